@@ -1,0 +1,1 @@
+// (placeholder until the image I/O area is implemented)

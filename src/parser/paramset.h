@@ -1,0 +1,67 @@
+// Parameter lists of scene directives ("float fov" [45] ...). Every parameter
+// remembers where it came from and whether it was looked up; after building an
+// entity, the scene builder calls checkUnused(), which throws a located error
+// for the first parameter nobody asked for (misspelt or unsupported).
+#pragma once
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "core/geometry.h"
+#include "core/spectrum.h"
+
+namespace gradus {
+
+struct Param {
+    std::string type;  // as written: integer, float, point2, point3, vector3, normal, rgb, ...
+    std::string name;
+    FileLoc loc;       // location of the "type name" string
+    std::vector<double> numbers;       // numeric types (rgb/color/spectrum already as numbers)
+    std::vector<std::string> strings;  // string, texture, spectrum given as filename/named
+    std::vector<bool> bools;
+    mutable bool used = false;
+};
+
+class ParamSet {
+  public:
+    // Adds a parameter; a later one with the same name replaces the earlier one.
+    void add(Param p);
+    bool has(const std::string &name) const { return find(name) != nullptr; }
+    // Finds a parameter by name (any type) and marks it used; nullptr if absent.
+    const Param *find(const std::string &name) const;
+    const std::vector<Param> &all() const { return params_; }
+
+    // Typed lookups. A parameter present with the wrong type or the wrong
+    // number of values throws a located Error. Each marks the parameter used.
+    int getInt(const std::string &name, int def) const;
+    Float getFloat(const std::string &name, Float def) const;
+    bool getBool(const std::string &name, bool def) const;
+    std::string getString(const std::string &name, const std::string &def) const;
+    Point2 getPoint2(const std::string &name, Point2 def) const;
+    Point3 getPoint3(const std::string &name, Point3 def) const;  // point/point3
+    Vec3 getVector3(const std::string &name, Vec3 def) const;     // vector/vector3
+    Normal3 getNormal(const std::string &name, Normal3 def) const;
+    // rgb / color / spectrum (inline pairs, named or .spd file) / blackbody, as linear RGB.
+    Spectrum getSpectrum(const std::string &name, Spectrum def) const;
+    // Name of a texture parameter ("texture Kd" "mytex"), or "" if absent.
+    std::string getTexture(const std::string &name) const;
+
+    std::vector<int> getInts(const std::string &name) const;
+    std::vector<Float> getFloats(const std::string &name) const;
+    std::vector<Point2> getPoint2s(const std::string &name) const;  // point2, or float pairs for "uv"/"st"
+    std::vector<Point3> getPoint3s(const std::string &name) const;
+    std::vector<Normal3> getNormals(const std::string &name) const;
+    std::vector<Vec3> getVector3s(const std::string &name) const;
+    std::vector<std::string> getStrings(const std::string &name) const;
+
+    // Location of a parameter (for errors about its value); `fallback` if absent.
+    FileLoc locOf(const std::string &name, const FileLoc &fallback) const;
+    // Throws Error at the first parameter never looked up:
+    // "file:l:c: parameter "float fvo" is not used by Camera "perspective" (misspelt or unsupported)".
+    void checkUnused(const std::string &what) const;
+
+  private:
+    std::vector<Param> params_;
+};
+
+}  // namespace gradus

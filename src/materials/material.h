@@ -1,0 +1,45 @@
+// Materials turn a surface hit into a BSDF (allocated in the per-thread arena).
+#pragma once
+#include <memory>
+#include <string>
+
+#include "core/arena.h"
+#include "materials/bsdf.h"
+#include "parser/scene_desc.h"
+#include "textures/texture.h"
+
+namespace gradus {
+
+class Material {
+  public:
+    virtual ~Material() = default;
+    // May perturb si.shading (bump mapping) before building the BSDF.
+    virtual BSDF getBSDF(SurfaceInteraction &si, Arena &arena, TransportMode mode) const = 0;
+    // Lowest roughness this material can produce anywhere (for scene features:
+    // "has specular or near-specular surfaces"). 0 = perfectly specular.
+    virtual Float minRoughness() const = 0;
+    virtual bool hasTextures() const { return false; }
+};
+
+// Creates a material of pbrt-v3 type `desc.type` ("matte", ...). Reads its
+// parameters (textures resolved through `textures`); unknown types and known
+// but unsupported pbrt-v3 materials throw located errors. The caller runs
+// desc.params.checkUnused() afterwards. `named` resolves "mix" components.
+std::shared_ptr<Material> CreateMaterial(const MaterialDesc &desc, const NamedTextures &textures,
+                                         const std::map<std::string, std::shared_ptr<Material>> &named);
+
+// Creates a texture of class desc.type ("constant", "imagemap", "checkerboard", ...).
+// Adds it to `textures` under desc.name (float or spectrum by desc.valueType).
+void CreateTexture(const TextureDesc &desc, const SceneDesc &scene, NamedTextures *textures);
+
+// Texture-or-constant parameter lookup ("texture Kd" "name" or "rgb Kd" [...]).
+std::shared_ptr<SpectrumTexture> GetSpectrumTexture(const ParamSet &params, const std::string &name,
+                                                    const Spectrum &def, const NamedTextures &textures,
+                                                    const FileLoc &loc);
+std::shared_ptr<FloatTexture> GetFloatTexture(const ParamSet &params, const std::string &name, Float def,
+                                              const NamedTextures &textures, const FileLoc &loc);
+// Like GetFloatTexture but returns nullptr when the parameter is absent (e.g. "bumpmap").
+std::shared_ptr<FloatTexture> GetFloatTextureOrNull(const ParamSet &params, const std::string &name,
+                                                    const NamedTextures &textures, const FileLoc &loc);
+
+}  // namespace gradus

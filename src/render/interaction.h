@@ -1,0 +1,73 @@
+// Surface hit records shared by shapes, materials, lights and integrators.
+#pragma once
+#include "core/geometry.h"
+#include "core/spectrum.h"
+
+namespace gradus {
+
+class Material;
+class AreaLight;
+
+// Offset for spawning rays off a surface: Embree intersects in float, hits are
+// refined in double; a relative epsilon of the scene scale keeps rays off the
+// surface they leave (set once per scene by the scene builder).
+extern Float gRayEpsilon;
+
+struct Interaction {
+    Point3 p;
+    Normal3 n;  // geometric normal (unit); zero for points in space / on point lights
+    Vec3 wo;    // outgoing direction (unit), towards the previous vertex
+    Interaction() = default;
+    Interaction(const Point3 &p_, const Normal3 &n_, const Vec3 &wo_) : p(p_), n(n_), wo(wo_) {}
+    bool onSurface() const { return n != Normal3(0, 0, 0); }
+    Point3 offsetOrigin(const Vec3 &d) const {
+        if (!onSurface()) return p;
+        Float eps = gRayEpsilon * (1 + MaxComponent(Abs(p)));
+        return p + (Dot(d, n) > 0 ? n : -n) * eps;
+    }
+    Ray spawnRay(const Vec3 &d) const { return Ray(offsetOrigin(d), d, Infinity); }
+    // Ray towards p2 with tMax just short of it (d not normalized: t in [0,1)).
+    Ray spawnRayTo(const Point3 &p2) const {
+        Point3 o = offsetOrigin(p2 - p);
+        Vec3 d = p2 - o;
+        return Ray(o, d, 1 - 1e-4);
+    }
+    Ray spawnRayTo(const Interaction &it) const {
+        Point3 o = offsetOrigin(it.p - p);
+        Point3 t = it.offsetOrigin(o - it.p);
+        return Ray(o, t - o, 1 - 1e-4);
+    }
+};
+
+struct SurfaceInteraction : Interaction {
+    Point2 uv;
+    Vec3 dpdu, dpdv;
+    Normal3 dndu, dndv;
+    struct {
+        Normal3 n;  // shading normal, same hemisphere as n
+        Vec3 dpdu, dpdv;
+        Normal3 dndu, dndv;
+    } shading;
+    const Material *material = nullptr;
+    const AreaLight *areaLight = nullptr;
+    int geomId = -1, primId = -1;  // Embree ids (for shifts: "same surface" tests)
+
+    // Sets the shading frame; flips the geometric normal into the shading hemisphere
+    // when `orientationIsAuthoritative` is false (pbrt-v3 semantics).
+    void setShadingGeometry(const Vec3 &dpdus, const Vec3 &dpdvs, const Normal3 &dndus, const Normal3 &dndvs,
+                            bool orientationIsAuthoritative) {
+        shading.n = Normalize(Cross(dpdus, dpdvs));
+        if (orientationIsAuthoritative)
+            n = FaceForward(n, shading.n);
+        else
+            shading.n = FaceForward(shading.n, n);
+        shading.dpdu = dpdus;
+        shading.dpdv = dpdvs;
+        shading.dndu = dndus;
+        shading.dndv = dndvs;
+    }
+    // Emitted radiance from an area light at this point towards w (0 if none).
+    Spectrum Le(const Vec3 &w) const;
+};
+
+}  // namespace gradus

@@ -1,1 +1,144 @@
-// (placeholder until the image I/O area is implemented)
+#include "image/image.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.h"
+
+namespace gradus {
+
+namespace {
+
+// "primal.R" -> ("primal", "R"); "R" -> ("", "R"). Splits at the last dot.
+void SplitChannel(const std::string &name, std::string *layer, std::string *base) {
+    size_t dot = name.rfind('.');
+    if (dot == std::string::npos) {
+        *layer = "";
+        *base = name;
+    } else {
+        *layer = name.substr(0, dot);
+        *base = name.substr(dot + 1);
+    }
+}
+
+std::string Join(const std::string &prefix, const std::string &base) {
+    return prefix.empty() ? base : prefix + "." + base;
+}
+
+}  // namespace
+
+Image::Image(int width, int height, std::vector<std::string> channels)
+    : width_(width), height_(height), channels_(std::move(channels)) {
+    if (width < 0 || height < 0)
+        throw Error("Image: negative size " + std::to_string(width) + "x" + std::to_string(height));
+    for (size_t i = 0; i < channels_.size(); ++i)
+        for (size_t j = 0; j < i; ++j)
+            if (channels_[i] == channels_[j])
+                throw Error("Image: duplicate channel name \"" + channels_[i] + "\"");
+    data_.assign(size_t(width) * size_t(height) * channels_.size(), 0.f);
+}
+
+Image Image::RGB(int width, int height) { return Image(width, height, {"R", "G", "B"}); }
+
+int Image::channelIndex(const std::string &name) const {
+    for (size_t i = 0; i < channels_.size(); ++i)
+        if (channels_[i] == name) return int(i);
+    return -1;
+}
+
+int Image::addChannel(const std::string &name) {
+    int existing = channelIndex(name);
+    if (existing >= 0) return existing;
+    size_t oldN = channels_.size(), newN = oldN + 1;
+    size_t npix = size_t(width_) * size_t(height_);
+    std::vector<float> grown(npix * newN, 0.f);
+    for (size_t p = 0; p < npix; ++p)
+        std::copy(data_.begin() + p * oldN, data_.begin() + (p + 1) * oldN, grown.begin() + p * newN);
+    data_.swap(grown);
+    channels_.push_back(name);
+    return int(oldN);
+}
+
+std::vector<std::string> Image::layers() const {
+    std::vector<std::string> out;
+    for (const std::string &c : channels_) {
+        std::string layer, base;
+        SplitChannel(c, &layer, &base);
+        if (std::find(out.begin(), out.end(), layer) == out.end()) out.push_back(layer);
+    }
+    return out;
+}
+
+Image Image::layerRGB(const std::string &prefix) const {
+    int idx[3] = {channelIndex(Join(prefix, "R")), channelIndex(Join(prefix, "G")),
+                  channelIndex(Join(prefix, "B"))};
+    if (idx[0] < 0 || idx[1] < 0 || idx[2] < 0) {
+        // Luminance-only layer, or a layer with a single channel: replicate it.
+        int y = channelIndex(Join(prefix, "Y"));
+        if (y < 0) {
+            std::vector<int> members;
+            for (size_t i = 0; i < channels_.size(); ++i) {
+                std::string layer, base;
+                SplitChannel(channels_[i], &layer, &base);
+                if (layer == prefix) members.push_back(int(i));
+            }
+            if (members.size() == 1) y = members[0];
+        }
+        if (y < 0)
+            throw Error("image has no RGB (or Y) channels in layer \"" + prefix + "\"");
+        idx[0] = idx[1] = idx[2] = y;
+    }
+    Image out = RGB(width_, height_);
+    out.metadata = metadata;
+    size_t npix = size_t(width_) * size_t(height_), nc = channels_.size();
+    for (size_t p = 0; p < npix; ++p)
+        for (int c = 0; c < 3; ++c) out.data_[p * 3 + c] = data_[p * nc + idx[c]];
+    return out;
+}
+
+void Image::setLayerRGB(const std::string &prefix, const Image &rgb) {
+    if (rgb.width() != width_ || rgb.height() != height_)
+        throw Error("setLayerRGB: size mismatch (" + std::to_string(rgb.width()) + "x" +
+                    std::to_string(rgb.height()) + " into " + std::to_string(width_) + "x" +
+                    std::to_string(height_) + ")");
+    Image src = (rgb.channelIndex("R") >= 0 && rgb.channelIndex("G") >= 0 &&
+                 rgb.channelIndex("B") >= 0 && rgb.numChannels() == 3)
+                    ? rgb
+                    : rgb.layerRGB("");
+    int sc[3] = {src.channelIndex("R"), src.channelIndex("G"), src.channelIndex("B")};
+    int dc[3];
+    const char *names[3] = {"R", "G", "B"};
+    for (int c = 0; c < 3; ++c) dc[c] = addChannel(Join(prefix, names[c]));
+    size_t npix = size_t(width_) * size_t(height_), nc = channels_.size();
+    for (size_t p = 0; p < npix; ++p)
+        for (int c = 0; c < 3; ++c) data_[p * nc + dc[c]] = src.data_[p * 3 + sc[c]];
+}
+
+}  // namespace gradus
+
+namespace gradus {
+
+std::string DefaultRGBLayer(const Image &image) {
+    auto hasRGB = [&](const std::string &l) {
+        std::string p = l.empty() ? "" : l + ".";
+        return (image.channelIndex(p + "R") >= 0 && image.channelIndex(p + "G") >= 0 &&
+                image.channelIndex(p + "B") >= 0) ||
+               image.channelIndex(p + "Y") >= 0;
+    };
+    if (hasRGB("")) return "";
+    for (const std::string &l : image.layers())
+        if (hasRGB(l)) return l;
+    throw Error("image has no R,G,B (or Y) channels in any layer");
+}
+
+float SRGBToLinear(float v) {
+    if (v <= 0.04045f) return v / 12.92f;
+    return std::pow((v + 0.055f) / 1.055f, 2.4f);
+}
+
+float LinearToSRGB(float v) {
+    if (v <= 0.0031308f) return 12.92f * v;
+    return 1.055f * std::pow(v, 1.f / 2.4f) - 0.055f;
+}
+
+}  // namespace gradus

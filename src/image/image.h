@@ -42,11 +42,21 @@ class Image {
     std::vector<float> data_;
 };
 
+// The layer that single-layer outputs (PNG, PFM, diff) use by default: "" when
+// unprefixed R,G,B (or Y) exist, else the first layer that has them. Throws if none.
+std::string DefaultRGBLayer(const Image &image);
+
+// sRGB transfer function (IEC 61966-2-1), on [0,1].
+float SRGBToLinear(float v);
+float LinearToSRGB(float v);
+
 // Reads EXR (all channels, multi-layer), PNG (8/16-bit, sRGB decoded to linear),
-// PFM. Throws gradus::Error naming the file on failure.
+// PFM (either endianness); other formats stb_image knows (JPEG, TGA, BMP, HDR) too.
+// Format is chosen by the file's magic bytes. Throws gradus::Error naming the file on failure.
 Image ReadImage(const std::string &filename);
 // Writes by extension: .exr (float32, every channel, metadata as string
 // attributes), .png (R,G,B clamped, sRGB-encoded, 8-bit), .pfm (R,G,B float).
+// PNG/PFM take the DefaultRGBLayer. Unknown extension -> gradus::Error.
 void WriteImage(const std::string &filename, const Image &image);
 
 }  // namespace gradus

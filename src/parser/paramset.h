@@ -3,12 +3,14 @@
 // entity, the scene builder calls checkUnused(), which throws a located error
 // for the first parameter nobody asked for (misspelt or unsupported).
 #pragma once
+#include <initializer_list>
 #include <string>
 #include <vector>
 
 #include "core/error.h"
 #include "core/geometry.h"
 #include "core/spectrum.h"
+#include "parser/spectrum_convert.h"
 
 namespace gradus {
 
@@ -42,7 +44,11 @@ class ParamSet {
     Vec3 getVector3(const std::string &name, Vec3 def) const;     // vector/vector3
     Normal3 getNormal(const std::string &name, Normal3 def) const;
     // rgb / color / spectrum (inline pairs, named or .spd file) / blackbody, as linear RGB.
+    // Sampled spectra ("spectrum" pairs or .spd files) are converted as
+    // reflectances (a constant spectrum c gives grey c); use the overload with
+    // SpectrumKind::Illuminant for emission. blackbody is always an illuminant.
     Spectrum getSpectrum(const std::string &name, Spectrum def) const;
+    Spectrum getSpectrum(const std::string &name, Spectrum def, SpectrumKind kind) const;
     // Name of a texture parameter ("texture Kd" "mytex"), or "" if absent.
     std::string getTexture(const std::string &name) const;
 
@@ -60,7 +66,15 @@ class ParamSet {
     // "file:l:c: parameter "float fvo" is not used by Camera "perspective" (misspelt or unsupported)".
     void checkUnused(const std::string &what) const;
 
+    // Canonical spelling of a parameter type: point->point3, vector->vector3,
+    // normal->normal3, color->rgb; other names unchanged.
+    static std::string canonicalType(const std::string &type);
+
   private:
+    // Finds `name`, checks its canonical type is one of `types` (else throws a
+    // located error naming `expected`), marks it used.
+    const Param *lookup(const std::string &name, std::initializer_list<const char *> types,
+                        const char *expected) const;
     std::vector<Param> params_;
 };
 

@@ -77,6 +77,8 @@ struct SceneDesc {
     std::map<std::string, InstanceDesc> instances;
     std::vector<InstanceUseDesc> instanceUses;
     std::vector<MediumDesc> media;
+    // TransformTimes (Gradus keeps only the start transform; parsed for completeness).
+    Float transformStartTime = 0, transformEndTime = 1;
     // Directory of the top-level scene file: pbrt-v3 resolves plymesh and
     // imagemap filenames against it.
     std::string sceneDirectory;

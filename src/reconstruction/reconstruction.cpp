@@ -1,0 +1,278 @@
+#include "reconstruction/reconstruction.h"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "core/error.h"
+#include "reconstruction/dct_solver.h"
+#include "reconstruction/poisson_ops.h"
+
+namespace gradus {
+
+using recon::PoissonProblem;
+
+ReconstructionOptions ReconstructionOptions::L1Default() { return ReconstructionOptions(); }
+
+ReconstructionOptions ReconstructionOptions::L1Reference() {
+    ReconstructionOptions o;
+    o.norm = ReconstructionNorm::L1;
+    o.irlsIterations = 20;
+    o.cgIterations = 50;
+    o.cgTolerance = 0;
+    o.preconditioner = Preconditioner::None;
+    o.initFromL2 = false;
+    return o;
+}
+
+ReconstructionOptions ReconstructionOptions::L2Exact(double alpha) {
+    ReconstructionOptions o;
+    o.norm = ReconstructionNorm::L2;
+    o.l2Method = L2Method::Exact;
+    o.alpha = alpha;
+    return o;
+}
+
+ReconstructionOptions ReconstructionOptions::L2CG(double alpha) {
+    ReconstructionOptions o;
+    o.norm = ReconstructionNorm::L2;
+    o.l2Method = L2Method::CG;
+    o.alpha = alpha;
+    o.cgIterations = 2000;
+    o.cgTolerance = 1e-6;
+    return o;
+}
+
+ReconstructionOptions ReconstructionOptions::Weighted() {
+    ReconstructionOptions o;
+    o.norm = ReconstructionNorm::Weighted;
+    o.cgIterations = 500;
+    o.cgTolerance = 1e-5;
+    return o;
+}
+
+ReconstructionNorm ParseReconstructionNorm(const std::string &name) {
+    if (name == "l2" || name == "L2") return ReconstructionNorm::L2;
+    if (name == "l1" || name == "L1") return ReconstructionNorm::L1;
+    if (name == "weighted") return ReconstructionNorm::Weighted;
+    throw Error("unknown reconstruction norm '" + name + "' (valid: l2, l1, weighted)");
+}
+
+const char *ReconstructionNormName(ReconstructionNorm norm) {
+    switch (norm) {
+    case ReconstructionNorm::L2: return "l2";
+    case ReconstructionNorm::L1: return "l1";
+    case ReconstructionNorm::Weighted: return "weighted";
+    }
+    return "?";
+}
+
+namespace {
+
+// Checks one interleaved buffer and copies it to planar storage. Entries of
+// missing edges (last column of dx, last row of dy) are ignored and zeroed.
+void ToPlanar(const GradientImages &in, const std::vector<float> &src, const char *layer,
+              int skipLastCol, int skipLastRow, bool nonNegative, std::vector<float> &dst) {
+    const int W = in.width, H = in.height, C = in.channels;
+    const size_t N = size_t(W) * H;
+    if (src.size() != N * C) {
+        std::ostringstream m;
+        m << "reconstruction: layer '" << layer << "' has " << src.size() << " values, expected "
+          << W << "x" << H << "x" << C << " = " << N * C;
+        throw Error(m.str());
+    }
+    dst.assign(N * C, 0.f);
+    for (int y = 0; y < H - skipLastRow; ++y)
+        for (int x = 0; x < W - skipLastCol; ++x)
+            for (int c = 0; c < C; ++c) {
+                size_t i = size_t(y) * W + x;
+                float v = src[i * C + c];
+                if (!std::isfinite(v) || (nonNegative && v < 0)) {
+                    std::ostringstream m;
+                    m << "reconstruction: layer '" << layer << "' has "
+                      << (std::isnan(v) ? "a NaN" : std::isinf(v) ? "an infinite" : "a negative")
+                      << " value at pixel (" << x << ", " << y << "), channel " << c;
+                    throw Error(m.str());
+                }
+                dst[c * N + i] = v;
+            }
+}
+
+// Per-term weights 1 / (channel-mean variance + floor), see reconstruction.h.
+void InverseVarianceWeights(const PoissonProblem &P, const std::vector<float> &var, bool edgeX,
+                            bool edgeY, std::vector<float> &w, double *meanVar) {
+    const int W = P.W, H = P.H, C = P.C;
+    const size_t N = P.N;
+    w.assign(N, 0.f);
+    double sum = 0;
+    size_t count = 0;
+    for (int y = 0; y < H - (edgeY ? 1 : 0); ++y)
+        for (int x = 0; x < W - (edgeX ? 1 : 0); ++x) {
+            size_t i = size_t(y) * W + x;
+            double v = 0;
+            for (int c = 0; c < C; ++c) v += var[c * N + i];
+            w[i] = float(v / C);  // temporarily the mean variance
+            sum += v / C;
+            ++count;
+        }
+    double mean = count ? sum / count : 0;
+    *meanVar = mean;
+    double floor = mean > 0 ? 1e-3 * mean : 1.0;
+    for (int y = 0; y < H - (edgeY ? 1 : 0); ++y)
+        for (int x = 0; x < W - (edgeX ? 1 : 0); ++x) {
+            size_t i = size_t(y) * W + x;
+            w[i] = float(1.0 / (w[i] + floor));
+        }
+}
+
+std::vector<float> ToInterleaved(const std::vector<float> &planar, int C, size_t N) {
+    std::vector<float> out(planar.size());
+    for (int c = 0; c < C; ++c)
+        for (size_t i = 0; i < N; ++i) out[i * C + c] = planar[c * N + i];
+    return out;
+}
+
+// IRLS weights for the L1 (colour-length) objective: 1 / (|e| + reg).
+void IrlsWeights(PoissonProblem &P, const std::vector<float> &x, double alpha, double reg) {
+    const size_t N = P.N;
+    std::vector<float> ep(N), ex(N), ey(N);
+    recon::TermResidualLengths(P, x.data(), ep.data(), ex.data(), ey.data());
+    const float a = float(alpha), rg = float(reg);
+    for (int y = 0; y < P.H; ++y)
+        for (int xi = 0; xi < P.W; ++xi) {
+            size_t i = size_t(y) * P.W + xi;
+            // The primal row's residual is alpha (x - p).
+            P.wp[i] = 1.f / (a * ep[i] + rg);
+            P.wx[i] = xi + 1 < P.W ? 1.f / (ex[i] + rg) : 0.f;
+            P.wy[i] = y + 1 < P.H ? 1.f / (ey[i] + rg) : 0.f;
+        }
+}
+
+}  // namespace
+
+ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionOptions &opt) {
+    const auto t0 = std::chrono::steady_clock::now();
+    if (in.width <= 0 || in.height <= 0)
+        throw Error("reconstruction: image size " + std::to_string(in.width) + "x" +
+                    std::to_string(in.height) + " is empty");
+    if (in.channels < 1 || in.channels > recon::kMaxChannels)
+        throw Error("reconstruction: " + std::to_string(in.channels) +
+                    " channels (supported: 1 to " + std::to_string(recon::kMaxChannels) + ")");
+    if (std::isnan(opt.alpha) || opt.alpha < 0)
+        throw Error("reconstruction: alpha must be >= 0 (got " + std::to_string(opt.alpha) + ")");
+    if (opt.cgIterations < 0 || opt.irlsIterations < 1)
+        throw Error("reconstruction: CG iterations must be >= 0 and IRLS iterations >= 1");
+    if (!(opt.irlsRegInit > 0) || !(opt.irlsRegFactor > 0) || !(opt.cgTolerance >= 0))
+        throw Error("reconstruction: IRLS regularisation and CG tolerance must be positive");
+
+    PoissonProblem P;
+    P.W = in.width;
+    P.H = in.height;
+    P.C = in.channels;
+    P.N = size_t(P.W) * P.H;
+    ToPlanar(in, in.primal, "primal", 0, 0, false, P.p);
+    ToPlanar(in, in.dx, "dx", 1, 0, false, P.gx);
+    ToPlanar(in, in.dy, "dy", 0, 1, false, P.gy);
+    const bool weighted = opt.norm == ReconstructionNorm::Weighted;
+    if (weighted && !in.hasVariance())
+        throw Error("reconstruction: the weighted norm needs variance layers primal_var, dx_var "
+                    "and dy_var");
+
+    ReconstructionStats st;
+    std::vector<float> x(P.p.size());
+    const double alpha = opt.alpha;
+    P.a2 = float(alpha * alpha);
+    const bool jacobi = opt.preconditioner == Preconditioner::Jacobi;
+
+    if (std::isinf(alpha) && !weighted) {
+        st.method = "primal (alpha = inf)";
+        x = P.p;
+        P.a2 = 1.f;
+    } else if (opt.norm == ReconstructionNorm::L2) {
+        if (opt.l2Method == L2Method::Exact) {
+            st.method = "l2-exact-dct";
+            recon::SolveL2Exact(P, x.data());
+        } else {
+            st.method = jacobi ? "l2-pcg-jacobi" : "l2-cg";
+            P.setUnitWeights();
+            x = P.p;
+            recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, jacobi);
+            st.cgIterations = rep.iterations;
+            st.finalRelativeResidual = rep.relResidual;
+        }
+    } else if (opt.norm == ReconstructionNorm::L1) {
+        st.method = "l1-irls";
+        P.setUnitWeights();
+        // IRLS iteration 0: the L2 solution (exact, or CG from the primal).
+        if (opt.initFromL2) {
+            recon::SolveL2Exact(P, x.data());
+        } else {
+            x = P.p;
+            recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, jacobi);
+            st.cgIterations += rep.iterations;
+            st.finalRelativeResidual = rep.relResidual;
+        }
+        st.irlsIterations = 1;
+        for (int k = 1; k < opt.irlsIterations; ++k) {
+            double reg = opt.irlsRegInit * std::pow(opt.irlsRegFactor, k - 1);
+            IrlsWeights(P, x, alpha, reg);
+            recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, jacobi);
+            st.cgIterations += rep.iterations;
+            st.finalRelativeResidual = rep.relResidual;
+            ++st.irlsIterations;
+        }
+    } else {  // Weighted
+        st.method = "weighted-pcg";
+        std::vector<float> vp, vx, vy;
+        ToPlanar(in, in.primalVar, "primal_var", 0, 0, true, vp);
+        ToPlanar(in, in.dxVar, "dx_var", 1, 0, true, vx);
+        ToPlanar(in, in.dyVar, "dy_var", 0, 1, true, vy);
+        double mp, mx, my;
+        InverseVarianceWeights(P, vp, false, false, P.wp, &mp);
+        InverseVarianceWeights(P, vx, true, false, P.wx, &mx);
+        InverseVarianceWeights(P, vy, false, true, P.wy, &my);
+        // Start from the unweighted L2 solution whose alpha^2 is the ratio of
+        // mean primal to mean gradient weight (cheap and usually close).
+        double sp = 0, sg = 0;
+        size_t ng = 0;
+        for (size_t i = 0; i < P.N; ++i) {
+            sp += P.wp[i];
+            if (P.wx[i] > 0) sg += P.wx[i], ++ng;
+            if (P.wy[i] > 0) sg += P.wy[i], ++ng;
+        }
+        P.a2 = ng > 0 && sg > 0 ? float((sp / P.N) / (sg / ng)) : 1.f;
+        recon::SolveL2Exact(P, x.data());
+        // Normalise the weights to a mean of about one (scale-free solution).
+        const double s = ng > 0 && sg > 0 ? double(ng) / sg : 1.0;
+        for (size_t i = 0; i < P.N; ++i) {
+            P.wp[i] = float(P.wp[i] * s);
+            P.wx[i] = float(P.wx[i] * s);
+            P.wy[i] = float(P.wy[i] * s);
+        }
+        P.a2 = 1.f;
+        recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, jacobi);
+        st.cgIterations = rep.iterations;
+        st.finalRelativeResidual = rep.relResidual;
+    }
+
+    recon::Energies e = recon::ComputeEnergies(P, x.data());
+    st.primalL2 = e.primalL2;
+    st.gradientL2 = e.gradientL2;
+    st.primalL1 = e.primalL1;
+    st.gradientL1 = e.gradientL1;
+    if (weighted) st.objective = e.weightedL2;
+    else if (std::isinf(alpha)) st.objective = 0;
+    else if (opt.norm == ReconstructionNorm::L2) st.objective = alpha * alpha * e.primalL2 + e.gradientL2;
+    else st.objective = alpha * e.primalL1 + e.gradientL1;
+
+    ReconstructionResult res;
+    res.width = P.W;
+    res.height = P.H;
+    res.channels = P.C;
+    res.image = ToInterleaved(x, P.C, P.N);
+    st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    res.stats = st;
+    return res;
+}
+
+}  // namespace gradus

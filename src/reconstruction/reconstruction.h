@@ -1,0 +1,115 @@
+// Screened-Poisson reconstruction of gradient-domain renders.
+//
+// Every gradient-domain integrator outputs a noisy primal image p and noisy
+// forward differences gx(x,y) ~ I(x+1,y) - I(x,y), gy(x,y) ~ I(x,y+1) - I(x,y)
+// (the last column of gx and the last row of gy are unused). The final image
+// minimises (G-MLT Eq. 16, with alpha weighting the primal residual as in the
+// frequency-domain form G-MLT Eq. 19, i.e. alpha^2 in the normal equations):
+//
+//   E(I) = sum_pixels  || alpha (I - p) ||  +  sum_edges || D I - g ||
+//
+// where ||.|| is squared (L2) or the Euclidean length over colour channels
+// (L1, solved by IRLS; channels share the IRLS weights). alpha -> infinity
+// returns p; alpha = 0 keeps the mean of p and otherwise integrates g.
+//
+// Weighted: the variance-weighted least-squares reading of the image-space
+// control-variate reconstruction (Rousselle, Jarosz, Novak 2016): each term
+// is weighted by the inverse of its estimated variance,
+//   E(I) = sum_i (I_i - p_i)^2 / v^p_i + sum_e ((D I)_e - g_e)^2 / v^g_e,
+// with v the per-term variance averaged over the colour channels plus a floor
+// of 1e-3 times that layer's mean variance (zero-variance terms stay finite).
+// alpha is not used (the variances set the primal/gradient balance).
+#pragma once
+#include <string>
+#include <vector>
+
+namespace gradus {
+
+class Image;
+
+// Input buffers, interleaved per pixel: v(x,y,c) = data[(y*width+x)*channels+c].
+struct GradientImages {
+    int width = 0, height = 0, channels = 3;
+    std::vector<float> primal, dx, dy;
+    // Optional per-term variances (same layout); required by Norm::Weighted.
+    std::vector<float> primalVar, dxVar, dyVar;
+    bool hasVariance() const { return !primalVar.empty(); }
+};
+
+enum class ReconstructionNorm { L2, L1, Weighted };
+// L2 solve: Exact = direct DCT-II diagonalisation; CG = preconditioned CG.
+enum class L2Method { Exact, CG };
+enum class Preconditioner { None, Jacobi };
+
+struct ReconstructionOptions {
+    ReconstructionNorm norm = ReconstructionNorm::L1;
+    double alpha = 0.2;  // the papers' value; must be >= 0 (inf returns the primal)
+    L2Method l2Method = L2Method::Exact;
+    // CG iterations per solve (L2 CG, weighted, and each IRLS step), and a
+    // relative residual tolerance (||r|| / ||r0|| per channel) that stops early.
+    int cgIterations = 8;
+    double cgTolerance = 0.0;
+    Preconditioner preconditioner = Preconditioner::Jacobi;
+    // IRLS (L1 only): iteration 0 is the L2 solve, each further iteration
+    // reweights by 1 / (|e| + reg), reg = irlsRegInit * irlsRegFactor^(k-1).
+    int irlsIterations = 20;
+    double irlsRegInit = 0.05, irlsRegFactor = 0.5;
+    // Start L1 from the exact L2 solution (true) or from the primal (false).
+    bool initFromL2 = true;
+
+    // Presets. L1Default is the library default above. L1Reference reproduces
+    // the reference implementation's schedule (20 IRLS x 50 plain CG from the
+    // primal) for comparisons; L2Exact / L2CG / Weighted as named.
+    static ReconstructionOptions L1Default();
+    static ReconstructionOptions L1Reference();
+    static ReconstructionOptions L2Exact(double alpha = 0.2);
+    static ReconstructionOptions L2CG(double alpha = 0.2);
+    static ReconstructionOptions Weighted();
+};
+
+struct ReconstructionStats {
+    std::string method;      // e.g. "l2-exact", "l1-irls", "weighted-cg"
+    double seconds = 0;      // wall-clock time of Reconstruct
+    int irlsIterations = 0;  // IRLS iterations done (L1)
+    int cgIterations = 0;    // total CG iterations
+    // Residuals of the result, summed over pixels/edges and channels:
+    double primalL2 = 0, gradientL2 = 0;  // sum (I-p)^2, sum (DI-g)^2
+    double primalL1 = 0, gradientL1 = 0;  // sum ||I-p||, sum ||DI-g|| (colour length)
+    // The minimised objective: L2 alpha^2*primalL2 + gradientL2; L1
+    // alpha*primalL1 + gradientL1; Weighted its inverse-variance sum.
+    double objective = 0;
+    double finalRelativeResidual = 0;  // last CG solve: max_c ||r|| / ||r0|| (0 if exact)
+};
+
+struct ReconstructionResult {
+    int width = 0, height = 0, channels = 0;
+    std::vector<float> image;  // interleaved like GradientImages
+    ReconstructionStats stats;
+    float at(int x, int y, int c) const { return image[(size_t(y) * width + x) * channels + c]; }
+};
+
+// Solves the reconstruction. Throws gradus::Error on bad input (sizes, NaN/Inf
+// values, negative variances, missing variances for Weighted, bad options).
+ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionOptions &opt);
+
+// Parses "l2" | "l1" | "weighted" (throws gradus::Error otherwise).
+ReconstructionNorm ParseReconstructionNorm(const std::string &name);
+const char *ReconstructionNormName(ReconstructionNorm norm);
+
+// ---- gradus::Image bridge (layers primal, dx, dy, optional primal_var, dx_var, dy_var) ----
+
+// Extracts RGB layers "primal", "dx", "dy" (and variances when all three are
+// present). Throws gradus::Error naming a missing layer.
+GradientImages GradientImagesFromImage(const Image &img);
+// Same, from three separate images (their unprefixed R,G,B or Y).
+GradientImages GradientImagesFromImages(const Image &primal, const Image &dx, const Image &dy);
+// Converts a result to an RGB image (channels R, G, B).
+Image ResultToImage(const ReconstructionResult &r);
+// One-call helper: reconstructs the primal/dx/dy layers of `img` as RGB.
+Image ReconstructImage(const Image &img, const ReconstructionOptions &opt,
+                       ReconstructionStats *stats = nullptr);
+// For integrators: adds layers "reconstructed_l1" and "reconstructed_l2"
+// (default presets with the given alpha) to a film holding primal/dx/dy.
+void AddReconstructionLayers(Image &film, double alpha = 0.2);
+
+}  // namespace gradus

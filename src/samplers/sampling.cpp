@@ -46,7 +46,9 @@ Float Distribution1D::sampleContinuous(Float u, Float *pdf, int *offset) const {
     Float width = cdf_[o + 1] - cdf_[o];
     Float du = width > 0 ? (u - cdf_[o]) / width : 0;
     if (pdf) *pdf = funcInt_ > 0 ? func_[o] / funcInt_ : 1;
-    return std::min<Float>((o + du) / count(), OneMinusEpsilon);
+    // Keep x inside bucket o despite rounding (the next bucket may have f = 0).
+    Float x = (o + du) / count(), end = Float(o + 1) / count();
+    return x < end ? x : std::nextafter(end, Float(0));
 }
 
 int Distribution1D::sampleDiscrete(Float u, Float *pmf, Float *uRemapped) const {

@@ -1,0 +1,113 @@
+// Building blocks of the samplers: hashed permutations, randomised radical
+// inverses with Owen scrambling, and the first two Sobol' dimensions.
+#pragma once
+#include <cstdint>
+
+#include "samplers/rng.h"
+
+namespace gradus {
+
+// Element i of a pseudo-random permutation of [0, n) chosen by `seed`
+// (a bijection for each fixed seed). Several rounds of invertible operations
+// on w-bit integers (xor with a key, multiplication by an odd number, xor with
+// a right shift of itself), with cycle walking when n is not a power of two.
+inline uint32_t PermutationElement(uint32_t i, uint32_t n, uint64_t seed) {
+    if (n <= 1) return 0;
+    uint32_t mask = n - 1;
+    mask |= mask >> 1; mask |= mask >> 2; mask |= mask >> 4; mask |= mask >> 8; mask |= mask >> 16;
+    int w = 0;
+    while ((mask >> w) != 0) ++w;
+    int shift = (w + 1) / 2;
+    uint64_t k = MixBits(seed ^ 0x4f1bbcdcbfa53e0bULL);
+    uint32_t k0 = uint32_t(k), k1 = uint32_t(k >> 32);
+    uint32_t m0 = uint32_t(MixBits(k)) | 1, m1 = uint32_t(MixBits(k + 1)) | 1;
+    do {
+        i = (i ^ k0) & mask;
+        i = (i * m0) & mask;
+        i ^= i >> shift;
+        i = (i + k1) & mask;
+        i = (i * m1) & mask;
+        i ^= i >> shift;
+        i = (i ^ (k0 >> 16)) & mask;
+        i = (i * 0x2c1b3c6dU) & mask;
+        i ^= i >> (w > 2 ? w / 3 + 1 : 1);
+    } while (i >= n);
+    // A final keyed rotation makes every element exactly uniform over seeds
+    // (cycle walking alone is biased when n is not a power of two).
+    return uint32_t((uint64_t(i) + MixBits(k ^ 0x94d049bb133111ebULL) % n) % n);
+}
+
+// Radical inverse of `a` in `base` with Owen (nested uniform) scrambling: the
+// permutation applied to digit j is chosen by hashing `seed` with digits
+// 0..j-1 (the node of the digit tree). After the first max(minDigits, number
+// of digits of a) digits, the rest of the scrambled value is a uniform value
+// in the last interval hashed from the node, which is the distribution of the
+// scrambled remaining (zero) digits. The joint distribution of the points
+// a < base^minDigits is therefore exactly that of Owen scrambling (they have
+// distinct minDigits-digit prefixes, hence independent tails), e.g. with
+// base^minDigits >= spp the samples of a pixel keep their stratification.
+// Result in [0, 1).
+inline double OwenScrambledRadicalInverse(uint32_t base, uint64_t a, uint64_t seed, int minDigits = 0) {
+    uint64_t h = MixBits(seed ^ (uint64_t(base) << 40));
+    uint64_t digits = 0;
+    double scale = 1;
+    const double invBase = 1.0 / base;
+    for (int j = 0; a != 0 || j < minDigits; ++j) {
+        uint32_t d = uint32_t(a % base);
+        a /= base;
+        digits = digits * base + PermutationElement(d, base, h);
+        scale *= invBase;
+        h = MixBits(h ^ (d + 0x9e3779b97f4a7c15ULL));
+    }
+    double v = (double(digits) + BitsToUniform(MixBits(h + 0x5bd1e995ULL))) * scale;
+    return v < OneMinusEpsilon ? v : OneMinusEpsilon;
+}
+
+// Number of base-b digits needed so that b^digits >= n.
+inline int DigitsFor(uint64_t n, uint32_t base) {
+    int d = 0;
+    for (uint64_t p = 1; p < n; p *= base) ++d;
+    return d;
+}
+
+// Owen scrambling of a base-2 fraction given by its 32 most significant bits
+// `x` (bit 31 = 1/2). Same construction as above with base 2 (minBits <= 32).
+inline double OwenScrambledBinary(uint32_t x, uint64_t seed, int minBits = 0) {
+    uint64_t h = MixBits(seed ^ 0x2545f4914f6cdd1dULL);
+    uint64_t bits = 0;
+    double scale = 1;
+    for (int j = 0; x != 0 || j < minBits; ++j) {
+        uint32_t b = x >> 31;
+        x <<= 1;
+        bits = (bits << 1) | (b ^ uint32_t(h >> 63));
+        scale *= 0.5;
+        h = MixBits(h ^ (b + 0x9e3779b97f4a7c15ULL));
+    }
+    double v = (double(bits) + BitsToUniform(MixBits(h + 0x5bd1e995ULL))) * scale;
+    return v < OneMinusEpsilon ? v : OneMinusEpsilon;
+}
+
+// Sobol' dimension 0 (van der Corput): bits of the index reversed.
+inline uint32_t SobolDim0(uint32_t i) {
+    i = (i << 16) | (i >> 16);
+    i = ((i & 0x00ff00ffU) << 8) | ((i & 0xff00ff00U) >> 8);
+    i = ((i & 0x0f0f0f0fU) << 4) | ((i & 0xf0f0f0f0U) >> 4);
+    i = ((i & 0x33333333U) << 2) | ((i & 0xccccccccU) >> 2);
+    i = ((i & 0x55555555U) << 1) | ((i & 0xaaaaaaaaU) >> 1);
+    return i;
+}
+
+// Sobol' dimension 1: generator matrix columns v_0 = 2^31, v_{k+1} = v_k ^ (v_k >> 1)
+// (Pascal's triangle mod 2). With dimension 0 it forms a (0,2)-sequence in base 2.
+inline uint32_t SobolDim1(uint32_t i) {
+    uint32_t v = 0x80000000U, r = 0;
+    for (; i != 0; i >>= 1, v ^= v >> 1)
+        if (i & 1) r ^= v;
+    return r;
+}
+
+// The i-th prime (i >= 0), for Halton bases; i < PrimeTableSize.
+constexpr int PrimeTableSize = 1024;
+uint32_t Prime(int i);
+
+}  // namespace gradus

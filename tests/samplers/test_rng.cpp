@@ -1,0 +1,164 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+#include <vector>
+
+#include "samplers/chi2_test.h"
+#include "samplers/lowdiscrepancy.h"
+#include "samplers/rng.h"
+
+using namespace gradus;
+
+TEST(RNG, StreamsAreReproducibleAndDistinct) {
+    RNG a(5), b(5), c(6);
+    bool differs = false;
+    for (int i = 0; i < 100; ++i) {
+        uint32_t x = a.uniformU32();
+        EXPECT_EQ(x, b.uniformU32());
+        differs |= x != c.uniformU32();
+    }
+    EXPECT_TRUE(differs);
+    RNG d;
+    d.setSequence(5);
+    RNG e(5);
+    EXPECT_EQ(d, e);
+}
+
+TEST(RNG, AdvanceMatchesStepping) {
+    for (int64_t n : {0, 1, 2, 7, 1000, 65537}) {
+        RNG a(42, 17), b(42, 17);
+        for (int64_t i = 0; i < n; ++i) a.uniformU32();
+        b.advance(n);
+        EXPECT_EQ(a, b) << n;
+        EXPECT_EQ(a.uniformU32(), b.uniformU32());
+        b.advance(-(n + 1));
+        EXPECT_EQ(b, RNG(42, 17)) << n;
+    }
+}
+
+// z-tests on mean and variance of uniform(): |z| < 3.29 has a false-positive
+// rate of 0.1% per test under the null hypothesis.
+TEST(RNG, UniformMoments) {
+    RNG rng(99);
+    const int n = 1000000;
+    double sum = 0, sum2 = 0;
+    for (int i = 0; i < n; ++i) {
+        double u = rng.uniform();
+        ASSERT_TRUE(u >= 0 && u < 1);
+        sum += u;
+        sum2 += (u - 0.5) * (u - 0.5);
+    }
+    double zMean = (sum / n - 0.5) / std::sqrt(1.0 / 12 / n);
+    double zVar = (sum2 / n - 1.0 / 12) / std::sqrt(1.0 / 180 / n);
+    EXPECT_LT(std::abs(zMean), 3.29);
+    EXPECT_LT(std::abs(zVar), 3.29);
+}
+
+TEST(Hash, SensitiveToEveryArgumentAndOrder) {
+    std::set<uint64_t> seen;
+    for (uint64_t a = 0; a < 8; ++a)
+        for (uint64_t b = 0; b < 8; ++b)
+            for (uint64_t c = 0; c < 8; ++c) seen.insert(Hash(a, b, c));
+    EXPECT_EQ(seen.size(), 512u);
+    EXPECT_NE(Hash(1, 2), Hash(2, 1));
+    EXPECT_NE(MixBits(0), MixBits(1));
+    // Avalanche: flipping one input bit flips about half of the output bits.
+    RNG rng(3);
+    double flips = 0;
+    const int n = 2000;
+    for (int i = 0; i < n; ++i) {
+        uint64_t x = (uint64_t(rng.uniformU32()) << 32) | rng.uniformU32();
+        int bit = rng.uniformU32() % 64;
+        flips += __builtin_popcountll(MixBits(x) ^ MixBits(x ^ (1ULL << bit)));
+    }
+    EXPECT_NEAR(flips / n, 32, 0.5);  // sd of the mean is 4/sqrt(2000) ~ 0.09
+}
+
+TEST(Permutation, IsABijection) {
+    for (uint32_t n : {1u, 2u, 3u, 4u, 5u, 9u, 16u, 17u, 100u, 1024u, 1000u}) {
+        for (uint64_t seed = 0; seed < 20; ++seed) {
+            std::vector<int> hit(n, 0);
+            for (uint32_t i = 0; i < n; ++i) {
+                uint32_t p = PermutationElement(i, n, seed);
+                ASSERT_LT(p, n);
+                ++hit[p];
+            }
+            for (uint32_t i = 0; i < n; ++i) ASSERT_EQ(hit[i], 1) << "n=" << n << " seed=" << seed;
+        }
+    }
+}
+
+// For a fixed index, the image over random seeds must be uniform (this is
+// what makes hashed stratification unbiased). 1% false-positive rate overall.
+TEST(Permutation, ElementUniformOverSeeds) {
+    const int tests = 6;
+    double alpha = chi2::SidakAlpha(0.01, tests);
+    int k = 0;
+    for (uint32_t n : {4u, 9u, 13u}) {
+        for (uint32_t i : {0u, n - 1}) {
+            std::vector<double> obs(n, 0), exp(n, 0);
+            const int samples = 20000;
+            for (int s = 0; s < samples; ++s) obs[PermutationElement(i, n, Hash(s, 77))] += 1;
+            for (auto &e : exp) e = double(samples) / n;
+            auto r = chi2::TestCounts(obs, exp, alpha);
+            EXPECT_TRUE(r.pass) << "n=" << n << " i=" << i << ": " << r.message;
+            ++k;
+        }
+    }
+    EXPECT_EQ(k, tests);
+}
+
+TEST(LowDiscrepancy, SobolGeneratorsAndPrimes) {
+    EXPECT_EQ(SobolDim0(1), 0x80000000u);
+    EXPECT_EQ(SobolDim0(6), 0x60000000u);
+    // Second Sobol' dimension: 0, 1/2, 3/4, 1/4, 5/8, 1/8, 3/8, 7/8 (Joe-Kuo ordering).
+    const double expect[8] = {0, 0.5, 0.75, 0.25, 0.625, 0.125, 0.375, 0.875};
+    for (uint32_t i = 0; i < 8; ++i) EXPECT_EQ(SobolDim1(i) * 0x1p-32, expect[i]) << i;
+    // (0,m,2)-net: first 2^m points, every elementary interval of area 2^-m holds one.
+    for (int m = 1; m <= 8; ++m) {
+        uint32_t n = 1u << m;
+        for (int k = 0; k <= m; ++k) {
+            std::vector<int> cell(n, 0);
+            for (uint32_t i = 0; i < n; ++i) {
+                uint32_t x = uint32_t(uint64_t(SobolDim0(i)) >> (32 - k));
+                uint32_t y = uint32_t(uint64_t(SobolDim1(i)) >> (32 - (m - k)));
+                ++cell[(x << (m - k)) | y];
+            }
+            for (uint32_t c = 0; c < n; ++c) ASSERT_EQ(cell[c], 1) << "m=" << m << " k=" << k;
+        }
+    }
+    EXPECT_EQ(Prime(0), 2u);
+    EXPECT_EQ(Prime(1), 3u);
+    EXPECT_EQ(Prime(9), 29u);
+    EXPECT_EQ(Prime(999), 7919u);
+}
+
+// Owen scrambling keeps the stratification of the radical inverse (b^k points
+// fill the b^k intervals once each) and makes each point uniform over seeds.
+TEST(LowDiscrepancy, OwenScramblingStratifiesAndIsUniform) {
+    for (uint32_t base : {2u, 3u, 5u, 7u}) {
+        uint32_t n = base * base * base;
+        for (uint64_t seed = 1; seed < 6; ++seed) {
+            std::vector<int> cell(n, 0);
+            for (uint32_t i = 0; i < n; ++i) {
+                double v = base == 2 ? OwenScrambledBinary(SobolDim0(i), seed, 3)
+                                     : OwenScrambledRadicalInverse(base, i, seed, 3);
+                ASSERT_TRUE(v >= 0 && v < 1);
+                ++cell[int(v * n)];
+            }
+            for (uint32_t c = 0; c < n; ++c) ASSERT_EQ(cell[c], 1) << base << " " << seed;
+        }
+    }
+    // Point 5 of base 3 over 20000 seeds, 30 bins (false-positive rate 0.1% per test, 2 tests).
+    for (uint32_t base : {2u, 3u}) {
+        std::vector<double> obs(30, 0), exp(30, 20000.0 / 30);
+        for (int s = 0; s < 20000; ++s) {
+            double v = base == 2 ? OwenScrambledBinary(SobolDim0(5), Hash(s), 4)
+                               : OwenScrambledRadicalInverse(3, 5, Hash(s), 4);
+            obs[int(v * 30)] += 1;
+        }
+        auto r = chi2::TestCounts(obs, exp, 0.001);
+        EXPECT_TRUE(r.pass) << base << ": " << r.message;
+    }
+}

@@ -54,6 +54,10 @@ class BxDF {
     // 1 (or more) for diffuse. Shift mappings classify vertices with it.
     virtual Float roughness() const = 0;
 
+  protected:
+    // For composite BxDFs whose lobes are known only after construction.
+    void addFlags(unsigned f) { flags_ |= f; }
+
   private:
     unsigned flags_;
 };

@@ -119,15 +119,18 @@ void Image::setLayerRGB(const std::string &prefix, const Image &rgb) {
 namespace gradus {
 
 std::string DefaultRGBLayer(const Image &image) {
-    auto hasRGB = [&](const std::string &l) {
-        std::string p = l.empty() ? "" : l + ".";
-        return (image.channelIndex(p + "R") >= 0 && image.channelIndex(p + "G") >= 0 &&
-                image.channelIndex(p + "B") >= 0) ||
-               image.channelIndex(p + "Y") >= 0;
+    auto has = [&](const std::string &l, const char *c) {
+        return image.channelIndex(l.empty() ? std::string(c) : l + "." + c) >= 0;
     };
-    if (hasRGB("")) return "";
-    for (const std::string &l : image.layers())
+    auto hasRGB = [&](const std::string &l) { return has(l, "R") && has(l, "G") && has(l, "B"); };
+    std::vector<std::string> layers = image.layers();
+    bool haveUnprefixed = std::find(layers.begin(), layers.end(), "") != layers.end();
+    if (haveUnprefixed && (hasRGB("") || has("", "Y"))) return "";
+    if (hasRGB("primal")) return "primal";
+    for (const std::string &l : layers)
         if (hasRGB(l)) return l;
+    for (const std::string &l : layers)
+        if (has(l, "Y")) return l;
     throw Error("image has no R,G,B (or Y) channels in any layer");
 }
 

@@ -43,7 +43,8 @@ class Image {
 };
 
 // The layer that single-layer outputs (PNG, PFM, diff) use by default: "" when
-// unprefixed R,G,B (or Y) exist, else the first layer that has them. Throws if none.
+// unprefixed R,G,B (or Y) exist, else "primal" if it has R,G,B, else the first
+// layer with R,G,B, else the first with Y. Throws if none.
 std::string DefaultRGBLayer(const Image &image);
 
 // sRGB transfer function (IEC 61966-2-1), on [0,1].

@@ -3,6 +3,9 @@
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfMultiPartOutputFile.h>
+#include <OpenEXR/ImfOutputPart.h>
+#include <OpenEXR/ImfPartType.h>
 #include <OpenEXR/ImfOutputFile.h>
 #include <gtest/gtest.h>
 #include <png.h>
@@ -78,6 +81,11 @@ TEST(Image, ChannelsAndLayers) {
     EXPECT_THROW(Image(2, 2, {"R", "R"}), Error);
     EXPECT_EQ(DefaultRGBLayer(img), "");
     EXPECT_EQ(DefaultRGBLayer(Image(1, 1, {"primal.R", "primal.G", "primal.B"})), "primal");
+    EXPECT_EQ(DefaultRGBLayer(Image(1, 1, {"dx.R", "dx.G", "dx.B", "primal.R", "primal.G",
+                                           "primal.B"})),
+              "primal");
+    EXPECT_EQ(DefaultRGBLayer(Image(1, 1, {"a.Y", "b.R", "b.G", "b.B"})), "b");
+    EXPECT_THROW(DefaultRGBLayer(Image(1, 1, {"depth"})), Error);
 }
 
 TEST(ImageIO, ExrRoundTripMultiLayerWithMetadata) {
@@ -141,6 +149,46 @@ TEST(ImageIO, ExrReadsHalfAndUintChannels) {
     EXPECT_EQ(img.at(3, 2, y), 0.25f * 11);
     EXPECT_EQ(img.at(1, 1, id), 1005.f);
     EXPECT_EQ(img.layerRGB("").at(3, 2, 1), 0.25f * 11);
+}
+
+// Multi-part files: channels of a named part get the part name as layer prefix
+// (unless they already carry it); metadata of every part is kept.
+TEST(ImageIO, ExrReadsMultiPartFiles) {
+    TempDir dir;
+    std::string f = dir.file("parts.exr");
+    const int w = 3, h = 2;
+    std::vector<float> a(w * h * 3), b(w * h);
+    for (size_t i = 0; i < a.size(); ++i) a[i] = float(i);
+    for (size_t i = 0; i < b.size(); ++i) b[i] = 100.f + float(i);
+    {
+        std::vector<Imf::Header> headers(2, Imf::Header(w, h));
+        headers[0].setName("primal");
+        headers[0].setType(Imf::SCANLINEIMAGE);
+        for (const char *c : {"R", "G", "B"}) headers[0].channels().insert(c, Imf::Channel(Imf::FLOAT));
+        headers[1].setName("dx");
+        headers[1].setType(Imf::SCANLINEIMAGE);
+        headers[1].channels().insert("dx.Y", Imf::Channel(Imf::FLOAT));
+        Imf::MultiPartOutputFile out(f.c_str(), headers.data(), 2);
+        Imf::OutputPart p0(out, 0), p1(out, 1);
+        Imf::FrameBuffer fb0, fb1;
+        const char *names[3] = {"R", "G", "B"};
+        for (int c = 0; c < 3; ++c)
+            fb0.insert(names[c], Imf::Slice(Imf::FLOAT, (char *)(a.data() + c), 3 * sizeof(float),
+                                            3 * sizeof(float) * w));
+        fb1.insert("dx.Y", Imf::Slice(Imf::FLOAT, (char *)b.data(), sizeof(float), sizeof(float) * w));
+        p0.setFrameBuffer(fb0);
+        p0.writePixels(h);
+        p1.setFrameBuffer(fb1);
+        p1.writePixels(h);
+    }
+    Image img = ReadImage(f);
+    ASSERT_EQ(img.numChannels(), 4);
+    int g = img.channelIndex("primal.G"), y = img.channelIndex("dx.Y");
+    ASSERT_GE(g, 0);
+    ASSERT_GE(y, 0);
+    EXPECT_EQ(img.at(2, 1, g), float((1 * w + 2) * 3 + 1));
+    EXPECT_EQ(img.at(2, 1, y), 100.f + float(1 * w + 2));
+    EXPECT_EQ(DefaultRGBLayer(img), "primal");  // full RGB preferred over Y
 }
 
 TEST(ImageIO, PngRoundTripWithin8BitQuantisation) {

@@ -20,7 +20,7 @@ inline uint32_t PermutationElement(uint32_t i, uint32_t n, uint64_t seed) {
     int shift = (w + 1) / 2;
     uint64_t k = MixBits(seed ^ 0x4f1bbcdcbfa53e0bULL);
     uint32_t k0 = uint32_t(k), k1 = uint32_t(k >> 32);
-    uint32_t m0 = uint32_t(MixBits(k)) | 1, m1 = uint32_t(MixBits(k + 1)) | 1;
+    uint32_t m0 = (k0 * 0x9e3779b9U) | 1, m1 = (k1 * 0x85ebca6bU) | 1;
     do {
         i = (i ^ k0) & mask;
         i = (i * m0) & mask;

@@ -181,6 +181,11 @@ Dir LookupDirective(std::string_view w) {
     return Dir::Unknown;
 }
 
+// Cheap pre-check: every directive starts with an upper-case letter, numbers never do.
+bool IsDirective(std::string_view w) {
+    return !w.empty() && w[0] >= 'A' && w[0] <= 'Z' && LookupDirective(w) != Dir::Unknown;
+}
+
 enum class ValueKind { Numbers, Integers, Strings, Bools, Spectrum };
 
 bool ParamTypeInfo(const std::string &t, ValueKind *kind, int *multiple) {
@@ -333,7 +338,7 @@ class Parser {
         Token t = next();
         double v;
         if (t.kind != Tok::Word || !ParseNumber(t.text, &v)) {
-            if (t.kind == Tok::Word && LookupDirective(t.text) == Dir::Unknown)
+            if (t.kind == Tok::Word && !IsDirective(t.text))
                 fail(t, "malformed number " + Show(t));
             fail(t, std::string(directive) + " expects " + std::to_string(count) + " numbers, got " + Show(t));
         }
@@ -383,14 +388,14 @@ class Parser {
                     }
                     if (t.kind == Tok::End) fail(open, "unbalanced '[': no matching ']' before end of file");
                     if (t.kind == Tok::LBracket) fail(t, "unexpected '[' inside a parameter value list");
-                    if (t.kind == Tok::Word && LookupDirective(t.text) != Dir::Unknown)
+                    if (t.kind == Tok::Word && IsDirective(t.text))
                         fail(open, "unbalanced '[': no matching ']' before " + std::string(t.text));
                     addValue(p, kind, next());
                 }
             } else {
                 const Token &t = peek();
                 if (t.kind == Tok::End || t.kind == Tok::RBracket ||
-                    (t.kind == Tok::Word && LookupDirective(t.text) != Dir::Unknown))
+                    (t.kind == Tok::Word && IsDirective(t.text)))
                     fail(decl, "parameter \"" + d + "\" has no value");
                 addValue(p, kind, next());
             }

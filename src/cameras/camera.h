@@ -1,0 +1,66 @@
+// Cameras. The perspective camera follows pbrt-v3 (fov on the shorter image
+// axis, screen window, thin lens) and exposes the importance function We and
+// its pdfs, which light tracing and bidirectional connections need.
+#pragma once
+#include <memory>
+
+#include "core/transform.h"
+#include "parser/scene_desc.h"
+#include "render/interaction.h"
+
+namespace gradus {
+
+struct CameraSample {
+    Point2 pFilm;  // continuous raster position
+    Point2 pLens;  // [0,1)^2
+};
+
+struct CameraWiSample {
+    Spectrum We;          // importance arriving along -wi at the lens point
+    Vec3 wi;              // from ref towards the lens point
+    Float pdf = 0;        // solid angle at ref
+    Point2 pRaster;       // raster position of the connection
+    Interaction pLens;
+};
+
+class Camera {
+  public:
+    virtual ~Camera() = default;
+    // Ray with unit direction in world space; returns the weight (0 if none).
+    virtual Float generateRay(const CameraSample &s, Ray *ray) const = 0;
+    // Importance along ray (from the lens); *pRaster receives the raster point.
+    virtual Spectrum We(const Ray &ray, Point2 *pRaster) const = 0;
+    virtual void pdfWe(const Ray &ray, Float *pdfPos, Float *pdfDir) const = 0;
+    // Samples a lens point as seen from ref (for t = 1 connections).
+    virtual bool sampleWi(const Interaction &ref, Point2 u, CameraWiSample *s) const = 0;
+    virtual Normal3 lensNormal() const = 0;  // world-space view direction (the lens plane normal)
+    Point2i fullResolution;
+};
+
+class PerspectiveCamera : public Camera {
+  public:
+    PerspectiveCamera(const Transform &worldFromCamera, Point2i resolution, const Float screenWindow[4],
+                      Float fovDeg, Float lensRadius, Float focalDistance);
+    Float generateRay(const CameraSample &s, Ray *ray) const override;
+    Spectrum We(const Ray &ray, Point2 *pRaster) const override;
+    void pdfWe(const Ray &ray, Float *pdfPos, Float *pdfDir) const override;
+    bool sampleWi(const Interaction &ref, Point2 u, CameraWiSample *s) const override;
+    Normal3 lensNormal() const override { return viewDir_; }
+    Float lensRadius() const { return lensRadius_; }
+    // Raster position of a camera-space direction from the lens centre (for tests).
+    const Transform &rasterFromCamera() const { return rasterFromCamera_; }
+
+  private:
+    Transform worldFromCamera_, cameraFromWorld_;
+    Transform cameraFromRaster_, rasterFromCamera_;
+    Float lensRadius_, focalDistance_;
+    Float imagePlaneArea_;  // at z = 1
+    Vec3 viewDir_;
+};
+
+// Creates the camera from the Camera directive (only "perspective" so far;
+// orthographic/realistic/environment give UnsupportedError). `resolution`
+// is the film's full resolution.
+std::unique_ptr<Camera> CreateCamera(const CameraDesc &desc, Point2i resolution);
+
+}  // namespace gradus

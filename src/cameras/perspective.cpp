@@ -1,0 +1,122 @@
+#include "cameras/camera.h"
+#include "core/error.h"
+#include "samplers/sampling.h"
+
+namespace gradus {
+
+PerspectiveCamera::PerspectiveCamera(const Transform &worldFromCamera, Point2i res, const Float sw[4], Float fov,
+                                     Float lensRadius, Float focalDistance)
+    : worldFromCamera_(worldFromCamera),
+      cameraFromWorld_(worldFromCamera.inverse()),
+      lensRadius_(lensRadius),
+      focalDistance_(focalDistance) {
+    fullResolution = res;
+    // pbrt-v3: screen -> raster maps the screen window onto the full resolution, y flipped.
+    Transform screenFromCamera = Perspective(fov, 1e-2, 1000);
+    Transform rasterFromScreen = Scale(res.x, res.y, 1) *
+                                 Scale(1 / (sw[1] - sw[0]), 1 / (sw[2] - sw[3]), 1) *
+                                 Translate(Vec3(-sw[0], -sw[3], 0));
+    rasterFromCamera_ = rasterFromScreen * screenFromCamera;
+    cameraFromRaster_ = rasterFromCamera_.inverse();
+    Point3 pMin = cameraFromRaster_.applyPoint(Point3(0, 0, 0));
+    Point3 pMax = cameraFromRaster_.applyPoint(Point3(res.x, res.y, 0));
+    pMin = pMin / pMin.z;
+    pMax = pMax / pMax.z;
+    imagePlaneArea_ = std::abs((pMax.x - pMin.x) * (pMax.y - pMin.y));
+    viewDir_ = Normalize(worldFromCamera_.applyVector(Vec3(0, 0, 1)));
+}
+
+Float PerspectiveCamera::generateRay(const CameraSample &s, Ray *ray) const {
+    Point3 pCam = cameraFromRaster_.applyPoint(Point3(s.pFilm.x, s.pFilm.y, 0));
+    Vec3 d = Normalize(pCam);
+    Point3 o(0, 0, 0);
+    if (lensRadius_ > 0) {
+        Point2 pl = SampleUniformDiskConcentric(s.pLens) * lensRadius_;
+        Float ft = focalDistance_ / d.z;
+        Point3 pFocus = d * ft;
+        o = Point3(pl.x, pl.y, 0);
+        d = Normalize(pFocus - o);
+    }
+    *ray = Ray(worldFromCamera_.applyPoint(o), Normalize(worldFromCamera_.applyVector(d)));
+    return 1;
+}
+
+// We of pbrt-v3's perspective camera: 1 / (A * lensArea * cos^4 theta) inside the image.
+Spectrum PerspectiveCamera::We(const Ray &ray, Point2 *pRaster) const {
+    Float cosTheta = Dot(ray.d, viewDir_);
+    if (cosTheta <= 0) return Spectrum(0);
+    Point3 pFocus = ray(((lensRadius_ > 0) ? focalDistance_ : 1) / cosTheta);
+    Point3 pr = rasterFromCamera_.applyPoint(cameraFromWorld_.applyPoint(pFocus));
+    if (pRaster) *pRaster = Point2(pr.x, pr.y);
+    if (pr.x < 0 || pr.x >= fullResolution.x || pr.y < 0 || pr.y >= fullResolution.y) return Spectrum(0);
+    Float lensArea = lensRadius_ > 0 ? Pi * lensRadius_ * lensRadius_ : 1;
+    Float cos2 = cosTheta * cosTheta;
+    return Spectrum(1 / (imagePlaneArea_ * lensArea * cos2 * cos2));
+}
+
+void PerspectiveCamera::pdfWe(const Ray &ray, Float *pdfPos, Float *pdfDir) const {
+    Float cosTheta = Dot(ray.d, viewDir_);
+    *pdfPos = *pdfDir = 0;
+    if (cosTheta <= 0) return;
+    Point3 pFocus = ray(((lensRadius_ > 0) ? focalDistance_ : 1) / cosTheta);
+    Point3 pr = rasterFromCamera_.applyPoint(cameraFromWorld_.applyPoint(pFocus));
+    if (pr.x < 0 || pr.x >= fullResolution.x || pr.y < 0 || pr.y >= fullResolution.y) return;
+    Float lensArea = lensRadius_ > 0 ? Pi * lensRadius_ * lensRadius_ : 1;
+    *pdfPos = 1 / lensArea;
+    *pdfDir = 1 / (imagePlaneArea_ * cosTheta * cosTheta * cosTheta);
+}
+
+bool PerspectiveCamera::sampleWi(const Interaction &ref, Point2 u, CameraWiSample *s) const {
+    Point2 pl = SampleUniformDiskConcentric(u) * lensRadius_;
+    Point3 pLensW = worldFromCamera_.applyPoint(Point3(pl.x, pl.y, 0));
+    Vec3 wi = pLensW - ref.p;
+    Float dist2 = wi.lengthSquared();
+    if (dist2 == 0) return false;
+    Float dist = std::sqrt(dist2);
+    wi = wi / dist;
+    s->pLens = Interaction(pLensW, viewDir_, Vec3(0, 0, 0));
+    Float lensArea = lensRadius_ > 0 ? Pi * lensRadius_ * lensRadius_ : 1;
+    Float cosL = AbsDot(viewDir_, wi);
+    if (cosL == 0) return false;
+    s->pdf = dist2 / (cosL * lensArea);
+    s->wi = wi;
+    s->We = We(Ray(pLensW, -wi), &s->pRaster);
+    return !s->We.isBlack();
+}
+
+std::unique_ptr<Camera> CreateCamera(const CameraDesc &desc, Point2i res) {
+    const ParamSet &ps = desc.params;
+    std::string type = desc.present ? desc.type : "perspective";
+    if (type != "perspective") {
+        if (type == "orthographic" || type == "realistic" || type == "environment")
+            throw UnsupportedError(desc.loc, "Camera \"" + type + "\"");
+        throw Error(desc.loc, "unknown camera type \"" + type + "\" (valid: perspective)");
+    }
+    ps.getFloat("shutteropen", 0);
+    ps.getFloat("shutterclose", 1);
+    Float lensRadius = ps.getFloat("lensradius", 0);
+    Float focalDistance = ps.getFloat("focaldistance", 1e6);
+    Float aspect = ps.getFloat("frameaspectratio", Float(res.x) / Float(res.y));
+    Float sw[4];
+    if (aspect > 1) {
+        sw[0] = -aspect; sw[1] = aspect; sw[2] = -1; sw[3] = 1;
+    } else {
+        sw[0] = -1; sw[1] = 1; sw[2] = -1 / aspect; sw[3] = 1 / aspect;
+    }
+    std::vector<Float> swp = ps.getFloats("screenwindow");
+    if (!swp.empty()) {
+        if (swp.size() != 4) throw Error(ps.locOf("screenwindow", desc.loc), "\"screenwindow\" needs 4 values");
+        for (int i = 0; i < 4; ++i) sw[i] = swp[i];
+    }
+    Float fov = ps.getFloat("fov", 90);
+    Float halffov = ps.getFloat("halffov", -1);
+    if (halffov > 0) fov = 2 * halffov;
+    if (!(fov > 0 && fov < 180)) throw Error(ps.locOf("fov", desc.loc), "\"fov\" must be in (0, 180) degrees");
+    if (lensRadius < 0) throw Error(ps.locOf("lensradius", desc.loc), "\"lensradius\" must be >= 0");
+    if (!(focalDistance > 0)) throw Error(ps.locOf("focaldistance", desc.loc), "\"focaldistance\" must be > 0");
+    ps.checkUnused("Camera \"perspective\"");
+    return std::make_unique<PerspectiveCamera>(desc.cameraFromWorld.inverse(), res, sw, fov, lensRadius,
+                                               focalDistance);
+}
+
+}  // namespace gradus

@@ -1,0 +1,130 @@
+#include "integrators/path/path.h"
+
+#include "core/error.h"
+#include "core/stats.h"
+#include "samplers/sampling.h"
+
+namespace gradus {
+
+PathIntegrator::PathIntegrator(const EntityDesc &desc) : loc_(desc.loc) {
+    const ParamSet &ps = desc.params;
+    maxDepth_ = ps.getInt("maxdepth", 5);
+    rrThreshold_ = ps.getFloat("rrthreshold", 1);
+    strategy_ = ps.getString("lightsamplestrategy", "spatial");
+    ps.getInts("pixelbounds");
+    if (maxDepth_ < 0) throw Error(ps.locOf("maxdepth", desc.loc), "\"maxdepth\" must be >= 0");
+}
+
+void PathIntegrator::preprocess(const Scene &scene, Film &) {
+    lightSampler_ = LightSampler(scene.lights, strategy_, loc_);
+}
+
+void PathIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const {
+    Ray ray;
+    Float w = scene_->camera->generateRay(cs, &ray);
+    if (w == 0) return;
+    rec.addRadiance(Li(ray, sampler, arena) * w);
+}
+
+// Next-event estimation and BSDF sampling combined with the power heuristic
+// (Veach 1997, Eq. 9.13); emission found by BSDF sampling is weighted at the
+// next vertex, so each bounce costs one closest-hit and one shadow ray.
+Spectrum PathIntegrator::Li(const Ray &cameraRay, Sampler &sampler, Arena &arena) const {
+    GRADUS_STAT_COUNTER("Path/Paths", nPaths);
+    GRADUS_STAT_COUNTER("Path/Path vertices", nVertices);
+    ++nPaths;
+    const Scene &scene = *scene_;
+    Spectrum L(0), beta(1);
+    Ray ray = cameraRay;
+    bool specularBounce = true;  // the camera ray counts as specular for emission
+    Float prevBsdfPdf = 0;
+    Interaction prevIt;
+    Float etaScale = 1;
+    for (int bounces = 0;; ++bounces) {
+        SurfaceInteraction isect;
+        bool found = scene.intersect(ray, &isect);
+        // Emission reached by the previous BSDF sample.
+        if (found) {
+            Spectrum Le = isect.Le(-ray.d);
+            if (!Le.isBlack()) {
+                if (specularBounce) {
+                    L += beta * Le;
+                } else {
+                    Float lightPdf = lightSampler_.pmf(isect.areaLight) * isect.areaLight->pdfLi(prevIt, ray.d);
+                    L += beta * Le * PowerHeuristic(1, prevBsdfPdf, 1, lightPdf);
+                }
+            }
+        } else {
+            for (const Light *light : scene.infiniteLights) {
+                Spectrum Le = light->Le(ray);
+                if (Le.isBlack()) continue;
+                if (specularBounce) {
+                    L += beta * Le;
+                } else {
+                    Float lightPdf = lightSampler_.pmf(light) * light->pdfLi(prevIt, ray.d);
+                    L += beta * Le * PowerHeuristic(1, prevBsdfPdf, 1, lightPdf);
+                }
+            }
+            break;
+        }
+        if (bounces >= maxDepth_) break;
+        ++nVertices;
+
+        if (!isect.material) {  // interface: continue straight through
+            ray = isect.spawnRay(ray.d);
+            --bounces;
+            continue;
+        }
+        BSDF bsdf = isect.material->getBSDF(isect, arena, TransportMode::Radiance);
+        if (!bsdf) break;
+        const Vec3 wo = isect.wo;
+
+        // Next-event estimation (skipped at purely specular vertices).
+        if (bsdf.hasNonSpecular() && !scene.lights.empty()) {
+            Float pmf;
+            const Light *light = lightSampler_.sample(sampler.get1D(), &pmf);
+            Point2 uLight = sampler.get2D();
+            LightLiSample ls;
+            if (light && pmf > 0 && light->sampleLi(isect, uLight, &ls) && ls.pdf > 0) {
+                Spectrum f = bsdf.f(wo, ls.wi) * AbsDot(ls.wi, isect.shading.n);
+                if (!f.isBlack() && scene.unoccluded(isect, ls.pLight)) {
+                    Float lightPdf = pmf * ls.pdf;
+                    if (IsDeltaLight(light->flags)) {
+                        L += beta * f * ls.L / lightPdf;
+                    } else {
+                        Float bsdfPdf = bsdf.pdf(wo, ls.wi);
+                        L += beta * f * ls.L * (PowerHeuristic(1, lightPdf, 1, bsdfPdf) / lightPdf);
+                    }
+                }
+            }
+        } else if (bsdf.hasNonSpecular()) {
+            sampler.get1D();
+            sampler.get2D();
+        }
+
+        // BSDF sampling for the next direction.
+        Float uc = sampler.get1D();
+        Point2 u = sampler.get2D();
+        BSDFSample bs;
+        if (!bsdf.sample(wo, uc, u, TransportMode::Radiance, &bs) || !bs.valid()) break;
+        beta *= bs.f * (AbsDot(bs.wi, isect.shading.n) / bs.pdf);
+        specularBounce = bs.isSpecular();
+        prevBsdfPdf = bs.pdf;
+        prevIt = isect;
+        if (bs.isTransmission()) etaScale *= Sqr(bs.eta);
+        ray = isect.spawnRay(bs.wi);
+
+        // Russian roulette (pbrt-v3: after three bounces, on beta scaled by eta^2).
+        Spectrum rrBeta = beta * etaScale;
+        Float uRR = sampler.get1D();
+        if (rrBeta.maxComponent() < rrThreshold_ && bounces > 3) {
+            Float q = std::max<Float>(0.05, 1 - rrBeta.maxComponent());
+            if (uRR < q) break;
+            beta = beta / (1 - q);
+        }
+        if (beta.isBlack()) break;
+    }
+    return L;
+}
+
+}  // namespace gradus

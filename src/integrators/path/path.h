@@ -1,0 +1,33 @@
+// Unidirectional path tracer with next-event estimation and MIS (pbrt-v3's
+// "path" semantics).
+//
+// Parameters (pbrt-v3 names and defaults):
+//   integer maxdepth 5            maximum number of bounces
+//   float rrthreshold 1           Russian roulette starts when max(beta) < rrthreshold (after 3 bounces)
+//   string lightsamplestrategy "spatial"   uniform | power | spatial (spatial = power for now)
+//   integer pixelbounds [x0 x1 y0 y1]      accepted (use --cropwindow instead)
+#pragma once
+#include "integrators/integrator.h"
+#include "lights/light_sampler.h"
+
+namespace gradus {
+
+class PathIntegrator : public SampleIntegrator {
+  public:
+    explicit PathIntegrator(const EntityDesc &desc);
+    std::string name() const override { return "path"; }
+    void preprocess(const Scene &scene, Film &film) override;
+    void estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const override;
+    // Radiance along a camera ray (exposed for tests).
+    Spectrum Li(const Ray &ray, Sampler &sampler, Arena &arena) const;
+    int maxDepth() const { return maxDepth_; }
+
+  private:
+    int maxDepth_;
+    Float rrThreshold_;
+    std::string strategy_;
+    FileLoc loc_;
+    LightSampler lightSampler_;
+};
+
+}  // namespace gradus

@@ -1,0 +1,132 @@
+#include "render/film.h"
+
+#include <cmath>
+
+#include "core/error.h"
+
+namespace gradus {
+
+Film::Film(Point2i res, const Float crop[4], std::unique_ptr<Filter> filter, std::string filename, Float scale)
+    : fullRes_(res), filter_(std::move(filter)), filename_(std::move(filename)), scale_(scale) {
+    // pbrt-v3: cropped bounds = [ceil(res * crop.min), ceil(res * crop.max)).
+    bounds_.pMin = {int(std::ceil(res.x * crop[0])), int(std::ceil(res.y * crop[2]))};
+    bounds_.pMax = {int(std::ceil(res.x * crop[1])), int(std::ceil(res.y * crop[3]))};
+    if (bounds_.area() <= 0) throw Error("film crop window selects no pixels");
+    size_t n = size_t(bounds_.area());
+    sum_.assign(n, Spectrum(0));
+    weight_.assign(n, 0);
+    splat_.assign(n, Spectrum(0));
+    count_.assign(n, 0);
+}
+
+Bounds2i Film::sampleBounds() const {
+    Bounds2i b;
+    b.pMin = {int(std::floor(bounds_.pMin.x + 0.5 - filter_->radius.x)),
+              int(std::floor(bounds_.pMin.y + 0.5 - filter_->radius.y))};
+    b.pMax = {int(std::ceil(bounds_.pMax.x - 0.5 + filter_->radius.x)),
+              int(std::ceil(bounds_.pMax.y - 0.5 + filter_->radius.y))};
+    return b;
+}
+
+int Film::addLayer(const std::string &name) {
+    for (int i = 0; i < numLayers(); ++i)
+        if (layerNames_[i] == name) return i;
+    layerNames_.push_back(name);
+    layers_.emplace_back(size_t(bounds_.area()), Spectrum(0));
+    return numLayers() - 1;
+}
+
+std::unique_ptr<FilmTile> Film::makeTile(const Bounds2i &samplePixels) const {
+    return std::make_unique<FilmTile>(*this, samplePixels);
+}
+
+FilmTile::FilmTile(const Film &film, const Bounds2i &sp) : film_(film) {
+    int rx = int(std::ceil(film.filter_->radius.x)) + 1, ry = int(std::ceil(film.filter_->radius.y)) + 1;
+    bounds_.pMin = {sp.pMin.x - rx, sp.pMin.y - ry};
+    bounds_.pMax = {sp.pMax.x + rx, sp.pMax.y + ry};
+    size_t n = size_t(bounds_.area());
+    sum_.assign(n, Spectrum(0));
+    weight_.assign(n, 0);
+    count_.assign(n, 0);
+    layers_.resize(film.numLayers());
+    for (auto &l : layers_) l.assign(n, Spectrum(0));
+}
+
+void FilmTile::addSample(Point2 pFilm, const Spectrum &L, Float w) {
+    const Vec2 r = film_.filter_->radius;
+    // Discrete pixels whose centre lies within the filter radius of pFilm.
+    Point2 pd(pFilm.x - 0.5, pFilm.y - 0.5);
+    int x0 = int(std::ceil(pd.x - r.x)), x1 = int(std::floor(pd.x + r.x));
+    int y0 = int(std::ceil(pd.y - r.y)), y1 = int(std::floor(pd.y + r.y));
+    for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+            Point2i p{x, y};
+            if (!film_.bounds_.inside(p) || !inTile(p)) continue;
+            Float fw = film_.filter_->evaluate(Point2(x - pd.x, y - pd.y)) * w;
+            if (fw == 0) continue;
+            size_t i = index(p);
+            sum_[i] += L * fw;
+            weight_[i] += fw;
+        }
+}
+
+void FilmTile::addLayer(int layer, Point2i p, const Spectrum &v) {
+    if (!film_.bounds_.inside(p) || !inTile(p)) return;
+    layers_[layer][index(p)] += v;
+}
+
+void FilmTile::addCount(Point2i p, double n) {
+    if (!film_.bounds_.inside(p) || !inTile(p)) return;
+    count_[index(p)] += n;
+}
+
+void Film::mergeTile(const FilmTile &t) {
+    for (int y = std::max(t.bounds_.pMin.y, bounds_.pMin.y); y < std::min(t.bounds_.pMax.y, bounds_.pMax.y); ++y)
+        for (int x = std::max(t.bounds_.pMin.x, bounds_.pMin.x); x < std::min(t.bounds_.pMax.x, bounds_.pMax.x);
+             ++x) {
+            Point2i p{x, y};
+            size_t i = index(p), j = t.index(p);
+            sum_[i] += t.sum_[j];
+            weight_[i] += t.weight_[j];
+            count_[i] += t.count_[j];
+            for (int l = 0; l < numLayers(); ++l) layers_[l][i] += t.layers_[l][j];
+        }
+    for (const auto &s : t.splats_) {
+        Point2i p{int(std::floor(s.p.x)), int(std::floor(s.p.y))};
+        if (bounds_.inside(p)) splat_[index(p)] += s.v;
+    }
+}
+
+Image Film::mainImage() const {
+    Image img = Image::RGB(bounds_.width(), bounds_.height());
+    for (int y = 0; y < bounds_.height(); ++y)
+        for (int x = 0; x < bounds_.width(); ++x) {
+            size_t i = size_t(y) * bounds_.width() + x;
+            Spectrum v(0);
+            if (weight_[i] != 0) v = sum_[i] / weight_[i];
+            if (splatSpp_ > 0) v += splat_[i] / splatSpp_;
+            v *= scale_;
+            for (int c = 0; c < 3; ++c) img.at(x, y, c) = float(v[c]);
+        }
+    return img;
+}
+
+Image Film::layerImage(int layer) const {
+    Image img = Image::RGB(bounds_.width(), bounds_.height());
+    for (int y = 0; y < bounds_.height(); ++y)
+        for (int x = 0; x < bounds_.width(); ++x) {
+            size_t i = size_t(y) * bounds_.width() + x;
+            Spectrum v = count_[i] > 0 ? layers_[layer][i] / count_[i] : Spectrum(0);
+            v *= scale_;
+            for (int c = 0; c < 3; ++c) img.at(x, y, c) = float(v[c]);
+        }
+    return img;
+}
+
+Image Film::toImage() const {
+    Image img = mainImage();
+    for (int l = 0; l < numLayers(); ++l) img.setLayerRGB(layerNames_[l], layerImage(l));
+    return img;
+}
+
+}  // namespace gradus

@@ -1,0 +1,98 @@
+// Film: the main filtered RGB image plus named per-pixel layers (gradients,
+// per-strategy images, ...), and light-tracing splats. Rendering goes through
+// FilmTiles that are merged in a fixed order, so images do not depend on the
+// thread count.
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/geometry.h"
+#include "core/spectrum.h"
+#include "filters/filter.h"
+#include "image/image.h"
+
+namespace gradus {
+
+struct Bounds2i {
+    Point2i pMin, pMax;  // pMax exclusive
+    int width() const { return std::max(0, pMax.x - pMin.x); }
+    int height() const { return std::max(0, pMax.y - pMin.y); }
+    int64_t area() const { return int64_t(width()) * height(); }
+    bool inside(Point2i p) const { return p.x >= pMin.x && p.x < pMax.x && p.y >= pMin.y && p.y < pMax.y; }
+};
+
+class FilmTile;
+
+class Film {
+  public:
+    Film(Point2i fullResolution, const Float cropWindow[4], std::unique_ptr<Filter> filter, std::string filename,
+         Float scale);
+    Point2i fullResolution() const { return fullRes_; }
+    const Bounds2i &pixelBounds() const { return bounds_; }   // cropped output pixels
+    Bounds2i sampleBounds() const;                             // pixels to sample (filter support)
+    const Filter &filter() const { return *filter_; }
+    const std::string &filename() const { return filename_; }
+    Float scale() const { return scale_; }
+
+    // Extra per-pixel layer (value = sum of contributions / samples of that pixel).
+    int addLayer(const std::string &name);
+    int numLayers() const { return int(layerNames_.size()); }
+    const std::string &layerName(int i) const { return layerNames_[i]; }
+
+    std::unique_ptr<FilmTile> makeTile(const Bounds2i &samplePixels) const;
+    void mergeTile(const FilmTile &tile);
+    // Number of camera samples per pixel taken so far (for splat normalisation).
+    void setSplatSamples(double sppTotal) { splatSpp_ = sppTotal; }
+    double splatSamples() const { return splatSpp_; }
+
+    // Final images (cropped size).
+    Image mainImage() const;
+    Image layerImage(int layer) const;
+    // RGB main image and all layers ("name.R" ...) in one image.
+    Image toImage() const;
+
+  private:
+    friend class FilmTile;
+    size_t index(Point2i p) const {
+        return size_t(p.y - bounds_.pMin.y) * bounds_.width() + size_t(p.x - bounds_.pMin.x);
+    }
+    Point2i fullRes_;
+    Bounds2i bounds_;
+    std::unique_ptr<Filter> filter_;
+    std::string filename_;
+    Float scale_;
+    std::vector<Spectrum> sum_;
+    std::vector<double> weight_;
+    std::vector<Spectrum> splat_;
+    std::vector<double> count_;
+    std::vector<std::string> layerNames_;
+    std::vector<std::vector<Spectrum>> layers_;
+    double splatSpp_ = 0;
+};
+
+class FilmTile {
+  public:
+    FilmTile(const Film &film, const Bounds2i &samplePixels);
+    // Filtered main-image sample at continuous raster position pFilm.
+    void addSample(Point2 pFilm, const Spectrum &L, Float weight = 1);
+    void addLayer(int layer, Point2i pixel, const Spectrum &v);
+    void addCount(Point2i pixel, double n);
+    void addSplat(Point2 pFilm, const Spectrum &v) { splats_.push_back({pFilm, v}); }
+
+  private:
+    friend class Film;
+    bool inTile(Point2i p) const { return bounds_.inside(p); }
+    size_t index(Point2i p) const {
+        return size_t(p.y - bounds_.pMin.y) * bounds_.width() + size_t(p.x - bounds_.pMin.x);
+    }
+    const Film &film_;
+    Bounds2i bounds_;  // pixels this tile may write (sample pixels grown by the filter radius + 1)
+    std::vector<Spectrum> sum_;
+    std::vector<double> weight_, count_;
+    std::vector<std::vector<Spectrum>> layers_;
+    struct Splat { Point2 p; Spectrum v; };
+    std::vector<Splat> splats_;
+};
+
+}  // namespace gradus

@@ -1,0 +1,63 @@
+#include "render/scene.h"
+
+#include <sstream>
+
+#include "core/stats.h"
+
+namespace gradus {
+
+Float gRayEpsilon = 1e-6;
+
+Spectrum SurfaceInteraction::Le(const Vec3 &w) const {
+    return areaLight ? areaLight->L(*this, w) : Spectrum(0);
+}
+
+Scene::Scene() = default;
+Scene::~Scene() = default;
+
+bool Scene::intersect(const Ray &r, SurfaceInteraction *si) const {
+    GRADUS_STAT_COUNTER("Rays/Closest-hit rays", nRays);
+    ++nRays;
+    RayHit h;
+    if (!accel.intersect(r, &h)) return false;
+    const GeometryRecord &g = geometry[h.geomId];
+    Float dlen = r.d.length();
+    Vec3 wo = -r.d / dlen;
+    if (g.mesh) {
+        g.mesh->interaction(h.primId, h.b1, h.b2, wo, si);
+    } else {
+        // Refine the sphere hit in double precision along the original ray.
+        Float t;
+        Interaction tmp;
+        if (!g.sphere->intersectP(r, &t, &tmp)) t = h.t;
+        g.sphere->interaction(r, t, si);
+    }
+    si->material = g.material;
+    si->areaLight = g.areaLights.empty() ? nullptr : g.areaLights[h.primId];
+    si->geomId = h.geomId;
+    si->primId = h.primId;
+    return true;
+}
+
+bool Scene::occluded(const Ray &r) const {
+    GRADUS_STAT_COUNTER("Rays/Shadow rays", nShadow);
+    ++nShadow;
+    return accel.occluded(r);
+}
+
+std::string SceneFeatures::describe() const {
+    std::ostringstream os;
+    auto yn = [](bool b) { return b ? "yes" : "no"; };
+    os << "Scene features:\n"
+       << "  triangles: " << numTriangles << ", spheres: " << numSpheres << ", lights: " << numLights << "\n"
+       << "  specular surfaces: " << yn(specularSurfaces) << "\n"
+       << "  near-specular surfaces (roughness < 0.001): " << yn(nearSpecularSurfaces) << "\n"
+       << "  lowest material roughness: " << minRoughness << "\n"
+       << "  delta lights: " << yn(deltaLights) << ", infinite lights: " << yn(infiniteLights)
+       << ", area lights: " << yn(areaLights) << "\n"
+       << "  textures: " << yn(textures) << ", subdivision surfaces: " << yn(subdivisionSurfaces) << "\n"
+       << "  emitters directly visible: " << yn(emittersDirectlyVisible) << "\n";
+    return os.str();
+}
+
+}  // namespace gradus

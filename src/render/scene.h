@@ -1,0 +1,60 @@
+// The renderable scene: Embree geometry with per-geometry records, lights,
+// camera, and the SceneFeatures that integrators use to skip work.
+#pragma once
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "accelerators/embree_accel.h"
+#include "cameras/camera.h"
+#include "lights/light.h"
+#include "materials/material.h"
+
+namespace gradus {
+
+// What the scene contains (printed by --stats).
+struct SceneFeatures {
+    bool specularSurfaces = false;      // some material has a perfectly specular lobe (roughness 0)
+    bool nearSpecularSurfaces = false;  // some material is glossy below the shift threshold (0.001)...
+    Float minRoughness = 1;             // lowest roughness over all materials
+    bool deltaLights = false;
+    bool infiniteLights = false;
+    bool areaLights = false;
+    bool textures = false;
+    bool subdivisionSurfaces = false;
+    bool emittersDirectlyVisible = false;  // probed with camera rays at load
+    int numLights = 0;
+    int64_t numTriangles = 0;
+    int numSpheres = 0;
+    std::string describe() const;
+};
+
+struct GeometryRecord {
+    std::shared_ptr<const TriangleMesh> mesh;  // or
+    std::shared_ptr<const Sphere> sphere;
+    const Material *material = nullptr;
+    std::vector<const AreaLight *> areaLights;  // per primitive; empty if not emissive
+};
+
+class Scene {
+  public:
+    Scene();
+    ~Scene();
+    // Closest hit; fills the full surface interaction (double precision).
+    bool intersect(const Ray &r, SurfaceInteraction *si) const;
+    // Any hit before r.tMax.
+    bool occluded(const Ray &r) const;
+    // Shadow-ray test between two interactions (offset at both ends).
+    bool unoccluded(const Interaction &a, const Interaction &b) const { return !occluded(a.spawnRayTo(b)); }
+
+    EmbreeAccel accel;
+    std::vector<GeometryRecord> geometry;   // indexed by Embree geometry id
+    std::vector<std::shared_ptr<Light>> lights;
+    std::vector<const Light *> infiniteLights;
+    std::vector<std::shared_ptr<Material>> materials;  // owned
+    std::unique_ptr<Camera> camera;
+    Bounds3 bounds;
+    SceneFeatures features;
+};
+
+}  // namespace gradus

@@ -1,0 +1,280 @@
+#include "render/scene_builder.h"
+
+#include <map>
+
+#include "core/error.h"
+#include "parser/ply.h"
+#include "samplers/sampling.h"
+
+namespace gradus {
+
+namespace {
+
+struct ShapeBuild {
+    std::shared_ptr<TriangleMesh> mesh;
+    std::shared_ptr<Sphere> sphere;
+};
+
+ShapeBuild CreateShape(const ShapeDesc &sd, const SceneDesc &scene) {
+    const ParamSet &ps = sd.params;
+    const std::string &t = sd.type;
+    ShapeBuild b;
+    auto checkAlpha = [&]() {
+        if (ps.has("alpha") || ps.has("shadowalpha")) {
+            const Param *p = ps.find("alpha");
+            if (!p) p = ps.find("shadowalpha");
+            bool constantOne = p->type == "float" && p->numbers.size() == 1 && p->numbers[0] == 1;
+            if (!constantOne) throw UnsupportedError(p->loc, "alpha cut-outs on shapes");
+        }
+    };
+    if (t == "trianglemesh") {
+        std::vector<int> idx = ps.getInts("indices");
+        std::vector<Point3> P = ps.getPoint3s("P");
+        if (P.empty()) throw Error(sd.loc, "trianglemesh: missing \"point P\"");
+        if (idx.empty()) {
+            if (P.size() == 3) idx = {0, 1, 2};
+            else throw Error(sd.loc, "trianglemesh: missing \"integer indices\"");
+        }
+        std::vector<Point2> uv = ps.getPoint2s("uv");
+        if (uv.empty()) uv = ps.getPoint2s("st");
+        std::vector<Normal3> N = ps.getNormals("N");
+        std::vector<Vec3> S = ps.getVector3s("S");
+        checkAlpha();
+        b.mesh = TriangleMesh::Create(sd.worldFromObject, sd.reverseOrientation, std::move(P), std::move(idx),
+                                      std::move(N), std::move(S), std::move(uv), sd.loc);
+    } else if (t == "plymesh") {
+        std::string fn = ps.getString("filename", "");
+        if (fn.empty()) throw Error(sd.loc, "plymesh: missing \"string filename\"");
+        PlyMesh ply;
+        try {
+            ply = ReadPly(scene.resolve(fn));
+        } catch (const Error &e) {
+            throw Error(ps.locOf("filename", sd.loc), e.what());
+        }
+        checkAlpha();
+        if (ps.has("displacement")) throw UnsupportedError(ps.locOf("displacement", sd.loc), "plymesh displacement");
+        b.mesh = TriangleMesh::Create(sd.worldFromObject, sd.reverseOrientation, std::move(ply.P),
+                                      std::move(ply.indices), std::move(ply.N), {}, std::move(ply.uv), sd.loc);
+    } else if (t == "sphere") {
+        Float r = ps.getFloat("radius", 1);
+        Float zmin = ps.getFloat("zmin", -r), zmax = ps.getFloat("zmax", r), phimax = ps.getFloat("phimax", 360);
+        if (!(r > 0)) throw Error(ps.locOf("radius", sd.loc), "sphere: \"radius\" must be > 0");
+        b.sphere = std::make_shared<Sphere>(sd.worldFromObject, sd.reverseOrientation, r, zmin, zmax, phimax);
+    } else if (t == "disk" || t == "cylinder" || t == "cone" || t == "paraboloid" || t == "hyperboloid" ||
+               t == "loopsubdiv" || t == "curve" || t == "nurbs" || t == "heightfield") {
+        throw UnsupportedError(sd.loc, "Shape \"" + t + "\"");
+    } else {
+        throw Error(sd.loc, "unknown shape \"" + t +
+                                "\" (valid: trianglemesh, plymesh, sphere; pbrt-v3 also has disk, cylinder, cone, "
+                                "paraboloid, hyperboloid, loopsubdiv, curve, nurbs, heightfield)");
+    }
+    ps.checkUnused("Shape \"" + t + "\"");
+    return b;
+}
+
+}  // namespace
+
+std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
+    auto scene = std::make_unique<Scene>();
+    SceneFeatures &feat = scene->features;
+
+    // Textures (in file order: later ones may reference earlier ones).
+    NamedTextures textures;
+    for (const auto &td : desc.textures) {
+        CreateTexture(td, desc, &textures);
+        td.params.checkUnused("Texture \"" + td.name + "\"");
+        if (td.type != "constant") feat.textures = true;
+    }
+    // Materials; "none"/"interface"/"" mean no surface (rays pass through).
+    std::vector<const Material *> matByIndex(desc.materials.size(), nullptr);
+    std::map<std::string, std::shared_ptr<Material>> named;
+    feat.minRoughness = 1;
+    for (size_t i = 0; i < desc.materials.size(); ++i) {
+        const MaterialDesc &md = desc.materials[i];
+        if (md.type.empty() || md.type == "none" || md.type == "interface") {
+            md.params.checkUnused("Material \"" + md.type + "\"");
+            continue;
+        }
+        auto m = CreateMaterial(md, textures, named);
+        md.params.checkUnused("Material \"" + md.type + "\"");
+        if (!md.name.empty()) named[md.name] = m;
+        matByIndex[i] = m.get();
+        scene->materials.push_back(m);
+    }
+    MaterialDesc defDesc;
+    defDesc.type = "matte";
+    auto defaultMaterial = CreateMaterial(defDesc, textures, named);
+    scene->materials.push_back(defaultMaterial);
+
+    // Shapes: world shapes, then flattened object instances.
+    std::vector<ShapeDesc> shapes = desc.shapes;
+    for (const auto &use : desc.instanceUses) {
+        auto it = desc.instances.find(use.name);
+        if (it == desc.instances.end()) throw Error(use.loc, "unknown object \"" + use.name + "\"");
+        for (ShapeDesc s : it->second.shapes) {
+            if (s.areaLight >= 0) throw UnsupportedError(s.loc, "area lights inside object instances");
+            s.worldFromObject = use.worldFromInstance * s.worldFromObject;
+            shapes.push_back(std::move(s));
+        }
+    }
+    for (const auto &sd : shapes) {
+        ShapeBuild b = CreateShape(sd, desc);
+        GeometryRecord rec;
+        rec.material = sd.material >= 0 ? matByIndex[sd.material] : defaultMaterial.get();
+        if (sd.material >= 0 && matByIndex[sd.material]) {
+            Float r = matByIndex[sd.material]->minRoughness();
+            feat.minRoughness = std::min(feat.minRoughness, r);
+        }
+        std::vector<std::shared_ptr<Shape>> prims;
+        if (b.mesh) {
+            if (b.mesh->numTriangles() == 0) continue;  // empty mesh: nothing to add
+            rec.mesh = b.mesh;
+            feat.numTriangles += b.mesh->numTriangles();
+            scene->bounds.expand(Bounds3());
+            for (const auto &p : b.mesh->p) scene->bounds.expand(p);
+        } else {
+            rec.sphere = b.sphere;
+            feat.numSpheres++;
+            scene->bounds.expand(b.sphere->worldBound());
+        }
+        if (sd.areaLight >= 0) {
+            const EntityDesc &ad = desc.areaLights[sd.areaLight];
+            if (ad.type != "diffuse" && ad.type != "area")
+                throw Error(ad.loc, "unknown area light \"" + ad.type + "\" (valid: diffuse, area)");
+            Spectrum L = ad.params.getSpectrum("L", Spectrum(1)) * ad.params.getSpectrum("scale", Spectrum(1));
+            bool twoSided = ad.params.getBool("twosided", false);
+            ad.params.getInt("nsamples", 1);
+            ad.params.checkUnused("AreaLightSource \"" + ad.type + "\"");
+            if (b.mesh) {
+                for (int t = 0; t < b.mesh->numTriangles(); ++t) {
+                    auto tri = std::make_shared<Triangle>(b.mesh, t);
+                    if (tri->area() <= 0) {
+                        rec.areaLights.push_back(nullptr);
+                        continue;
+                    }
+                    auto al = std::make_shared<AreaLight>(tri, L, twoSided);
+                    rec.areaLights.push_back(al.get());
+                    scene->lights.push_back(al);
+                }
+            } else {
+                auto al = std::make_shared<AreaLight>(b.sphere, L, twoSided);
+                rec.areaLights.push_back(al.get());
+                scene->lights.push_back(al);
+            }
+            feat.areaLights = true;
+        }
+        int id = b.mesh ? scene->accel.addMesh(b.mesh) : scene->accel.addSphere(b.sphere);
+        if (id != int(scene->geometry.size())) throw Error("internal: geometry ids out of order");
+        scene->geometry.push_back(std::move(rec));
+    }
+    scene->accel.commit();
+    if (!scene->bounds.empty()) {
+        Point3 c;
+        Float r;
+        scene->bounds.boundingSphere(&c, &r);
+        gRayEpsilon = 1e-6 * std::min<Float>(1, std::max<Float>(r, 1e-6));
+    }
+
+    for (const auto &ld : desc.lights) {
+        auto l = CreateLight(ld, desc);
+        if (l->flags & LIGHT_INFINITE) {
+            scene->infiniteLights.push_back(l.get());
+            feat.infiniteLights = true;
+        }
+        if (IsDeltaLight(l->flags)) feat.deltaLights = true;
+        scene->lights.push_back(l);
+    }
+    for (auto &l : scene->lights) l->preprocess(scene->bounds);
+    feat.numLights = int(scene->lights.size());
+    feat.specularSurfaces = feat.minRoughness == 0;
+    feat.nearSpecularSurfaces = feat.minRoughness < 1e-3;
+
+    scene->camera = CreateCamera(desc.camera, resolution);
+
+    // Are emitters directly visible? Probe a coarse grid of camera rays.
+    const int probe = 64;
+    for (int y = 0; y < probe && !feat.emittersDirectlyVisible; ++y)
+        for (int x = 0; x < probe; ++x) {
+            CameraSample cs;
+            cs.pFilm = Point2((x + 0.5) * resolution.x / probe, (y + 0.5) * resolution.y / probe);
+            cs.pLens = Point2(0.5, 0.5);
+            Ray r;
+            scene->camera->generateRay(cs, &r);
+            SurfaceInteraction si;
+            bool hit = scene->intersect(r, &si);
+            if ((hit && si.areaLight) || (!hit && !scene->infiniteLights.empty())) {
+                feat.emittersDirectlyVisible = true;
+                break;
+            }
+        }
+    return scene;
+}
+
+RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
+    RenderJob job;
+    // Film.
+    const EntityDesc &fd = desc.film;
+    if (fd.present && fd.type != "image")
+        throw Error(fd.loc, "unknown film \"" + fd.type + "\" (valid: image)");
+    const ParamSet &fp = fd.params;
+    Point2i res{fp.getInt("xresolution", 640), fp.getInt("yresolution", 480)};
+    if (res.x <= 0 || res.y <= 0) throw Error(fd.loc, "film resolution must be positive");
+    if (opts.quick) res = {std::max(1, res.x / 4), std::max(1, res.y / 4)};
+    Float crop[4] = {0, 1, 0, 1};
+    std::vector<Float> cw = fp.getFloats("cropwindow");
+    if (!cw.empty()) {
+        if (cw.size() != 4) throw Error(fp.locOf("cropwindow", fd.loc), "\"cropwindow\" needs 4 values");
+        for (int i = 0; i < 4; ++i) crop[i] = cw[i];
+    }
+    if (opts.hasCrop)
+        for (int i = 0; i < 4; ++i) crop[i] = opts.crop[i];
+    for (int i = 0; i < 4; ++i) crop[i] = Clamp<Float>(crop[i], 0, 1);
+    if (crop[0] > crop[1]) std::swap(crop[0], crop[1]);
+    if (crop[2] > crop[3]) std::swap(crop[2], crop[3]);
+    std::string filename = fp.getString("filename", "gradus.exr");
+    Float scale = fp.getFloat("scale", 1);
+    fp.getFloat("diagonal", 35);
+    Float maxLum = fp.getFloat("maxsampleluminance", Infinity);
+    if (std::isfinite(maxLum))
+        throw UnsupportedError(fp.locOf("maxsampleluminance", fd.loc), "Film \"maxsampleluminance\" clamping");
+    fp.checkUnused("Film \"image\"");
+    if (!opts.outfileOverride.empty()) filename = opts.outfileOverride;
+    job.film = std::make_unique<Film>(res, crop, CreateFilter(desc.filter), filename, scale);
+
+    // Sampler.
+    EntityDesc sdesc = desc.sampler;
+    if (!sdesc.present) sdesc.type = "halton";
+    int sppOverride = opts.sppOverride;
+    job.sampler = CreateSampler(sdesc, opts.seed, sppOverride);
+    if (opts.quick && sppOverride <= 0)
+        job.sampler = CreateSampler(sdesc, opts.seed, std::max(1, job.sampler->samplesPerPixel() / 8));
+    sdesc.params.checkUnused("Sampler \"" + sdesc.type + "\"");
+
+    if (desc.accelerator.present) {
+        // Embree replaces pbrt-v3's BVH/kd-tree; their tuning parameters are accepted and ignored.
+        for (const auto &p : desc.accelerator.params.all()) p.used = true;
+    }
+
+    // Integrator.
+    EntityDesc idesc = desc.integrator;
+    if (!idesc.present) idesc.type = "path";
+    bool overridden = !opts.integratorOverride.empty() && opts.integratorOverride != idesc.type;
+    if (!opts.integratorOverride.empty()) idesc.type = opts.integratorOverride;
+    job.integrator = CreateIntegrator(idesc);
+    if (overridden) {
+        // Parameters written for the scene's own integrator do not all apply to the override.
+        for (const auto &p : idesc.params.all())
+            if (!p.used) {
+                job.warnings.push_back(p.loc.str() + ": parameter \"" + p.type + " " + p.name +
+                                       "\" of Integrator \"" + desc.integrator.type + "\" is ignored by \"" +
+                                       idesc.type + "\"");
+                p.used = true;
+            }
+    }
+    idesc.params.checkUnused("Integrator \"" + idesc.type + "\"");
+
+    job.scene = BuildScene(desc, res);
+    return job;
+}
+
+}  // namespace gradus

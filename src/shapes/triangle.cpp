@@ -1,0 +1,183 @@
+#include "shapes/triangle.h"
+
+#include "core/error.h"
+#include "samplers/sampling.h"
+
+namespace gradus {
+
+std::shared_ptr<TriangleMesh> TriangleMesh::Create(const Transform &xf, bool reverseOrientation,
+                                                   std::vector<Point3> P, std::vector<int> indices,
+                                                   std::vector<Normal3> N, std::vector<Vec3> S,
+                                                   std::vector<Point2> uv, const FileLoc &loc) {
+    if (indices.size() % 3 != 0)
+        throw Error(loc, "triangle mesh: number of indices (" + std::to_string(indices.size()) +
+                             ") is not a multiple of 3");
+    for (int i : indices)
+        if (i < 0 || size_t(i) >= P.size())
+            throw Error(loc, "triangle mesh: vertex index " + std::to_string(i) + " out of range (" +
+                                 std::to_string(P.size()) + " vertices)");
+    if (!N.empty() && N.size() != P.size())
+        throw Error(loc, "triangle mesh: \"N\" has " + std::to_string(N.size()) + " entries, \"P\" has " +
+                             std::to_string(P.size()));
+    if (!S.empty() && S.size() != P.size())
+        throw Error(loc, "triangle mesh: \"S\" must have one entry per vertex");
+    if (!uv.empty() && uv.size() != P.size())
+        throw Error(loc, "triangle mesh: \"uv\" has " + std::to_string(uv.size()) + " entries, \"P\" has " +
+                             std::to_string(P.size()));
+    auto m = std::make_shared<TriangleMesh>();
+    m->reverseOrientation = reverseOrientation;
+    m->transformSwapsHandedness = xf.swapsHandedness();
+    m->p.resize(P.size());
+    for (size_t i = 0; i < P.size(); ++i) m->p[i] = xf.applyPoint(P[i]);
+    m->n.resize(N.size());
+    for (size_t i = 0; i < N.size(); ++i) {
+        Normal3 n = xf.applyNormal(N[i]);
+        if (reverseOrientation) n = -n;
+        m->n[i] = n;
+    }
+    m->s.resize(S.size());
+    for (size_t i = 0; i < S.size(); ++i) m->s[i] = xf.applyVector(S[i]);
+    m->uv = std::move(uv);
+    m->indices = std::move(indices);
+    return m;
+}
+
+void TriangleMesh::interaction(int tri, Float b1, Float b2, const Vec3 &wo, SurfaceInteraction *si) const {
+    const int i0 = indices[3 * tri], i1 = indices[3 * tri + 1], i2 = indices[3 * tri + 2];
+    const Point3 &p0 = p[i0], &p1 = p[i1], &p2 = p[i2];
+    Float b0 = 1 - b1 - b2;
+    Point2 uv0(0, 0), uv1(1, 0), uv2(1, 1);
+    if (!uv.empty()) { uv0 = uv[i0]; uv1 = uv[i1]; uv2 = uv[i2]; }
+    // Partial derivatives from the uv parameterisation.
+    Vec2 duv02 = uv0 - uv2, duv12 = uv1 - uv2;
+    Vec3 dp02 = p0 - p2, dp12 = p1 - p2;
+    Float det = duv02.x * duv12.y - duv02.y * duv12.x;
+    Normal3 ng = Cross(dp02, dp12);
+    Float ngLen = ng.length();
+    ng = ngLen > 0 ? ng / ngLen : Normal3(0, 0, 1);
+    Vec3 dpdu, dpdv;
+    bool degenerateUV = std::abs(det) < 1e-12;
+    if (!degenerateUV) {
+        Float inv = 1 / det;
+        dpdu = (dp02 * duv12.y - dp12 * duv02.y) * inv;
+        dpdv = (dp12 * duv02.x - dp02 * duv12.x) * inv;
+    }
+    if (degenerateUV || Cross(dpdu, dpdv).lengthSquared() == 0) CoordinateSystem(ng, &dpdu, &dpdv);
+
+    si->p = p0 * b0 + p1 * b1 + p2 * b2;
+    si->uv = uv0 * b0 + uv1 * b1 + uv2 * b2;
+    si->wo = wo;
+    si->dpdu = dpdu;
+    si->dpdv = dpdv;
+    si->dndu = si->dndv = Normal3(0, 0, 0);
+    si->n = ng;
+    si->shading.n = ng;
+    si->shading.dpdu = dpdu;
+    si->shading.dpdv = dpdv;
+    si->shading.dndu = si->shading.dndv = Normal3(0, 0, 0);
+
+    if (!n.empty()) {
+        Normal3 ns = n[i0] * b0 + n[i1] * b1 + n[i2] * b2;
+        ns = ns.lengthSquared() > 0 ? Normalize(ns) : si->n;
+        si->n = FaceForward(si->n, ns);
+        Vec3 ss = s.empty() ? si->dpdu : s[i0] * b0 + s[i1] * b1 + s[i2] * b2;
+        if (ss.lengthSquared() == 0) ss = si->dpdu;
+        Vec3 ts = Cross(ss, ns);
+        if (ts.lengthSquared() > 0) {
+            ts = Normalize(ts);
+            ss = Cross(ts, ns);
+        } else {
+            CoordinateSystem(ns, &ss, &ts);
+        }
+        // Normal derivatives from the per-vertex normals.
+        Normal3 dndu(0, 0, 0), dndv(0, 0, 0);
+        if (!degenerateUV) {
+            Normal3 dn1 = n[i0] - n[i2], dn2 = n[i1] - n[i2];
+            Float inv = 1 / det;
+            dndu = (dn1 * duv12.y - dn2 * duv02.y) * inv;
+            dndv = (dn2 * duv02.x - dn1 * duv12.x) * inv;
+        }
+        si->setShadingGeometry(ss, ts, dndu, dndv, true);
+    } else if (reverseOrientation ^ transformSwapsHandedness) {
+        si->n = -si->n;
+        si->shading.n = si->n;
+    }
+}
+
+void Triangle::vertices(Point3 *p0, Point3 *p1, Point3 *p2) const {
+    const int *v = &mesh_->indices[3 * tri_];
+    *p0 = mesh_->p[v[0]];
+    *p1 = mesh_->p[v[1]];
+    *p2 = mesh_->p[v[2]];
+}
+
+Float Triangle::area() const {
+    Point3 p0, p1, p2;
+    vertices(&p0, &p1, &p2);
+    return 0.5 * Cross(p1 - p0, p2 - p0).length();
+}
+
+Bounds3 Triangle::worldBound() const {
+    Point3 p0, p1, p2;
+    vertices(&p0, &p1, &p2);
+    Bounds3 b;
+    b.expand(p0);
+    b.expand(p1);
+    b.expand(p2);
+    return b;
+}
+
+Interaction Triangle::sampleArea(Point2 u, Float *pdf) const {
+    Point3 p0, p1, p2;
+    vertices(&p0, &p1, &p2);
+    Point2 b = SampleUniformTriangle(u);
+    Interaction it;
+    it.p = p0 * b.x + p1 * b.y + p2 * (1 - b.x - b.y);
+    Normal3 n = Cross(p1 - p0, p2 - p0);
+    Float len = n.length();
+    it.n = len > 0 ? n / len : Normal3(0, 0, 1);
+    const int *v = &mesh_->indices[3 * tri_];
+    if (!mesh_->n.empty()) {
+        Normal3 ns = mesh_->n[v[0]] * b.x + mesh_->n[v[1]] * b.y + mesh_->n[v[2]] * (1 - b.x - b.y);
+        it.n = FaceForward(it.n, ns);
+    } else if (mesh_->reverseOrientation ^ mesh_->transformSwapsHandedness) {
+        it.n = -it.n;
+    }
+    Float a = 0.5 * len;
+    *pdf = a > 0 ? 1 / a : 0;
+    return it;
+}
+
+// Moeller-Trumbore in double precision.
+bool Triangle::intersectP(const Ray &r, Float *tHit, Interaction *hit) const {
+    Point3 p0, p1, p2;
+    vertices(&p0, &p1, &p2);
+    Vec3 e1 = p1 - p0, e2 = p2 - p0;
+    Vec3 pv = Cross(r.d, e2);
+    Float det = Dot(e1, pv);
+    if (det == 0) return false;
+    Float inv = 1 / det;
+    Vec3 tv = r.o - p0;
+    Float b1 = Dot(tv, pv) * inv;
+    if (b1 < 0 || b1 > 1) return false;
+    Vec3 qv = Cross(tv, e1);
+    Float b2 = Dot(r.d, qv) * inv;
+    if (b2 < 0 || b1 + b2 > 1) return false;
+    Float t = Dot(e2, qv) * inv;
+    if (t <= 0 || t >= r.tMax) return false;
+    *tHit = t;
+    hit->p = r(t);
+    Normal3 n = Normalize(Cross(e1, e2));
+    const int *v = &mesh_->indices[3 * tri_];
+    if (!mesh_->n.empty()) {
+        Float b0 = 1 - b1 - b2;
+        n = FaceForward(n, mesh_->n[v[0]] * b0 + mesh_->n[v[1]] * b1 + mesh_->n[v[2]] * b2);
+    } else if (mesh_->reverseOrientation ^ mesh_->transformSwapsHandedness) {
+        n = -n;
+    }
+    hit->n = n;
+    hit->wo = -r.d;
+    return true;
+}
+
+}  // namespace gradus

@@ -1,0 +1,43 @@
+// Triangle meshes, stored in world space (transformed at load, like pbrt-v3).
+#pragma once
+#include <memory>
+#include <vector>
+
+#include "core/error.h"
+#include "shapes/shape.h"
+
+namespace gradus {
+
+struct TriangleMesh {
+    std::vector<Point3> p;     // world space
+    std::vector<Normal3> n;    // optional per-vertex shading normals (world)
+    std::vector<Vec3> s;       // optional per-vertex tangents (world)
+    std::vector<Point2> uv;    // optional
+    std::vector<int> indices;  // 3 per triangle
+    bool reverseOrientation = false;
+    bool transformSwapsHandedness = false;
+    int numTriangles() const { return int(indices.size() / 3); }
+    // Builds the world-space mesh; validates indices (throws Error at loc).
+    static std::shared_ptr<TriangleMesh> Create(const Transform &worldFromObject, bool reverseOrientation,
+                                                std::vector<Point3> P, std::vector<int> indices,
+                                                std::vector<Normal3> N, std::vector<Vec3> S,
+                                                std::vector<Point2> uv, const FileLoc &loc);
+    // Fills the surface interaction for a hit with barycentrics (b1, b2) on triangle `tri`.
+    void interaction(int tri, Float b1, Float b2, const Vec3 &wo, SurfaceInteraction *si) const;
+};
+
+class Triangle : public Shape {
+  public:
+    Triangle(std::shared_ptr<const TriangleMesh> mesh, int tri) : mesh_(std::move(mesh)), tri_(tri) {}
+    Float area() const override;
+    Bounds3 worldBound() const override;
+    Interaction sampleArea(Point2 u, Float *pdf) const override;
+    bool intersectP(const Ray &r, Float *tHit, Interaction *hit) const override;
+
+  private:
+    void vertices(Point3 *p0, Point3 *p1, Point3 *p2) const;
+    std::shared_ptr<const TriangleMesh> mesh_;
+    int tri_;
+};
+
+}  // namespace gradus

@@ -46,72 +46,120 @@ void PoissonProblem::setUnitWeights() {
     for (int x = 0; x < W; ++x) wy[size_t(H - 1) * W + x] = 0.f;
 }
 
-namespace {
-template <bool Unit>
-void ResidualImpl(const PoissonProblem &P, const float *x, float *r) {
+void Residual(const PoissonProblem &P, const float *x, float *r, bool unitWeights) {
     const int W = P.W, H = P.H;
     const size_t N = P.N;
     const float a2 = P.a2;
-    // Unit weights: 1 on every term (boundary edges are skipped by the index tests).
-    auto wp = [&](size_t i) { return Unit ? 1.f : P.wp[i]; };
-    auto wx = [&](size_t i) { return Unit ? 1.f : P.wx[i]; };
-    auto wy = [&](size_t i) { return Unit ? 1.f : P.wy[i]; };
+    const bool unit = unitWeights || P.wp.empty();
+    // Unit weights as rows (0 on the missing last-column edge); a zero row
+    // stands for the missing edges above the first and below the last row.
+    std::vector<float> ones(W, 1.f), onesX(W, 1.f), zeros(W, 0.f);
+    onesX[W - 1] = 0.f;
     ParallelRows(H, [&](int y0, int y1) {
-        for (int c = 0; c < P.C; ++c) {
-            const float *xc = x + c * N, *pc = P.p.data() + c * N;
-            const float *gxc = P.gx.data() + c * N, *gyc = P.gy.data() + c * N;
-            float *rc = r + c * N;
-            for (int y = y0; y < y1; ++y) {
-                for (int xi = 0; xi < W; ++xi) {
-                    size_t i = size_t(y) * W + xi;
-                    // b - A x = a2 wp (p - x) + Dx^T Wx (gx - Dx x) + Dy^T Wy (gy - Dy x),
-                    // (Dx^T e)_i = e_{i-1} - e_i.
-                    float v = a2 * wp(i) * (pc[i] - xc[i]);
-                    if (xi + 1 < W) v -= wx(i) * (gxc[i] - (xc[i + 1] - xc[i]));
-                    if (xi > 0) v += wx(i - 1) * (gxc[i - 1] - (xc[i] - xc[i - 1]));
-                    if (y + 1 < H) v -= wy(i) * (gyc[i] - (xc[i + W] - xc[i]));
-                    if (y > 0) v += wy(i - W) * (gyc[i - W] - (xc[i] - xc[i - W]));
-                    rc[i] = v;
+        for (int y = y0; y < y1; ++y) {
+            const size_t row = size_t(y) * W;
+            const bool up = y > 0, down = y + 1 < H;
+            const float *__restrict wpr = unit ? ones.data() : P.wp.data() + row;
+            const float *__restrict wxr = unit ? onesX.data() : P.wx.data() + row;
+            const float *__restrict wyr = !down ? zeros.data() : unit ? ones.data() : P.wy.data() + row;
+            const float *__restrict wyu = !up ? zeros.data() : unit ? ones.data() : P.wy.data() + row - W;
+            for (int c = 0; c < P.C; ++c) {
+                const float *__restrict xr = x + c * N + row;
+                const float *__restrict xu = up ? xr - W : xr;
+                const float *__restrict xd = down ? xr + W : xr;
+                const float *__restrict pr = P.p.data() + c * N + row;
+                const float *__restrict gxr = P.gx.data() + c * N + row;
+                const float *__restrict gyr = down ? P.gy.data() + c * N + row : zeros.data();
+                const float *__restrict gyu = up ? P.gy.data() + c * N + row - W : zeros.data();
+                float *__restrict rr = r + c * N + row;
+                // b - A x = a2 wp (p - x) + Dx^T Wx (gx - Dx x) + Dy^T Wy (gy - Dy x),
+                // with (D^T e)_i = e_{i-1} - e_i.
+                auto vert = [&](int i) {
+                    return a2 * wpr[i] * (pr[i] - xr[i]) - wyr[i] * (gyr[i] - (xd[i] - xr[i])) +
+                           wyu[i] * (gyu[i] - (xr[i] - xu[i]));
+                };
+                auto right = [&](int i) { return wxr[i] * (gxr[i] - (xr[i + 1] - xr[i])); };
+                if (W == 1) {
+                    rr[0] = vert(0);
+                    continue;
                 }
+                rr[0] = vert(0) - right(0);
+                rr[W - 1] = vert(W - 1) + right(W - 2);
+#pragma omp simd
+                for (int i = 1; i < W - 1; ++i) rr[i] = vert(i) - right(i) + right(i - 1);
             }
         }
     });
 }
-}  // namespace
 
-void Residual(const PoissonProblem &P, const float *x, float *r, bool unitWeights) {
-    if (unitWeights || P.wp.empty()) ResidualImpl<true>(P, x, r);
-    else ResidualImpl<false>(P, x, r);
+void IrlsWeights(PoissonProblem &P, const float *x, float alpha, float reg) {
+    const int W = P.W, H = P.H, C = P.C;
+    const size_t N = P.N;
+    ParallelRows(H, [&](int y0, int y1) {
+        for (int y = y0; y < y1; ++y)
+            for (int xi = 0; xi < W; ++xi) {
+                const size_t i = size_t(y) * W + xi;
+                float sp = 0, sx = 0, sy = 0;
+                for (int c = 0; c < C; ++c) {
+                    const float *xc = x + c * N;
+                    const float d = xc[i] - P.p[c * N + i];
+                    sp += d * d;
+                    if (xi + 1 < W) {
+                        const float e = (xc[i + 1] - xc[i]) - P.gx[c * N + i];
+                        sx += e * e;
+                    }
+                    if (y + 1 < H) {
+                        const float e = (xc[i + W] - xc[i]) - P.gy[c * N + i];
+                        sy += e * e;
+                    }
+                }
+                // The primal row's residual is alpha (x - p).
+                P.wp[i] = 1.f / (alpha * std::sqrt(sp) + reg);
+                P.wx[i] = xi + 1 < W ? 1.f / (std::sqrt(sx) + reg) : 0.f;
+                P.wy[i] = y + 1 < H ? 1.f / (std::sqrt(sy) + reg) : 0.f;
+            }
+    });
 }
 
 ChannelSums ApplyA(const PoissonProblem &P, const float *p, float *Ap) {
     const int W = P.W, H = P.H, C = P.C;
     const size_t N = P.N;
     const float a2 = P.a2;
-    const float *wp = P.wp.data(), *wx = P.wx.data(), *wy = P.wy.data();
     return ParallelRowSums(H, [&](int y0, int y1, ChannelSums &acc) {
-        for (int c = 0; c < C; ++c) {
-            const float *pc = p + c * N;
-            float *out = Ap + c * N;
-            double sum = 0;
-            for (int y = y0; y < y1; ++y) {
-                const size_t row = size_t(y) * W;
-                const bool up = y > 0, down = y + 1 < H;
-                float rowSum = 0;
-                for (int xi = 0; xi < W; ++xi) {
-                    const size_t i = row + xi;
-                    const float pi = pc[i];
-                    float v = a2 * wp[i] * pi;
-                    if (xi + 1 < W) v += wx[i] * (pi - pc[i + 1]);
-                    if (xi > 0) v += wx[i - 1] * (pi - pc[i - 1]);
-                    if (down) v += wy[i] * (pi - pc[i + W]);
-                    if (up) v += wy[i - W] * (pi - pc[i - W]);
-                    out[i] = v;
-                    rowSum += v * pi;
+        for (int y = y0; y < y1; ++y) {
+            const size_t row = size_t(y) * W;
+            const float *__restrict wpr = P.wp.data() + row;
+            const float *__restrict wxr = P.wx.data() + row;
+            const float *__restrict wyr = P.wy.data() + row;
+            // Missing neighbours point at the row itself: their difference is 0.
+            const float *__restrict wyu = y > 0 ? wyr - W : wyr;
+            for (int c = 0; c < C; ++c) {
+                const float *__restrict pr = p + c * N + row;
+                const float *__restrict pu = y > 0 ? pr - W : pr;
+                const float *__restrict pd = y + 1 < H ? pr + W : pr;
+                float *__restrict out = Ap + c * N + row;
+                auto vert = [&](int x) {
+                    const float pi = pr[x];
+                    return a2 * wpr[x] * pi + wyr[x] * (pi - pd[x]) + wyu[x] * (pi - pu[x]);
+                };
+                float s = 0;
+                if (W == 1) {
+                    out[0] = vert(0);
+                } else {
+                    out[0] = vert(0) + wxr[0] * (pr[0] - pr[1]);
+                    out[W - 1] = vert(W - 1) + wxr[W - 2] * (pr[W - 1] - pr[W - 2]);
+                    s = out[0] * pr[0] + out[W - 1] * pr[W - 1];
                 }
-                sum += rowSum;
+#pragma omp simd reduction(+ : s)
+                for (int x = 1; x < W - 1; ++x) {
+                    const float pi = pr[x];
+                    const float v = a2 * wpr[x] * pi + wyr[x] * (pi - pd[x]) + wyu[x] * (pi - pu[x]) +
+                                    wxr[x] * (pi - pr[x + 1]) + wxr[x - 1] * (pi - pr[x - 1]);
+                    out[x] = v;
+                    s += v * pi;
+                }
+                acc[c] += s;
             }
-            acc[c] += sum;
         }
     });
 }
@@ -127,35 +175,6 @@ void InverseDiagonal(const PoissonProblem &P, std::vector<float> &minv) {
                 if (xi > 0) d += P.wx[i - 1];
                 if (y > 0) d += P.wy[i - W];
                 minv[i] = d > 0 ? 1.f / d : 0.f;
-            }
-    });
-}
-
-void TermResidualLengths(const PoissonProblem &P, const float *x, float *ep, float *ex,
-                         float *ey) {
-    const int W = P.W, H = P.H, C = P.C;
-    const size_t N = P.N;
-    ParallelRows(H, [&](int y0, int y1) {
-        for (int y = y0; y < y1; ++y)
-            for (int xi = 0; xi < W; ++xi) {
-                size_t i = size_t(y) * W + xi;
-                float sp = 0, sx = 0, sy = 0;
-                for (int c = 0; c < C; ++c) {
-                    const float *xc = x + c * N;
-                    float d = xc[i] - P.p[c * N + i];
-                    sp += d * d;
-                    if (xi + 1 < W) {
-                        float e = (xc[i + 1] - xc[i]) - P.gx[c * N + i];
-                        sx += e * e;
-                    }
-                    if (y + 1 < H) {
-                        float e = (xc[i + W] - xc[i]) - P.gy[c * N + i];
-                        sy += e * e;
-                    }
-                }
-                ep[i] = std::sqrt(sp);
-                ex[i] = std::sqrt(sx);
-                ey[i] = std::sqrt(sy);
             }
     });
 }
@@ -205,12 +224,14 @@ static ChannelSums ResidualNorms(const PoissonProblem &P, const float *r) {
     const size_t N = P.N;
     const int W = P.W;
     return ParallelRowSums(P.H, [&](int y0, int y1, ChannelSums &acc) {
-        for (int c = 0; c < P.C; ++c) {
-            double b = 0;
-            const float *rc = r + c * N;
-            for (size_t i = size_t(y0) * W; i < size_t(y1) * W; ++i) b += double(rc[i]) * rc[i];
-            acc[c] += b;
-        }
+        for (int y = y0; y < y1; ++y)
+            for (int c = 0; c < P.C; ++c) {
+                const float *__restrict rc = r + c * N + size_t(y) * W;
+                float b = 0;
+#pragma omp simd reduction(+ : b)
+                for (int x = 0; x < W; ++x) b += rc[x] * rc[x];
+                acc[c] += b;
+            }
     });
 }
 
@@ -261,19 +282,26 @@ CGReport SolveCG(const PoissonProblem &P, float *x, int maxIter, double tol, boo
         }
         // x += step d; r -= step Ad; new rz = r.M^-1 r
         ChannelSums rzNew = ParallelRowSums(H, [&](int y0, int y1, ChannelSums &acc) {
-            for (int c = 0; c < C; ++c) {
-                if (!active[c]) continue;
-                const float s = float(step[c]);
-                float *xc = x + c * N, *rc = r.data() + c * N;
-                const float *dc = d.data() + c * N, *adc = Ad.data() + c * N;
-                double a = 0;
-                for (size_t i = size_t(y0) * W; i < size_t(y1) * W; ++i) {
-                    xc[i] += s * dc[i];
-                    float rv = rc[i] - s * adc[i];
-                    rc[i] = rv;
-                    a += double(rv) * mi[i] * rv;
+            for (int y = y0; y < y1; ++y) {
+                const size_t row = size_t(y) * W;
+                const float *__restrict m = mi + row;
+                for (int c = 0; c < C; ++c) {
+                    if (!active[c]) continue;
+                    const float s = float(step[c]);
+                    float *__restrict xc = x + c * N + row;
+                    float *__restrict rc = r.data() + c * N + row;
+                    const float *__restrict dc = d.data() + c * N + row;
+                    const float *__restrict adc = Ad.data() + c * N + row;
+                    float a = 0;
+#pragma omp simd reduction(+ : a)
+                    for (int i = 0; i < W; ++i) {
+                        xc[i] += s * dc[i];
+                        const float rv = rc[i] - s * adc[i];
+                        rc[i] = rv;
+                        a += rv * m[i] * rv;
+                    }
+                    acc[c] += a;
                 }
-                acc[c] += a;
             }
         });
         if (tol > 0 || it + 1 == maxIter)

@@ -38,9 +38,10 @@ ChannelSums ApplyA(const PoissonProblem &P, const float *p, float *Ap);
 // Inverse of diag(A), N entries.
 void InverseDiagonal(const PoissonProblem &P, std::vector<float> &minv);
 
-// Colour-length residuals of the three term kinds at x (N each):
-// ep_i = ||x_i - p_i||, ex_i = ||(Dx x)_i - gx_i||, ey_i likewise (0 off the interior).
-void TermResidualLengths(const PoissonProblem &P, const float *x, float *ep, float *ex, float *ey);
+// IRLS weights of the colour-length (L1) objective at x (G-MLT Sec. 6, L1):
+// wp = 1 / (alpha ||x_i - p_i|| + reg), wx = 1 / (||(Dx x)_i - gx_i|| + reg),
+// wy likewise; 0 on the missing boundary edges.
+void IrlsWeights(PoissonProblem &P, const float *x, float alpha, float reg);
 
 struct Energies { double primalL2 = 0, gradientL2 = 0, primalL1 = 0, gradientL1 = 0, weightedL2 = 0; };
 // Unweighted residual sums at x (and sum of a2*wp*|.|^2 + w*|.|^2 with P's weights).

@@ -132,22 +132,6 @@ std::vector<float> ToInterleaved(const std::vector<float> &planar, int C, size_t
     return out;
 }
 
-// IRLS weights for the L1 (colour-length) objective: 1 / (|e| + reg).
-void IrlsWeights(PoissonProblem &P, const std::vector<float> &x, double alpha, double reg) {
-    const size_t N = P.N;
-    std::vector<float> ep(N), ex(N), ey(N);
-    recon::TermResidualLengths(P, x.data(), ep.data(), ex.data(), ey.data());
-    const float a = float(alpha), rg = float(reg);
-    for (int y = 0; y < P.H; ++y)
-        for (int xi = 0; xi < P.W; ++xi) {
-            size_t i = size_t(y) * P.W + xi;
-            // The primal row's residual is alpha (x - p).
-            P.wp[i] = 1.f / (a * ep[i] + rg);
-            P.wx[i] = xi + 1 < P.W ? 1.f / (ex[i] + rg) : 0.f;
-            P.wy[i] = y + 1 < P.H ? 1.f / (ey[i] + rg) : 0.f;
-        }
-}
-
 }  // namespace
 
 ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionOptions &opt) {
@@ -215,7 +199,7 @@ ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionO
         st.irlsIterations = 1;
         for (int k = 1; k < opt.irlsIterations; ++k) {
             double reg = opt.irlsRegInit * std::pow(opt.irlsRegFactor, k - 1);
-            IrlsWeights(P, x, alpha, reg);
+            recon::IrlsWeights(P, x.data(), float(alpha), float(reg));
             recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, jacobi);
             st.cgIterations += rep.iterations;
             st.finalRelativeResidual = rep.relResidual;

@@ -145,6 +145,7 @@ ChannelSums ApplyA(const PoissonProblem &P, const float *p, float *Ap) {
                 float s = 0;
                 if (W == 1) {
                     out[0] = vert(0);
+                    s = out[0] * pr[0];
                 } else {
                     out[0] = vert(0) + wxr[0] * (pr[0] - pr[1]);
                     out[W - 1] = vert(W - 1) + wxr[W - 2] * (pr[W - 1] - pr[W - 2]);

@@ -1,13 +1,40 @@
+// The one table of integrator names. Integrator folders that exist define
+// GRADUS_HAS_<NAME> (see src/render/CMakeLists.txt).
 #include "core/error.h"
-#include "integrators/integrator.h"
+#include "integrators/factories.h"
 #include "integrators/path/path.h"
 
 namespace gradus {
 
+std::unique_ptr<Integrator> CreatePathIntegrator(const EntityDesc &d) { return std::make_unique<PathIntegrator>(d); }
+
 const std::vector<IntegratorInfo> &IntegratorRegistry() {
     static const std::vector<IntegratorInfo> table = {
-        {"path", "unidirectional path tracing with next-event estimation and MIS",
-         [](const EntityDesc &d) { return std::make_unique<PathIntegrator>(d); }},
+        {"path", "unidirectional path tracing with next-event estimation and MIS", CreatePathIntegrator},
+#ifdef GRADUS_HAS_BDPT
+        {"bdpt", "bidirectional path tracing (all strategies, MIS)", CreateBDPTIntegrator},
+#endif
+#ifdef GRADUS_HAS_MBDPT
+        {"mbdpt", "matrix bidirectional path tracing (image-wide stratified connections)", CreateMBDPTIntegrator},
+#endif
+#ifdef GRADUS_HAS_GPT
+        {"gpt", "gradient-domain path tracing", CreateGPTIntegrator},
+#endif
+#ifdef GRADUS_HAS_GBDPT
+        {"gbdpt", "gradient-domain bidirectional path tracing", CreateGBDPTIntegrator},
+#endif
+#ifdef GRADUS_HAS_VCM
+        {"vcm", "vertex connection and merging", CreateVCMIntegrator},
+#endif
+#ifdef GRADUS_HAS_GVCM
+        {"gvcm", "gradient-domain vertex connection and merging", CreateGVCMIntegrator},
+#endif
+#ifdef GRADUS_HAS_MLT
+        {"mlt", "Metropolis light transport", CreateMLTIntegrator},
+#endif
+#ifdef GRADUS_HAS_GMLT
+        {"gmlt", "gradient-domain Metropolis light transport", CreateGMLTIntegrator},
+#endif
     };
     return table;
 }

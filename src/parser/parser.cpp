@@ -479,7 +479,8 @@ class Parser {
                 if (activeBits_ & (1 << i)) ctm_[i] = ctm_[i] * t;
         } catch (const Error &e) {
             if (dynamic_cast<const UnsupportedError *>(&e)) throw;
-            fail(at, std::string(at.text) + ": " + e.what());
+            std::string what = e.what(), prefix = std::string(at.text) + ": ";
+            fail(at, what.rfind(prefix, 0) == 0 ? what : prefix + what);
         }
     }
 

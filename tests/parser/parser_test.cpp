@@ -571,4 +571,5 @@ TEST(ParserErrors, DirectiveArguments) {
               "t.pbrt:2:1: unexpected string \"float x\" (expected a directive)");
     EXPECT_EQ(ErrorOf("LookAt 0 0 0  0 0 1  0 0 1\nWorldBegin\nWorldEnd").rfind("t.pbrt:1:1: LookAt: ", 0), 0u);
     EXPECT_EQ(ErrorOf("Scale 0 1 1\nWorldBegin\nWorldEnd").rfind("t.pbrt:1:1: Scale: ", 0), 0u);
+    EXPECT_EQ(ErrorOf("WorldBegin\n Rotate 30 0 0 0\nWorldEnd"), "t.pbrt:2:2: Rotate: zero-length axis");
 }

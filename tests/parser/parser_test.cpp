@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 #include <string>
 
 #include "parser/scene_desc.h"
@@ -572,4 +573,50 @@ TEST(ParserErrors, DirectiveArguments) {
     EXPECT_EQ(ErrorOf("LookAt 0 0 0  0 0 1  0 0 1\nWorldBegin\nWorldEnd").rfind("t.pbrt:1:1: LookAt: ", 0), 0u);
     EXPECT_EQ(ErrorOf("Scale 0 1 1\nWorldBegin\nWorldEnd").rfind("t.pbrt:1:1: Scale: ", 0), 0u);
     EXPECT_EQ(ErrorOf("WorldBegin\n Rotate 30 0 0 0\nWorldEnd"), "t.pbrt:2:2: Rotate: zero-length axis");
+}
+
+// Random byte mutations of a valid scene (fixed seed): parsing must either
+// succeed or throw gradus::Error with a location, never crash or throw
+// anything else.
+TEST(ParserErrors, RandomMutationsOnlyThrowLocatedErrors) {
+    const std::string seed = R"(LookAt 0 1 5 0 0 0 0 1 0
+Camera "perspective" "float fov" [40]
+Film "image" "integer xresolution" 32
+WorldBegin
+AttributeBegin
+  AreaLightSource "diffuse" "blackbody L" [5000 2]
+  Material "matte" "rgb Kd" [0.5 0.5 0.5] "spectrum Ks" [400 1 700 0.5]
+  Translate 0 1 0
+  Shape "trianglemesh" "point P" [0 0 0 1 0 0 0 1 0] "integer indices" [0 1 2]
+AttributeEnd
+ObjectBegin "o"
+  Shape "sphere" "float radius" 2
+ObjectEnd
+ObjectInstance "o"
+WorldEnd
+)";
+    std::mt19937 rng(777);
+    const char alphabet[] = "[]\"#\n 0123456789.-eAWS";
+    int ok = 0, errors = 0;
+    for (int iter = 0; iter < 3000; ++iter) {
+        std::string s = seed;
+        int nmut = 1 + rng() % 3;
+        for (int k = 0; k < nmut && !s.empty(); ++k) {
+            size_t p = rng() % s.size();
+            switch (rng() % 3) {
+                case 0: s[p] = alphabet[rng() % (sizeof(alphabet) - 1)]; break;
+                case 1: s.erase(p, 1 + rng() % 6); break;
+                default: s.insert(p, 1, alphabet[rng() % (sizeof(alphabet) - 1)]); break;
+            }
+        }
+        try {
+            ParseString(s, "m.pbrt", "/nonexistent");
+            ++ok;
+        } catch (const Error &e) {
+            ASSERT_EQ(std::string(e.what()).rfind("m.pbrt:", 0), 0u) << e.what();
+            ++errors;
+        }
+    }
+    EXPECT_GT(ok, 0);
+    EXPECT_GT(errors, 0);
 }

@@ -1,0 +1,435 @@
+// Statistical and analytic tests of every BxDF: chi-square goodness of fit of
+// sample() against pdf(), pdf mass, sample/eval consistency, reciprocity and
+// energy (white furnace).
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "materials/bxdfs.h"
+#include "samplers/chi2_test.h"
+
+using namespace gradus;
+
+namespace {
+
+struct Case {
+    std::string name;
+    std::function<std::unique_ptr<BxDF>()> make;
+    bool reciprocal;  // f(wo, wi) == f(wi, wo) in both modes
+};
+
+MicrofacetDistribution GGX(Float ax, Float ay) { return {MicrofacetDistribution::TrowbridgeReitz, ax, ay}; }
+MicrofacetDistribution Beck(Float ax, Float ay) { return {MicrofacetDistribution::Beckmann, ax, ay}; }
+
+// A composite like "plastic": diffuse + rough dielectric-coated reflection.
+struct Plastic : BxDF {
+    LambertianReflection d{Spectrum(0.5)};
+    MicrofacetReflection s;
+    CompositeBxDF c;
+    explicit Plastic(Float alpha) : BxDF(0), s(Spectrum(0.5), GGX(alpha, alpha), Fresnel::MakeDielectric(1.5)) {
+        c.add(&d);
+        c.add(&s, 3);
+    }
+    Spectrum f(const Vec3 &o, const Vec3 &i, TransportMode m) const override { return c.f(o, i, m); }
+    bool sample(const Vec3 &o, Float uc, Point2 u, TransportMode m, BSDFSample *s) const override {
+        return c.sample(o, uc, u, m, s);
+    }
+    Float pdf(const Vec3 &o, const Vec3 &i, TransportMode m) const override { return c.pdf(o, i, m); }
+    Float roughness() const override { return c.roughness(); }
+};
+
+// Diffuse transmission + rough dielectric (pbrt-v3 "translucent").
+struct Translucent : BxDF {
+    LambertianReflection r{Spectrum(0.2)};
+    LambertianTransmission t{Spectrum(0.2)};
+    MicrofacetDielectric g;
+    CompositeBxDF c;
+    explicit Translucent(Float alpha) : BxDF(0), g(Spectrum(0.5), Spectrum(0.5), 1.5, GGX(alpha, alpha)) {
+        c.add(&r);
+        c.add(&t);
+        c.add(&g);
+    }
+    Spectrum f(const Vec3 &o, const Vec3 &i, TransportMode m) const override { return c.f(o, i, m); }
+    bool sample(const Vec3 &o, Float uc, Point2 u, TransportMode m, BSDFSample *s) const override {
+        return c.sample(o, uc, u, m, s);
+    }
+    Float pdf(const Vec3 &o, const Vec3 &i, TransportMode m) const override { return c.pdf(o, i, m); }
+    Float roughness() const override { return c.roughness(); }
+};
+
+std::vector<Case> Cases() {
+    std::vector<Case> cs;
+    cs.push_back({"lambert", [] { return std::make_unique<LambertianReflection>(Spectrum(0.7)); }, true});
+    cs.push_back({"lambertT", [] { return std::make_unique<LambertianTransmission>(Spectrum(0.7)); }, true});
+    cs.push_back({"orennayar20", [] { return std::make_unique<OrenNayar>(Spectrum(0.7), 20); }, true});
+    for (Float a : {0.1, 0.3, 0.8}) {
+        std::string s = std::to_string(a).substr(0, 3);
+        cs.push_back({"ggx" + s, [a] {
+                          return std::make_unique<MicrofacetReflection>(Spectrum(1), GGX(a, a), Fresnel::One());
+                      }, true});
+        cs.push_back({"beckmann" + s, [a] {
+                          return std::make_unique<MicrofacetReflection>(Spectrum(1), Beck(a, a), Fresnel::One());
+                      }, true});
+        cs.push_back({"roughglass" + s, [a] {
+                          return std::make_unique<MicrofacetDielectric>(Spectrum(1), Spectrum(1), 1.5, GGX(a, a));
+                      }, false});
+        cs.push_back({"roughglassBeck" + s, [a] {
+                          return std::make_unique<MicrofacetDielectric>(Spectrum(1), Spectrum(1), 1.33, Beck(a, a));
+                      }, false});
+        cs.push_back({"substrate" + s, [a] {
+                          return std::make_unique<FresnelBlend>(Spectrum(0.5), Spectrum(0.2), GGX(a, a));
+                      }, true});
+        cs.push_back({"plastic" + s, [a] { return std::make_unique<Plastic>(a); }, true});
+    }
+    cs.push_back({"ggxAniso", [] {
+                      return std::make_unique<MicrofacetReflection>(Spectrum(1), GGX(0.15, 0.5), Fresnel::One());
+                  }, true});
+    cs.push_back({"beckAniso", [] {
+                      return std::make_unique<MicrofacetReflection>(Spectrum(1), Beck(0.5, 0.15), Fresnel::One());
+                  }, true});
+    cs.push_back({"conductor", [] {
+                      return std::make_unique<MicrofacetReflection>(
+                          Spectrum(1), GGX(0.25, 0.25),
+                          Fresnel::MakeConductor(Spectrum(0.2, 1.0, 1.2), Spectrum(3.7, 2.6, 2.4)));
+                  }, true});
+    cs.push_back({"roughglassAniso", [] {
+                      return std::make_unique<MicrofacetDielectric>(Spectrum(1), Spectrum(1), 1.5, GGX(0.1, 0.4));
+                  }, false});
+    cs.push_back({"roughglassTonly", [] {
+                      return std::make_unique<MicrofacetDielectric>(Spectrum(0), Spectrum(1), 1.5, GGX(0.3, 0.3));
+                  }, false});
+    cs.push_back({"translucent", [] { return std::make_unique<Translucent>(0.3); }, false});
+    return cs;
+}
+
+// Outgoing directions: three elevations above, and one below the surface. (At
+// more grazing angles the refracted lobes get peaks that the midpoint-rule
+// integration of the expected counts cannot resolve at test-suite cost.)
+std::vector<Vec3> Wos() {
+    std::vector<Vec3> w;
+    for (Float c : {0.95, 0.5, 0.2}) w.push_back(SphericalDirection(std::sqrt(1 - c * c), c, 0.7));
+    w.push_back(SphericalDirection(std::sqrt(1 - 0.6 * 0.6), -0.6, 2.1));
+    return w;
+}
+
+
+// Chi-square test over directions binned per hemisphere in (s, phi) with
+// |cos theta| = 1 - s^2: bins shrink towards the poles, where specular-like
+// lobes concentrate, and the midpoint rule in (s, phi) resolves those peaks.
+// Invalid samples form one more bin expecting N (1 - integral of the pdf).
+template <typename SampleFn, typename PdfFn>
+chi2::Result HemisphereChi2(SampleFn sample, PdfFn pdf, int64_t n, uint64_t seed, double alpha) {
+    const int ns = 12, np = 24;
+    auto bin = [&](const Vec3 &w) {
+        int h = w.z < 0;
+        double sv = std::sqrt(std::max(0.0, 1 - std::abs(w.z)));
+        int i = Clamp(int(sv * ns), 0, ns - 1), j = Clamp(int(SphericalPhi(w) * Inv2Pi * np), 0, np - 1);
+        return (h * ns + i) * np + j;
+    };
+    std::vector<double> obs(2 * ns * np + 1, 0.0), exp(2 * ns * np + 1, 0.0);
+    RNG rng(seed);
+    for (int64_t k = 0; k < n; ++k) {
+        Vec3 w;
+        if (!sample(rng, &w)) obs.back() += 1;
+        else obs[bin(w)] += 1;
+    }
+    // Adaptive midpoint rule per bin: the sub-grid doubles until the expected
+    // count changes by less than a small fraction of its Poisson deviation.
+    auto integrate = [&](int h, int i, int j, int sub) {
+        double sum = 0;
+        for (int a = 0; a < sub; ++a)
+            for (int b = 0; b < sub; ++b) {
+                double sv = (i + (a + 0.5) / sub) / ns, phi = 2 * Pi * (j + (b + 0.5) / sub) / np;
+                double ct = (1 - sv * sv) * (h ? -1 : 1);
+                sum += 2 * sv * pdf(SphericalDirection(SafeSqrt(1 - ct * ct), ct, phi));
+            }
+        return sum * (1.0 / (ns * sub)) * (2 * Pi / (np * sub));
+    };
+    double total = 0;
+    for (int h = 0; h < 2; ++h)
+        for (int i = 0; i < ns; ++i)
+            for (int j = 0; j < np; ++j) {
+                int sub = 16;
+                double prev = integrate(h, i, j, sub), e = prev;
+                while (sub < 384) {
+                    sub *= 2;
+                    e = integrate(h, i, j, sub);
+                    double dCount = std::abs(e - prev) * n;
+                    if (dCount < std::max(0.1, 0.01 * std::sqrt(e * n))) break;
+                    prev = e;
+                }
+                exp[(h * ns + i) * np + j] = e * n;
+                total += e;
+            }
+    // The integral is accurate to ~1e-5; a lost mass below that is not resolvable.
+    exp.back() = std::max(1e-5, 1 - total) * n;
+    auto r = chi2::TestCounts(obs, exp, alpha);
+    r.message += ", invalid = " + std::to_string(int64_t(obs.back())) + ", pdf integral = " + std::to_string(total);
+    return r;
+}
+
+int NumChi2Tests() { return int(Cases().size() * Wos().size()); }
+
+}  // namespace
+
+// Every case x direction is one chi-square test; the Sidak-corrected level makes
+// the whole suite fail with probability 1% for correct code (seeds are fixed).
+TEST(BxDF, ChiSquareSampleMatchesPdf) {
+    double alpha = chi2::SidakAlpha(0.01, NumChi2Tests());
+    int idx = 0;
+    for (const Case &c : Cases()) {
+        auto b = c.make();
+        for (const Vec3 &wo : Wos()) {
+            auto r = HemisphereChi2(
+                [&](RNG &rng, Vec3 *w) {
+                    BSDFSample s;
+                    Float uc = rng.uniform();
+                    Point2 u(rng.uniform(), rng.uniform());
+                    if (!b->sample(wo, uc, u, TransportMode::Radiance, &s)) return false;
+                    *w = s.wi;
+                    return true;
+                },
+                [&](const Vec3 &wi) { return b->pdf(wo, wi, TransportMode::Radiance); }, 100000, 1000 + idx++,
+                alpha);
+            EXPECT_TRUE(r.pass) << c.name << " wo=" << wo << ": " << r.message;
+        }
+    }
+}
+
+// sample() must report exactly what f() and pdf() give at the sampled direction,
+// and its pdfRev must equal pdf(wi, wo).
+TEST(BxDF, SampleConsistentWithEval) {
+    for (const Case &c : Cases()) {
+        auto b = c.make();
+        RNG rng(7);
+        for (const Vec3 &wo : Wos())
+            for (int i = 0; i < 2000; ++i) {
+                BSDFSample s;
+                for (TransportMode mode : {TransportMode::Radiance, TransportMode::Importance}) {
+                    if (!b->sample(wo, rng.uniform(), {rng.uniform(), rng.uniform()}, mode, &s)) continue;
+                    ASSERT_FALSE(s.isSpecular());
+                    ASSERT_NEAR(s.wi.length(), 1, 1e-9);
+                    Spectrum f = b->f(wo, s.wi, mode);
+                    Float pdf = b->pdf(wo, s.wi, mode);
+                    TransportMode rev = mode == TransportMode::Radiance ? TransportMode::Importance
+                                                                        : TransportMode::Radiance;
+                    Float pdfRev = b->pdf(s.wi, wo, rev);
+                    for (int k = 0; k < 3; ++k) ASSERT_NEAR(s.f[k], f[k], 1e-9 * (1 + f[k])) << c.name;
+                    ASSERT_NEAR(s.pdf, pdf, 1e-9 * (1 + pdf)) << c.name;
+                    ASSERT_NEAR(s.pdfRev, pdfRev, 1e-9 * (1 + pdfRev)) << c.name;
+                    ASSERT_GT(s.pdf, 0);
+                    bool transmit = s.wi.z * wo.z < 0;
+                    ASSERT_EQ(bool(s.flags & BSDF_TRANSMISSION), transmit) << c.name;
+                }
+            }
+    }
+}
+
+// Numerical integral of the pdf over the sphere is at most 1 and equals the
+// fraction of calls that produced a sample (within 5 sigma + integration error).
+TEST(BxDF, PdfIntegratesToSampledMass) {
+    for (const Case &c : Cases()) {
+        auto b = c.make();
+        for (const Vec3 &wo : Wos()) {
+            // Midpoint rule per hemisphere in (s, phi) with |cos theta| = 1 - s^2,
+            // which resolves peaks at the poles.
+            const int ns = 300, np = 200;
+            double integral = 0;
+            for (int h = 0; h < 2; ++h)
+                for (int i = 0; i < ns; ++i)
+                    for (int j = 0; j < np; ++j) {
+                        double sv = (i + 0.5) / ns, ct = (1 - sv * sv) * (h ? -1 : 1);
+                        double phi = 2 * Pi * (j + 0.5) / np;
+                        integral += 2 * sv * b->pdf(wo, SphericalDirection(SafeSqrt(1 - ct * ct), ct, phi),
+                                                    TransportMode::Radiance);
+                    }
+            integral *= (1.0 / ns) * (2 * Pi / np);
+            RNG rng(11);
+            const int n = 40000;
+            int ok = 0;
+            for (int i = 0; i < n; ++i) {
+                BSDFSample s;
+                if (b->sample(wo, rng.uniform(), {rng.uniform(), rng.uniform()}, TransportMode::Radiance, &s)) ++ok;
+            }
+            double frac = double(ok) / n, sigma = std::sqrt(frac * (1 - frac) / n);
+            EXPECT_LE(integral, 1.01) << c.name << " wo=" << wo;
+            EXPECT_NEAR(integral, frac, 5 * sigma + 0.01) << c.name << " wo=" << wo;
+        }
+    }
+}
+
+TEST(BxDF, Reciprocity) {
+    RNG rng(3);
+    for (const Case &c : Cases()) {
+        auto b = c.make();
+        for (int i = 0; i < 2000; ++i) {
+            Vec3 wo = SphericalDirection(0, 0, 0), wi;
+            Float c1 = 2 * rng.uniform() - 1, c2 = 2 * rng.uniform() - 1;
+            wo = SphericalDirection(SafeSqrt(1 - c1 * c1), c1, 2 * Pi * rng.uniform());
+            wi = SphericalDirection(SafeSqrt(1 - c2 * c2), c2, 2 * Pi * rng.uniform());
+            if (std::abs(wo.z) < 1e-3 || std::abs(wi.z) < 1e-3) continue;
+            Spectrum a = b->f(wo, wi, TransportMode::Radiance);
+            // Adjoint BSDF: importance-mode f equals radiance-mode f with directions swapped
+            // (Veach 1997, Sec. 3.7); for symmetric lobes both modes agree with the swap.
+            Spectrum adj = b->f(wi, wo, TransportMode::Importance);
+            for (int k = 0; k < 3; ++k) ASSERT_NEAR(a[k], adj[k], 1e-9 * (1 + a[k])) << c.name << " " << wo << wi;
+            if (c.reciprocal) {
+                Spectrum sw = b->f(wi, wo, TransportMode::Radiance);
+                for (int k = 0; k < 3; ++k) ASSERT_NEAR(a[k], sw[k], 1e-9 * (1 + a[k])) << c.name;
+            }
+        }
+    }
+}
+
+// Directional albedo E[f |cos| / pdf] of every lossless or lossy BxDF is <= 1
+// (importance mode: no radiance compression across refraction). Tolerance: 5 sigma.
+TEST(BxDF, WhiteFurnaceAlbedoAtMostOne) {
+    for (const Case &c : Cases()) {
+        auto b = c.make();
+        for (const Vec3 &wo : Wos()) {
+            RNG rng(21);
+            const int n = 40000;
+            double sum = 0, sum2 = 0;
+            for (int i = 0; i < n; ++i) {
+                BSDFSample s;
+                double w = 0;
+                if (b->sample(wo, rng.uniform(), {rng.uniform(), rng.uniform()}, TransportMode::Importance, &s))
+                    w = s.f.maxComponent() * AbsCosTheta(s.wi) / s.pdf;
+                sum += w;
+                sum2 += w * w;
+            }
+            double mean = sum / n, sd = std::sqrt(std::max(0.0, sum2 / n - mean * mean) / n);
+            EXPECT_LE(mean, 1 + 5 * sd + 1e-9) << c.name << " wo=" << wo;
+        }
+    }
+}
+
+TEST(BxDF, LambertianAlbedoIsExactlyR) {
+    LambertianReflection b(Spectrum(1));
+    RNG rng(5);
+    for (int i = 0; i < 1000; ++i) {
+        BSDFSample s;
+        ASSERT_TRUE(b.sample(Vec3(0.3, 0.1, 0.9487), rng.uniform(), {rng.uniform(), rng.uniform()},
+                             TransportMode::Radiance, &s));
+        ASSERT_NEAR(s.f.r * AbsCosTheta(s.wi) / s.pdf, 1, 1e-12);
+    }
+}
+
+// A rough dielectric with a small roughness loses little energy: albedo close to 1.
+TEST(BxDF, RoughDielectricNearlyLossless) {
+    MicrofacetDielectric b(Spectrum(1), Spectrum(1), 1.5, GGX(0.05, 0.05));
+    for (Float ct : {0.9, -0.9}) {
+        Vec3 wo = SphericalDirection(std::sqrt(1 - ct * ct), ct, 0.3);
+        RNG rng(9);
+        double sum = 0;
+        const int n = 20000;
+        for (int i = 0; i < n; ++i) {
+            BSDFSample s;
+            if (b.sample(wo, rng.uniform(), {rng.uniform(), rng.uniform()}, TransportMode::Importance, &s))
+                sum += s.f.r * AbsCosTheta(s.wi) / s.pdf;
+        }
+        EXPECT_GT(sum / n, 0.97) << ct;
+        EXPECT_LT(sum / n, 1.005) << ct;
+    }
+}
+
+// Smooth dielectric: each sample carries weight exactly 1 in importance mode and
+// 1/eta'^2 for refraction in radiance mode; reflection probability is Fresnel.
+TEST(BxDF, SpecularDielectricLosslessAndFresnel) {
+    const Float eta = 1.5;
+    SpecularDielectric b(Spectrum(1), Spectrum(1), eta);
+    EXPECT_EQ(b.roughness(), 0);
+    for (Float ct : {0.95, 0.4, -0.95, -0.4}) {
+        Vec3 wo = SphericalDirection(std::sqrt(1 - ct * ct), ct, 1.0);
+        RNG rng(13);
+        int nRefl = 0, n = 20000, nOk = 0;
+        for (int i = 0; i < n; ++i) {
+            BSDFSample s;
+            for (TransportMode mode : {TransportMode::Importance, TransportMode::Radiance}) {
+                RNG copy = rng;
+                if (!b.sample(wo, copy.uniform(), {0.5, 0.5}, mode, &s)) continue;
+                ASSERT_TRUE(s.isSpecular());
+                Float w = s.f.r * AbsCosTheta(s.wi) / s.pdf;
+                if (mode == TransportMode::Importance || !s.isTransmission())
+                    ASSERT_NEAR(w, 1, 1e-12);
+                else
+                    ASSERT_NEAR(w, 1 / (s.eta * s.eta), 1e-12);
+                if (mode == TransportMode::Importance) {
+                    ++nOk;
+                    if (!s.isTransmission()) ++nRefl;
+                    // Snell's law.
+                    if (s.isTransmission()) {
+                        Float sinO = std::sqrt(1 - wo.z * wo.z), sinI = std::sqrt(1 - s.wi.z * s.wi.z);
+                        Float etaO = wo.z > 0 ? 1 : eta, etaI = wo.z > 0 ? eta : 1;
+                        ASSERT_NEAR(etaO * sinO, etaI * sinI, 1e-9);
+                        ASSERT_NEAR(s.eta, etaI / etaO, 1e-12);
+                    }
+                }
+            }
+            rng.uniform();
+        }
+        Float F = FrDielectric(ct, eta);
+        double frac = double(nRefl) / nOk;
+        EXPECT_NEAR(frac, F, 5 * std::sqrt(F * (1 - F) / nOk) + 1e-9) << ct;
+    }
+}
+
+TEST(Fresnel, KnownValues) {
+    // Normal incidence: ((n-1)/(n+1))^2.
+    EXPECT_NEAR(FrDielectric(1, 1.5), 0.04, 1e-12);
+    EXPECT_NEAR(FrDielectric(-1, 1.5), 0.04, 1e-12);
+    // Beyond the critical angle from inside: total internal reflection.
+    EXPECT_EQ(FrDielectric(-0.5, 1.5), 1);
+    EXPECT_NEAR(FrDielectric(0, 1.5), 1, 1e-12);
+    // Conductor at normal incidence: ((n-1)^2 + k^2) / ((n+1)^2 + k^2).
+    Float n = 0.2, k = 3.7;
+    EXPECT_NEAR(FrConductor1(1, n, k), ((n - 1) * (n - 1) + k * k) / ((n + 1) * (n + 1) + k * k), 1e-12);
+    // A conductor with k = 0 is a dielectric.
+    for (Float c : {0.1, 0.5, 0.9}) EXPECT_NEAR(FrConductor1(c, 1.5, 0), FrDielectric(c, 1.5), 1e-9);
+}
+
+TEST(Microfacet, NormalizedProjectedArea) {
+    // Integral of D(wh) cos(theta_h) over the hemisphere is 1; visible normal pdf integrates to 1.
+    for (auto type : {MicrofacetDistribution::Beckmann, MicrofacetDistribution::TrowbridgeReitz})
+        for (auto axy : {std::pair<Float, Float>(0.2, 0.2), {0.3, 0.7}, {0.9, 0.9}}) {
+            MicrofacetDistribution d(type, axy.first, axy.second);
+            const int nc = 1000, np = 200;
+            double sumD = 0, sumV = 0;
+            Vec3 wo = SphericalDirection(std::sqrt(1 - 0.3 * 0.3), 0.3, 0.4);
+            for (int i = 0; i < nc; ++i)
+                for (int j = 0; j < np; ++j) {
+                    // Substitute cos = 1 - s^2 to resolve the peak at the pole.
+                    double sv = (i + 0.5) / nc, ct = 1 - sv * sv, phi = 2 * Pi * (j + 0.5) / np;
+                    Vec3 wh = SphericalDirection(SafeSqrt(1 - ct * ct), ct, phi);
+                    double jac = 2 * sv * (1.0 / nc) * (2 * Pi / np);
+                    sumD += d.D(wh) * ct * jac;
+                    sumV += d.pdf(wo, wh) * jac;
+                }
+            EXPECT_NEAR(sumD, 1, 2e-3) << type << " " << axy.first << "," << axy.second;
+            EXPECT_NEAR(sumV, 1, 2e-3) << type << " " << axy.first << "," << axy.second;
+        }
+}
+
+TEST(Microfacet, RemapRoughness) {
+    // pbrt-v3's mapping is increasing and maps 1 to about 1.62 and 0.1 to about 0.44 (log-polynomial fit).
+    Float prev = 0;
+    for (Float r = 0.001; r <= 1; r *= 1.5) {
+        Float a = MicrofacetDistribution::RoughnessToAlpha(r);
+        EXPECT_GT(a, prev);
+        prev = a;
+    }
+    EXPECT_NEAR(MicrofacetDistribution::RoughnessToAlpha(1), 1.62142, 1e-5);
+    EXPECT_NEAR(ErfInv(std::erf(0.7)), 0.7, 1e-12);
+    EXPECT_NEAR(ErfInv(std::erf(-2.5)), -2.5, 1e-9);
+}
+
+TEST(BxDF, RoughnessReported) {
+    EXPECT_EQ(LambertianReflection(Spectrum(1)).roughness(), 1);
+    EXPECT_EQ(SpecularReflection(Spectrum(1), Fresnel::One()).roughness(), 0);
+    EXPECT_EQ(MicrofacetReflection(Spectrum(1), GGX(0.3, 0.05), Fresnel::One()).roughness(), 0.05);
+    Plastic p(0.2);
+    EXPECT_EQ(p.roughness(), 0.2);
+}

@@ -196,7 +196,14 @@ ManifoldStatus TraceChain(const ManifoldScene &scene, const ManifoldSurfacePoint
 
 // Manifold walk: keep every interior half-vector of `base`, start at `newStart`
 // (may equal base.front()), and move the end vertex to `target` (same primitive
-// as base.back()).
+// as base.back()). Converged when |x_end - target| / scale < relativeTolerance,
+// scale = max(|start|_inf, |target|_inf, |target - start|). Newton: a trial step
+// that fails or moves away halves the step, a successful one doubles it (cap 1).
+// On failure the status is the reason of the last failed trial re-trace (e.g.
+// TotalInternalReflection when the target needs an exit past the critical
+// angle), or NotConverged if no trial failed.
+// Measured (bench/manifold, CPU time, shared machine): Newton 2.1 / 2.3 / 3.4 us
+// for k = 1 / 2 / 4, CeresTiny 6-19% slower with the same number of traces.
 ManifoldWalkResult ManifoldWalk(const ManifoldScene &scene, const ManifoldChain &base,
                                 const ManifoldSurfacePoint &newStart,
                                 const ManifoldSurfacePoint &target,

@@ -164,13 +164,21 @@ struct WalkFunction {
     mutable ManifoldChain chain;
     mutable ManifoldStatus lastFailure = ManifoldStatus::NotConverged;
     mutable int evaluations = 0;
+    // TinySolver evaluates a trial point without J and, if accepted, again with
+    // J: keep the last successful trace so the second call does not re-trace.
+    mutable Float cachedX[2] = {Infinity, Infinity};
 
     Point3 aim(const Float *x) const { return p1 + (T1 * x[0] + T2 * x[1]) * L; }
 
     bool operator()(const Float *x, Float *r, Float *J) const {
         ++evaluations;
         Point3 q = aim(x);
-        ManifoldStatus st = ctx->trace(q, &chain);
+        ManifoldStatus st = ManifoldStatus::Success;
+        if (x[0] != cachedX[0] || x[1] != cachedX[1]) {
+            st = ctx->trace(q, &chain);
+            cachedX[0] = cachedX[1] = Infinity;
+            if (st == ManifoldStatus::Success) { cachedX[0] = x[0]; cachedX[1] = x[1]; }
+        }
         if (st != ManifoldStatus::Success) {
             lastFailure = st;
             // TinySolver ignores the return value of trial evaluations: a huge
@@ -230,6 +238,8 @@ ManifoldWalkResult CeresWalk(WalkContext &ctx, const ManifoldWalkOptions &opts) 
     f.T1 = init.v[1].s;
     f.T2 = init.v[1].t;
     f.L = std::max(Distance(f.p1, ctx.start.p), 1e-12 * ctx.scale);
+    f.chain = init;  // x = 0 aims exactly at the initial x_1: reuse its trace
+    f.cachedX[0] = f.cachedX[1] = 0;
     ceres::TinySolver<WalkFunction> solver;
     solver.options.max_num_iterations = opts.maxIterations;
     solver.options.cost_threshold = 0.5 * Sqr(opts.relativeTolerance);
@@ -239,10 +249,14 @@ ManifoldWalkResult CeresWalk(WalkContext &ctx, const ManifoldWalkOptions &opts) 
     Eigen::Vector2d x(0, 0);
     const auto &summary = solver.Solve(f, &x);
     res.iterations = summary.iterations;
-    st = ctx.trace(f.aim(x.data()), &res.chain);
-    if (st != ManifoldStatus::Success) {
-        res.status = st;
-        return res;
+    if (x[0] == f.cachedX[0] && x[1] == f.cachedX[1]) {
+        res.chain = f.chain;
+    } else {
+        st = ctx.trace(f.aim(x.data()), &res.chain);
+        if (st != ManifoldStatus::Success) {
+            res.status = st;
+            return res;
+        }
     }
     res.relativeError = ctx.distance(res.chain) / ctx.scale;
     if (res.relativeError < opts.relativeTolerance)

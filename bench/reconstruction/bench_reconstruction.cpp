@@ -53,7 +53,7 @@ void CGIteration(benchmark::State &state) {
         }
     P.setUnitWeights();
     std::vector<float> x = P.p;
-    for (auto _ : state) recon::SolveCG(P, x.data(), int(state.range(0)), 0.0, true);
+    for (auto _ : state) recon::SolveCG(P, x.data(), int(state.range(0)), 0.0, recon::CGPrecond::Jacobi);
     state.SetItemsProcessed(state.iterations() * state.range(0));
 }
 
@@ -61,7 +61,12 @@ void CGIteration(benchmark::State &state) {
 
 BENCHMARK(CGIteration)->Arg(1)->Arg(21)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 BENCHMARK_CAPTURE(Run, L2Exact, ReconstructionOptions::L2Exact())->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
-BENCHMARK_CAPTURE(Run, L2CG, ReconstructionOptions::L2CG())->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime()->Iterations(1);
+BENCHMARK_CAPTURE(Run, L2CGJacobi, [] {
+    ReconstructionOptions o = ReconstructionOptions::L2CG();
+    o.preconditioner = Preconditioner::Jacobi;
+    return o;
+}())->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime()->Iterations(1);
+BENCHMARK_CAPTURE(Run, L2CGMultigrid, ReconstructionOptions::L2CG())->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime()->Iterations(1);
 BENCHMARK_CAPTURE(Run, L1Default, ReconstructionOptions::L1Default())->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 BENCHMARK_CAPTURE(Run, L1ReferenceSchedule, ReconstructionOptions::L1Reference())
     ->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime()->Iterations(1);

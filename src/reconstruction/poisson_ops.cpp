@@ -1,7 +1,10 @@
 #include "reconstruction/poisson_ops.h"
 
+#include "reconstruction/multigrid.h"
+
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -236,18 +239,41 @@ static ChannelSums ResidualNorms(const PoissonProblem &P, const float *r) {
     });
 }
 
-CGReport SolveCG(const PoissonProblem &P, float *x, int maxIter, double tol, bool jacobi) {
+CGReport SolveCG(const PoissonProblem &P, float *x, int maxIter, double tol, CGPrecond precond) {
     const int C = P.C, H = P.H;
     const size_t N = P.N, CN = size_t(C) * N;
     const int W = P.W;
     std::vector<float> r(CN), d(CN), Ad(CN), minv;
-    if (jacobi) InverseDiagonal(P, minv);
+    if (precond == CGPrecond::Jacobi) InverseDiagonal(P, minv);
     else minv.assign(N, 1.f);
     const float *mi = minv.data();
+    // Multigrid: z = M^-1 r kept in its own buffer (Jacobi/none fuse M^-1 = diag).
+    std::unique_ptr<MultigridPreconditioner> mg;
+    std::vector<float> z;
+    auto dot = [&](const float *a, const float *b) {
+        return ParallelRowSums(H, [&](int y0, int y1, ChannelSums &acc) {
+            for (int y = y0; y < y1; ++y)
+                for (int c = 0; c < C; ++c) {
+                    const float *__restrict ac = a + c * N + size_t(y) * W;
+                    const float *__restrict bc = b + c * N + size_t(y) * W;
+                    float v = 0;
+#pragma omp simd reduction(+ : v)
+                    for (int i = 0; i < W; ++i) v += ac[i] * bc[i];
+                    acc[c] += v;
+                }
+        });
+    };
 
     Residual(P, x, r.data());
+    if (maxIter > 0 && precond == CGPrecond::Multigrid) {
+        mg = std::make_unique<MultigridPreconditioner>(P);
+        z.resize(CN);
+        mg->apply(r.data(), z.data());
+        mi = nullptr;
+    }
     // d = M^-1 r; rz = r.M^-1 r; rr0 = r.r
-    const ChannelSums rz0 = ParallelRowSums(H, [&](int y0, int y1, ChannelSums &acc) {
+    const ChannelSums rz0 = mg ? (std::copy(z.begin(), z.end(), d.begin()), dot(r.data(), z.data()))
+                               : ParallelRowSums(H, [&](int y0, int y1, ChannelSums &acc) {
         for (int c = 0; c < C; ++c) {
             double a = 0;
             for (size_t i = size_t(y0) * W; i < size_t(y1) * W; ++i) {
@@ -285,7 +311,7 @@ CGReport SolveCG(const PoissonProblem &P, float *x, int maxIter, double tol, boo
         ChannelSums rzNew = ParallelRowSums(H, [&](int y0, int y1, ChannelSums &acc) {
             for (int y = y0; y < y1; ++y) {
                 const size_t row = size_t(y) * W;
-                const float *__restrict m = mi + row;
+                const float *__restrict m = mi ? mi + row : nullptr;
                 for (int c = 0; c < C; ++c) {
                     if (!active[c]) continue;
                     const float s = float(step[c]);
@@ -294,12 +320,20 @@ CGReport SolveCG(const PoissonProblem &P, float *x, int maxIter, double tol, boo
                     const float *__restrict dc = d.data() + c * N + row;
                     const float *__restrict adc = Ad.data() + c * N + row;
                     float a = 0;
+                    if (m) {
 #pragma omp simd reduction(+ : a)
-                    for (int i = 0; i < W; ++i) {
-                        xc[i] += s * dc[i];
-                        const float rv = rc[i] - s * adc[i];
-                        rc[i] = rv;
-                        a += rv * m[i] * rv;
+                        for (int i = 0; i < W; ++i) {
+                            xc[i] += s * dc[i];
+                            const float rv = rc[i] - s * adc[i];
+                            rc[i] = rv;
+                            a += rv * m[i] * rv;
+                        }
+                    } else {
+#pragma omp simd
+                        for (int i = 0; i < W; ++i) {
+                            xc[i] += s * dc[i];
+                            rc[i] -= s * adc[i];
+                        }
                     }
                     acc[c] += a;
                 }
@@ -309,6 +343,10 @@ CGReport SolveCG(const PoissonProblem &P, float *x, int maxIter, double tol, boo
             rr = ResidualNorms(P, r.data());
         ++rep.iterations;
         if (it + 1 == maxIter) break;
+        if (mg) {
+            mg->apply(r.data(), z.data());
+            rzNew = dot(r.data(), z.data());
+        }
         double beta[kMaxChannels];
         for (int c = 0; c < C; ++c) {
             beta[c] = active[c] ? rzNew[c] / rz[c] : 0.0;
@@ -321,7 +359,12 @@ CGReport SolveCG(const PoissonProblem &P, float *x, int maxIter, double tol, boo
                 const float b = float(beta[c]);
                 float *dc = d.data() + c * N;
                 const float *rc = r.data() + c * N;
-                for (size_t i = size_t(y0) * W; i < size_t(y1) * W; ++i) dc[i] = mi[i] * rc[i] + b * dc[i];
+                if (mg) {
+                    const float *zc = z.data() + c * N;
+                    for (size_t i = size_t(y0) * W; i < size_t(y1) * W; ++i) dc[i] = zc[i] + b * dc[i];
+                } else {
+                    for (size_t i = size_t(y0) * W; i < size_t(y1) * W; ++i) dc[i] = mi[i] * rc[i] + b * dc[i];
+                }
             }
         });
     }

@@ -51,7 +51,8 @@ Energies ComputeEnergies(const PoissonProblem &P, const float *x);
 // independent CGs that share the operator). Stops after maxIter iterations or
 // when ||r_c|| <= tol * ||r0_c|| for all channels.
 struct CGReport { int iterations = 0; double relResidual = 0; };
-CGReport SolveCG(const PoissonProblem &P, float *x, int maxIter, double tol, bool jacobi);
+enum class CGPrecond { None, Jacobi, Multigrid };
+CGReport SolveCG(const PoissonProblem &P, float *x, int maxIter, double tol, CGPrecond precond);
 
 }  // namespace recon
 }  // namespace gradus

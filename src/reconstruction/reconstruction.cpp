@@ -40,6 +40,7 @@ ReconstructionOptions ReconstructionOptions::L2CG(double alpha) {
     o.alpha = alpha;
     o.cgIterations = 2000;
     o.cgTolerance = 1e-6;
+    o.preconditioner = Preconditioner::Multigrid;
     return o;
 }
 
@@ -48,6 +49,7 @@ ReconstructionOptions ReconstructionOptions::Weighted() {
     o.norm = ReconstructionNorm::Weighted;
     o.cgIterations = 500;
     o.cgTolerance = 1e-5;
+    o.preconditioner = Preconditioner::Multigrid;
     return o;
 }
 
@@ -166,7 +168,9 @@ ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionO
     std::vector<float> x(P.p.size());
     const double alpha = opt.alpha;
     P.a2 = float(alpha * alpha);
-    const bool jacobi = opt.preconditioner == Preconditioner::Jacobi;
+    const recon::CGPrecond pc = opt.preconditioner == Preconditioner::Jacobi      ? recon::CGPrecond::Jacobi
+                               : opt.preconditioner == Preconditioner::Multigrid ? recon::CGPrecond::Multigrid
+                                                                                 : recon::CGPrecond::None;
 
     if (std::isinf(alpha) && !weighted) {
         st.method = "primal (alpha = inf)";
@@ -177,10 +181,10 @@ ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionO
             st.method = "l2-exact-dct";
             recon::SolveL2Exact(P, x.data());
         } else {
-            st.method = jacobi ? "l2-pcg-jacobi" : "l2-cg";
+            st.method = pc == recon::CGPrecond::Jacobi ? "l2-pcg-jacobi" : pc == recon::CGPrecond::Multigrid ? "l2-pcg-multigrid" : "l2-cg";
             P.setUnitWeights();
             x = P.p;
-            recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, jacobi);
+            recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, pc);
             st.cgIterations = rep.iterations;
             st.finalRelativeResidual = rep.relResidual;
         }
@@ -192,7 +196,7 @@ ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionO
             recon::SolveL2Exact(P, x.data());
         } else {
             x = P.p;
-            recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, jacobi);
+            recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, pc);
             st.cgIterations += rep.iterations;
             st.finalRelativeResidual = rep.relResidual;
         }
@@ -200,7 +204,7 @@ ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionO
         for (int k = 1; k < opt.irlsIterations; ++k) {
             double reg = opt.irlsRegInit * std::pow(opt.irlsRegFactor, k - 1);
             recon::IrlsWeights(P, x.data(), float(alpha), float(reg));
-            recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, jacobi);
+            recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, pc);
             st.cgIterations += rep.iterations;
             st.finalRelativeResidual = rep.relResidual;
             ++st.irlsIterations;
@@ -234,7 +238,7 @@ ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionO
             P.wy[i] = float(P.wy[i] * s);
         }
         P.a2 = 1.f;
-        recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, jacobi);
+        recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, pc);
         st.cgIterations = rep.iterations;
         st.finalRelativeResidual = rep.relResidual;
     }

@@ -239,11 +239,18 @@ static ChannelSums ResidualNorms(const PoissonProblem &P, const float *r) {
     });
 }
 
-CGReport SolveCG(const PoissonProblem &P, float *x, int maxIter, double tol, CGPrecond precond) {
+CGReport SolveCG(const PoissonProblem &P, float *x, int maxIter, double tol, CGPrecond precond,
+                 CGWorkspace *ws) {
     const int C = P.C, H = P.H;
     const size_t N = P.N, CN = size_t(C) * N;
     const int W = P.W;
-    std::vector<float> r(CN), d(CN), Ad(CN), minv;
+    CGWorkspace local;
+    if (!ws) ws = &local;
+    // Reused buffers (no fresh pages per IRLS step); every entry is overwritten.
+    std::vector<float> &r = ws->r, &d = ws->d, &Ad = ws->Ad, &minv = ws->minv;
+    r.resize(CN);
+    d.resize(CN);
+    Ad.resize(CN);
     if (precond == CGPrecond::Jacobi) InverseDiagonal(P, minv);
     else minv.assign(N, 1.f);
     const float *mi = minv.data();

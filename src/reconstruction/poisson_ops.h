@@ -52,7 +52,10 @@ Energies ComputeEnergies(const PoissonProblem &P, const float *x);
 // when ||r_c|| <= tol * ||r0_c|| for all channels.
 struct CGReport { int iterations = 0; double relResidual = 0; };
 enum class CGPrecond { None, Jacobi, Multigrid };
-CGReport SolveCG(const PoissonProblem &P, float *x, int maxIter, double tol, CGPrecond precond);
+// Buffers SolveCG can reuse across calls (e.g. IRLS steps).
+struct CGWorkspace { std::vector<float> r, d, Ad, minv; };
+CGReport SolveCG(const PoissonProblem &P, float *x, int maxIter, double tol, CGPrecond precond,
+                 CGWorkspace *ws = nullptr);
 
 }  // namespace recon
 }  // namespace gradus

@@ -1,8 +1,12 @@
 #include "reconstruction/reconstruction.h"
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <sstream>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "core/error.h"
 #include "reconstruction/dct_solver.h"
@@ -84,19 +88,32 @@ void ToPlanar(const GradientImages &in, const std::vector<float> &src, const cha
         throw Error(m.str());
     }
     dst.assign(N * C, 0.f);
+    auto bad = [&](float v) { return !std::isfinite(v) || (nonNegative && v < 0); };
+    std::atomic<bool> anyBad{false};
+    tbb::parallel_for(tbb::blocked_range<int>(0, H - skipLastRow), [&](const tbb::blocked_range<int> &rows) {
+        bool b = false;
+        for (int y = rows.begin(); y < rows.end(); ++y)
+            for (int x = 0; x < W - skipLastCol; ++x)
+                for (int c = 0; c < C; ++c) {
+                    const size_t i = size_t(y) * W + x;
+                    const float v = src[i * C + c];
+                    b |= bad(v);
+                    dst[c * N + i] = v;
+                }
+        if (b) anyBad = true;
+    });
+    if (!anyBad) return;
+    // Report the first bad value in scan order (deterministic message).
     for (int y = 0; y < H - skipLastRow; ++y)
         for (int x = 0; x < W - skipLastCol; ++x)
             for (int c = 0; c < C; ++c) {
-                size_t i = size_t(y) * W + x;
-                float v = src[i * C + c];
-                if (!std::isfinite(v) || (nonNegative && v < 0)) {
-                    std::ostringstream m;
-                    m << "reconstruction: layer '" << layer << "' has "
-                      << (std::isnan(v) ? "a NaN" : std::isinf(v) ? "an infinite" : "a negative")
-                      << " value at pixel (" << x << ", " << y << "), channel " << c;
-                    throw Error(m.str());
-                }
-                dst[c * N + i] = v;
+                const float v = src[(size_t(y) * W + x) * C + c];
+                if (!bad(v)) continue;
+                std::ostringstream m;
+                m << "reconstruction: layer '" << layer << "' has "
+                  << (std::isnan(v) ? "a NaN" : std::isinf(v) ? "an infinite" : "a negative")
+                  << " value at pixel (" << x << ", " << y << "), channel " << c;
+                throw Error(m.str());
             }
 }
 
@@ -129,8 +146,10 @@ void InverseVarianceWeights(const PoissonProblem &P, const std::vector<float> &v
 
 std::vector<float> ToInterleaved(const std::vector<float> &planar, int C, size_t N) {
     std::vector<float> out(planar.size());
-    for (int c = 0; c < C; ++c)
-        for (size_t i = 0; i < N; ++i) out[i * C + c] = planar[c * N + i];
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, N, 4096), [&](const tbb::blocked_range<size_t> &r) {
+        for (size_t i = r.begin(); i < r.end(); ++i)
+            for (int c = 0; c < C; ++c) out[i * C + c] = planar[c * N + i];
+    });
     return out;
 }
 
@@ -201,10 +220,11 @@ ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionO
             st.finalRelativeResidual = rep.relResidual;
         }
         st.irlsIterations = 1;
+        recon::CGWorkspace ws;
         for (int k = 1; k < opt.irlsIterations; ++k) {
             double reg = opt.irlsRegInit * std::pow(opt.irlsRegFactor, k - 1);
             recon::IrlsWeights(P, x.data(), float(alpha), float(reg));
-            recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, pc);
+            recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, pc, &ws);
             st.cgIterations += rep.iterations;
             st.finalRelativeResidual = rep.relResidual;
             ++st.irlsIterations;

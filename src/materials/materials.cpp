@@ -85,10 +85,11 @@ struct Roughness {
     bool varies() const { return NonConstant(u) || NonConstant(v); }
 };
 
-// Copper, used as pbrt-v3's default "metal": complex index of refraction at 650,
-// 550 and 450 nm (taken as R, G, B), read from Johnson & Christy, "Optical constants
-// of the noble metals", Phys. Rev. B 6, 4370 (1972). Point samples, not spectral
-// averages; normal-incidence reflectance ~ (0.94, 0.62, 0.54).
+// Copper, used as pbrt-v3's default "metal": complex index of refraction near 650,
+// 550 and 450 nm (taken as R, G, B), approximate values (rounded) from the tables of
+// Johnson & Christy, "Optical constants of the noble metals", Phys. Rev. B 6, 4370
+// (1972). Point samples, not spectral averages; normal-incidence reflectance
+// ((n-1)^2 + k^2) / ((n+1)^2 + k^2) ~ (0.94, 0.62, 0.54), copper's usual colour.
 const Spectrum kCopperEta(0.214, 1.02, 1.24);
 const Spectrum kCopperK(3.67, 2.58, 2.40);
 

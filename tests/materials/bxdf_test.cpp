@@ -433,3 +433,38 @@ TEST(BxDF, RoughnessReported) {
     Plastic p(0.2);
     EXPECT_EQ(p.roughness(), 0.2);
 }
+
+// A composite with a specular lobe: the one-sample estimator of the albedo is
+// unbiased over the mixture (diffuse 0.3 + perfect mirror 0.5 = 0.8), and
+// specular samples carry the lobe-selection probability in their pdf.
+TEST(BxDF, CompositeWithSpecularLobe) {
+    LambertianReflection d(Spectrum(0.3));
+    SpecularReflection m(Spectrum(0.5), Fresnel::One());
+    CompositeBxDF c;
+    c.add(&d, 1);
+    c.add(&m, 3);
+    EXPECT_EQ(c.flags(), unsigned(BSDF_REFLECTION | BSDF_DIFFUSE | BSDF_SPECULAR));
+    EXPECT_EQ(c.roughness(), 0);
+    Vec3 wo = Normalize(Vec3(0.3, -0.2, 0.7));
+    RNG rng(17);
+    const int n = 40000;
+    double sum = 0, sum2 = 0;
+    int nSpec = 0;
+    for (int i = 0; i < n; ++i) {
+        BSDFSample s;
+        ASSERT_TRUE(c.sample(wo, rng.uniform(), {rng.uniform(), rng.uniform()}, TransportMode::Radiance, &s));
+        if (s.isSpecular()) {
+            ++nSpec;
+            ASSERT_NEAR(s.pdf, 0.75, 1e-12);
+            ASSERT_NEAR(s.wi.z, wo.z, 1e-12);
+        } else {
+            ASSERT_NEAR(s.pdf, 0.25 * AbsCosTheta(s.wi) * InvPi, 1e-12);
+        }
+        double w = s.f.r * AbsCosTheta(s.wi) / s.pdf;
+        sum += w;
+        sum2 += w * w;
+    }
+    double mean = sum / n, sd = std::sqrt((sum2 / n - mean * mean) / n);
+    EXPECT_NEAR(mean, 0.8, 5 * sd + 1e-12);
+    EXPECT_NEAR(double(nSpec) / n, 0.75, 5 * std::sqrt(0.75 * 0.25 / n));
+}

@@ -302,11 +302,11 @@ std::shared_ptr<Light> CreateLight(const LightDesc &desc, const SceneDesc &scene
     const std::string &t = desc.type;
     std::shared_ptr<Light> light;
     if (t == "point") {
-        Spectrum I = ps.getSpectrum("I", Spectrum(1)) * scale;
+        Spectrum I = ps.getSpectrum("I", Spectrum(1), SpectrumKind::Illuminant) * scale;
         Point3 from = ps.getPoint3("from", Point3(0, 0, 0));
         light = std::make_shared<PointLight>(desc.worldFromLight * Translate(from), I);
     } else if (t == "spot") {
-        Spectrum I = ps.getSpectrum("I", Spectrum(1)) * scale;
+        Spectrum I = ps.getSpectrum("I", Spectrum(1), SpectrumKind::Illuminant) * scale;
         Float cone = ps.getFloat("coneangle", 30), delta = ps.getFloat("conedeltaangle", 5);
         Point3 from = ps.getPoint3("from", Point3(0, 0, 0)), to = ps.getPoint3("to", Point3(0, 0, 1));
         Vec3 dir = to - from;
@@ -316,12 +316,12 @@ std::shared_ptr<Light> CreateLight(const LightDesc &desc, const SceneDesc &scene
         Matrix4 m(f.s.x, f.t.x, f.n.x, from.x, f.s.y, f.t.y, f.n.y, from.y, f.s.z, f.t.z, f.n.z, from.z, 0, 0, 0, 1);
         light = std::make_shared<SpotLight>(desc.worldFromLight * Transform(m), I, cone, delta);
     } else if (t == "distant") {
-        Spectrum L = ps.getSpectrum("L", Spectrum(1)) * scale;
+        Spectrum L = ps.getSpectrum("L", Spectrum(1), SpectrumKind::Illuminant) * scale;
         Point3 from = ps.getPoint3("from", Point3(0, 0, 0)), to = ps.getPoint3("to", Point3(0, 0, 1));
         if (!((from - to).length() > 0)) throw Error(desc.loc, "distant light: \"from\" and \"to\" coincide");
         light = std::make_shared<DistantLight>(desc.worldFromLight, L, from - to);
     } else if (t == "infinite" || t == "exinfinite") {
-        Spectrum L = ps.getSpectrum("L", Spectrum(1)) * scale;
+        Spectrum L = ps.getSpectrum("L", Spectrum(1), SpectrumKind::Illuminant) * scale;
         ps.getInt("nsamples", 1);  // accepted: Gradus sets light samples in the integrator
         std::string map = ps.getString("mapname", "");
         if (!map.empty()) {

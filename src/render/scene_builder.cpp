@@ -141,7 +141,7 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
             const EntityDesc &ad = desc.areaLights[sd.areaLight];
             if (ad.type != "diffuse" && ad.type != "area")
                 throw Error(ad.loc, "unknown area light \"" + ad.type + "\" (valid: diffuse, area)");
-            Spectrum L = ad.params.getSpectrum("L", Spectrum(1)) * ad.params.getSpectrum("scale", Spectrum(1));
+            Spectrum L = ad.params.getSpectrum("L", Spectrum(1), SpectrumKind::Illuminant) * ad.params.getSpectrum("scale", Spectrum(1));
             bool twoSided = ad.params.getBool("twosided", false);
             ad.params.getInt("nsamples", 1);
             ad.params.checkUnused("AreaLightSource \"" + ad.type + "\"");

@@ -1,0 +1,1 @@
+"""Time-versus-error benchmark harness for Gradus (driven by bench/run)."""

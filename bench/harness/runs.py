@@ -1,0 +1,138 @@
+"""Time-budget runs: scenes x integrators x budgets x seeds, measured against references."""
+
+import csv
+import os
+import sys
+import time
+
+from . import analysis
+
+# The first seven columns are the interface; the rest document each run.
+CSV_COLUMNS = ["scene", "integrator", "seconds", "spp", "relmse", "mse", "psnr",
+               "budget", "seed", "wall_seconds", "relmse_untrimmed",
+               "discard_fraction", "discard_count", "discarded_pixels", "ref_noise",
+               "image", "status", "error"]
+
+SUMMARY_COLUMNS = ["scene", "integrator", "budget", "runs", "seconds", "seconds_stderr", "spp",
+                   "relmse", "relmse_stderr", "relmse_untrimmed", "relmse_untrimmed_stderr",
+                   "mse", "mse_stderr", "psnr", "psnr_stderr", "ref_noise", "speedup",
+                   "speedup_extrapolated", "baseline_seconds", "at_noise_floor"]
+
+
+def trimming(scene, args):
+    """(discard_fraction, discard_count): command line first, else the scene list's."""
+    f = args.discard_fraction if args.discard_fraction is not None else scene.discard_fraction
+    c = args.discard_count if args.discard_count is not None else scene.discard_count
+    return float(f or 0.0), int(c or 0)
+
+
+def render_path(out, scene, integrator, budget, seed):
+    return os.path.join(out, "renders", scene, "%s-t%s-s%d.exr"
+                        % (integrator, _tag(budget), seed))
+
+
+def _tag(x):
+    x = float(x)
+    return str(int(x)) if x == int(x) else str(x).replace(".", "p")
+
+
+def plan(scenes, integrators, budgets, seeds):
+    """Run order: seed, budget, scene, integrator - integrators of one budget run one
+    after another, so a change of machine load hits all of them alike."""
+    for seed in seeds:
+        for budget in budgets:
+            for scene in scenes:
+                for integ in integrators:
+                    yield scene, integ, budget, seed
+
+
+def measure(tools, scene, integ, budget, seed, args):
+    path = render_path(args.out, scene.name, integ, budget, seed)
+    frac, count = trimming(scene, args)
+    row = {"scene": scene.name, "integrator": integ, "budget": budget, "seed": seed,
+           "discard_fraction": frac, "discard_count": count, "ref_noise": scene.noise,
+           "image": os.path.relpath(path, args.out), "status": "ok", "error": ""}
+    try:
+        meta, wall = tools.render(scene.scene, path, integrator=integ, seconds=budget,
+                                  seed=seed, nthreads=args.nthreads)
+        row["wall_seconds"] = wall
+        row["seconds"] = float(meta.get("render_seconds", wall))
+        row["spp"] = int(float(meta.get("spp", 0)))
+        if meta.get("integrator") and meta["integrator"] != integ:
+            raise RuntimeError("image metadata says integrator '%s', asked for '%s'"
+                               % (meta["integrator"], integ))
+        d = tools.diff(path, scene.reference, frac, count, layer=args.layer)
+        row["relmse"] = d["relmse"]
+        row["mse"] = d["mse"]
+        row["psnr"] = d["psnr"]
+        row["discarded_pixels"] = d.get("discarded_pixels", 0)
+        if frac or count:
+            row["relmse_untrimmed"] = tools.diff(path, scene.reference, layer=args.layer)["relmse"]
+        else:
+            row["relmse_untrimmed"] = d["relmse"]
+    except RuntimeError as e:
+        row["status"] = "failed"
+        row["error"] = str(e).replace("\n", " ")
+    return row
+
+
+def run_all(tools, scenes, integrators, budgets, seeds, args):
+    os.makedirs(args.out, exist_ok=True)
+    rows = []
+    jobs = list(plan(scenes, integrators, budgets, seeds))
+    csv_path = os.path.join(args.out, "results.csv")
+    started = time.monotonic()
+    with open(csv_path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=CSV_COLUMNS, extrasaction="ignore")
+        w.writeheader()
+        for i, (scene, integ, budget, seed) in enumerate(jobs, 1):
+            if not args.quiet:
+                print("[%d/%d] %s %s %ss seed %d ... " % (i, len(jobs), scene.name, integ,
+                                                          _tag(budget), seed),
+                      end="", flush=True)
+            row = measure(tools, scene, integ, budget, seed, args)
+            rows.append(row)
+            w.writerow(_csv_row(row))
+            f.flush()
+            if not args.quiet:
+                if row["status"] == "ok":
+                    print("%.2fs %d spp relMSE %.4g" % (row["seconds"], row["spp"], row["relmse"]),
+                          flush=True)
+                else:
+                    print("FAILED", flush=True)
+            if row["status"] != "ok":
+                print("error: %s" % row["error"], file=sys.stderr)
+                if args.fail_fast:
+                    break
+    if not args.quiet:
+        print("measured %d runs in %.0f s; results in %s"
+              % (len(rows), time.monotonic() - started, csv_path))
+    return rows
+
+
+def _csv_row(row):
+    out = {}
+    for k in CSV_COLUMNS:
+        v = row.get(k)
+        if isinstance(v, float):
+            v = "%.6g" % v if k not in ("seconds", "wall_seconds", "budget") else "%.4f" % v
+        out[k] = "" if v is None else v
+    return out
+
+
+def write_summary(summary, out):
+    path = os.path.join(out, "summary.csv")
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=SUMMARY_COLUMNS, extrasaction="ignore")
+        w.writeheader()
+        for s in summary:
+            w.writerow({k: ("" if s.get(k) is None else
+                            ("%.6g" % s[k] if isinstance(s[k], float) else s[k]))
+                        for k in SUMMARY_COLUMNS})
+    return path
+
+
+def analyse(rows, baseline, floor_correction):
+    summary = analysis.summarise(rows)
+    analysis.speedups(summary, baseline, floor_correction)
+    return summary

@@ -37,7 +37,8 @@ struct GradientImages {
 };
 
 enum class ReconstructionNorm { L2, L1, Weighted };
-// L2 solve: Exact = direct DCT-II diagonalisation; CG = preconditioned CG.
+// L2 solve: Exact = direct DCT-II diagonalisation (FFTW REDFT10/REDFT01,
+// float); CG = preconditioned CG. Both start from / correct the primal.
 enum class L2Method { Exact, CG };
 // CG preconditioner: Jacobi (diagonal), or a symmetric multigrid V-cycle
 // (2x2 aggregation, Galerkin coarse operators, damped-Jacobi smoothing): far
@@ -61,10 +62,12 @@ struct ReconstructionOptions {
     // Start L1 from the exact L2 solution (true) or from the primal (false).
     bool initFromL2 = true;
 
-    // Presets. L1Default is the library default above (20 IRLS x 10 Jacobi-PCG
-    // from the exact L2 solution; lower L1 objective than L1Reference in the tests). L1Reference reproduces
-    // the reference implementation's schedule (20 IRLS x 50 plain CG from the
-    // primal) for comparisons; L2Exact / L2CG / Weighted as named.
+    // Presets. L1Default is the default above: 20 IRLS x 10 Jacobi-PCG from the
+    // exact L2 solution (lower L1 objective than L1Reference in the tests, at
+    // about a fifth of its CG work). L1Reference reproduces the reference
+    // implementation's schedule (20 IRLS x 50 plain CG from the primal) for
+    // comparisons. L2CG: multigrid PCG to 1e-6; Weighted: multigrid PCG to 1e-5
+    // from the L2 solution with alpha^2 = mean primal weight / mean gradient weight.
     static ReconstructionOptions L1Default();
     static ReconstructionOptions L1Reference();
     static ReconstructionOptions L2Exact(double alpha = 0.2);

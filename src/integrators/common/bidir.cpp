@@ -1,0 +1,483 @@
+#include "integrators/common/bidir.h"
+
+#include "core/stats.h"
+#include "shapes/sphere.h"
+#include "shapes/triangle.h"
+
+namespace gradus {
+
+namespace {
+
+TransportMode Flip(TransportMode m) {
+    return m == TransportMode::Radiance ? TransportMode::Importance : TransportMode::Radiance;
+}
+
+Interaction AsInteraction(const PathVertex &v) {
+    // Light and camera vertices off a surface get no ray offset (zero normal).
+    Vec3 n = v.onSurface() ? Vec3(v.ng) : Vec3(0, 0, 0);
+    return Interaction(v.p, n, v.wo);
+}
+
+// Solid-angle density at `from` -> area density at `to` (Veach 1997, Eq. 8.10).
+// Densities towards infinite-light vertices stay directional.
+Float ConvertDensity(Float pdf, const PathVertex &from, const PathVertex &to) {
+    if (to.isInfiniteLight()) return pdf;
+    Vec3 w = to.p - from.p;
+    Float d2 = w.lengthSquared();
+    if (d2 == 0) return 0;
+    Float invD2 = 1 / d2;
+    if (to.onSurface()) pdf *= AbsDot(Vec3(to.ng), w * std::sqrt(invD2));
+    return pdf * invD2;
+}
+
+// Directional density of all infinite lights towards w (direction to the light).
+Float InfiniteLightDensity(const BidirContext &ctx, const Vec3 &w) {
+    Float pdf = 0;
+    for (const Light *l : ctx.scene->infiniteLights) pdf += ctx.lightSampler->pmf(l) * l->pdfLi(Interaction(), w);
+    return pdf;
+}
+
+// Shading-normal correction of the adjoint BSDF (Veach 1997, Eq. 5.17):
+// |wo.ns| |wi.ng| / (|wo.ng| |wi.ns|), applied to importance transport.
+Float ShadingCorrection(const PathVertex &v, const Vec3 &wo, const Vec3 &wi) {
+    Vec3 ng = v.ng, ns = v.ns;
+    Float den = AbsDot(wo, ng) * AbsDot(wi, ns);
+    if (den == 0) return 0;
+    return AbsDot(wo, ns) * AbsDot(wi, ng) / den;
+}
+
+void Barycentrics(const TriangleMesh &m, int tri, const Point3 &p, float *b1, float *b2) {
+    const Point3 &p0 = m.p[m.indices[3 * tri]], &p1 = m.p[m.indices[3 * tri + 1]], &p2 = m.p[m.indices[3 * tri + 2]];
+    Vec3 e1 = p1 - p0, e2 = p2 - p0, d = p - p0;
+    Float d11 = Dot(e1, e1), d12 = Dot(e1, e2), d22 = Dot(e2, e2), dd1 = Dot(d, e1), dd2 = Dot(d, e2);
+    Float den = d11 * d22 - d12 * d12;
+    if (den == 0) {
+        *b1 = *b2 = 0;
+        return;
+    }
+    *b1 = float((d22 * dd1 - d12 * dd2) / den);
+    *b2 = float((d11 * dd2 - d12 * dd1) / den);
+}
+
+// Random walk shared by both subpaths (Veach 1997, Sec. 10.2): path[n-1] is the
+// origin; fills vertices n.. up to maxVertices, setting pdfFwd of each new
+// vertex and pdfRev of its predecessor.
+int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sampler &sampler, Arena &arena,
+               TransportMode mode, int n, int maxVertices, PathVertex *path, BSDF *bsdfs) {
+    GRADUS_STAT_COUNTER("BDPT/Subpath vertices", nVerts);
+    const Scene &scene = *ctx.scene;
+    Float pdfFwd = pdfDir;
+    while (n < maxVertices) {
+        SurfaceInteraction isect;
+        bool hit = scene.intersect(ray, &isect);
+        for (int k = 0; hit && !isect.material && k < 64; ++k) {  // interfaces: continue straight through
+            ray = isect.spawnRay(ray.d);
+            hit = scene.intersect(ray, &isect);
+        }
+        if (hit && !isect.material) break;
+        PathVertex &prev = path[n - 1];
+        if (!hit) {
+            // An escaped camera path ends on the infinite lights.
+            if (mode == TransportMode::Radiance && !scene.infiniteLights.empty()) {
+                PathVertex &v = path[n];
+                v = PathVertex();
+                v.type = VertexType::Light;
+                v.flags = VERTEX_INFINITE;
+                v.light = nullptr;
+                Vec3 d = Normalize(ray.d);
+                v.p = ray.o + d;
+                v.ng = -d;
+                v.wo = -d;
+                v.setThroughput(beta);
+                v.pdfFwd = pdfFwd;
+                bsdfs[n] = BSDF();
+                ++n;
+            }
+            break;
+        }
+        ++nVerts;
+        PathVertex &v = path[n];
+        v = PathVertex();
+        v.type = VertexType::Surface;
+        v.material = isect.material;
+        v.p = isect.p;
+        v.ng = isect.n;
+        v.wo = isect.wo;
+        v.geomId = isect.geomId;
+        v.primId = isect.primId;
+        const GeometryRecord &g = scene.geometry[isect.geomId];
+        if (g.mesh) Barycentrics(*g.mesh, isect.primId, isect.p, &v.b1, &v.b2);
+        v.setThroughput(beta);
+        v.pdfFwd = ConvertDensity(pdfFwd, prev, v);
+        BSDF bsdf = isect.material->getBSDF(isect, arena, mode);
+        bsdfs[n] = bsdf;
+        v.ns = bsdf ? bsdf.ns() : isect.shading.n;
+        if (bsdf) v.setRoughnessClass(bsdf.roughnessClass(0.001));
+        ++n;
+        if (n >= maxVertices || !bsdf) break;
+
+        Vec3 wo = isect.wo;
+        Float uc = sampler.get1D();
+        Point2 u2 = sampler.get2D();
+        BSDFSample bs;
+        if (!bsdf.sample(wo, uc, u2, mode, &bs) || !bs.valid()) break;
+        Float pdfRev;
+        pdfFwd = bs.pdf;
+        if (bs.isSpecular()) {
+            v.flags |= VERTEX_DELTA;
+            pdfFwd = pdfRev = 0;
+        } else {
+            pdfRev = bsdf.pdf(bs.wi, wo, Flip(mode));
+        }
+        beta *= bs.f * (AbsDot(bs.wi, Vec3(v.ns)) / bs.pdf);
+        if (mode == TransportMode::Importance) beta *= ShadingCorrection(v, wo, bs.wi);
+        prev.pdfRev = ConvertDensity(pdfRev, v, prev);
+        if (beta.isBlack() || !beta.isFinite()) break;
+        ray = isect.spawnRay(bs.wi);
+    }
+    return n;
+}
+
+}  // namespace
+
+void BidirContext::init(const Scene &s, const LightSampler &ls, MISHeuristic h) {
+    scene = &s;
+    camera = s.camera.get();
+    lightSampler = &ls;
+    heuristic = h;
+    Point3 c;
+    Float r = 0;
+    s.bounds.boundingSphere(&c, &r);
+    minConnectDist = std::isfinite(r) ? 2e-5 * r : 0;
+}
+
+int GenerateCameraSubpath(const BidirContext &ctx, const Ray &ray, Sampler &sampler, Arena &arena,
+                          int maxVertices, PathVertex *path, BSDF *bsdfs) {
+    if (maxVertices <= 0) return 0;
+    PathVertex &v = path[0];
+    v = PathVertex();
+    v.type = VertexType::Camera;
+    v.p = ray.o;
+    v.ng = ctx.camera->lensNormal();
+    v.ns = v.ng;
+    v.setThroughput(Spectrum(1));
+    v.pdfFwd = 1;
+    bsdfs[0] = BSDF();
+    Float pdfPos, pdfDir;
+    ctx.camera->pdfWe(ray, &pdfPos, &pdfDir);
+    if (pdfDir == 0) return 1;
+    return RandomWalk(ctx, ray, Spectrum(1), pdfDir, sampler, arena, TransportMode::Radiance, 1, maxVertices, path,
+                      bsdfs);
+}
+
+int GenerateLightSubpath(const BidirContext &ctx, Sampler &sampler, Arena &arena, int maxVertices, PathVertex *path,
+                         BSDF *bsdfs) {
+    Float uSel = sampler.get1D();
+    Point2 u1 = sampler.get2D(), u2 = sampler.get2D();
+    if (maxVertices <= 0) return 0;
+    Float pmf;
+    const Light *light = ctx.lightSampler->sample(uSel, &pmf);
+    if (!light || pmf == 0) return 0;
+    LightLeSample les;
+    if (!light->sampleLe(u1, u2, &les) || les.pdfPos == 0 || les.pdfDir == 0 || les.L.isBlack()) return 0;
+    PathVertex &v = path[0];
+    v = PathVertex();
+    v.type = VertexType::Light;
+    v.light = light;
+    if (IsDeltaLight(light->flags)) v.flags |= VERTEX_DELTA_LIGHT;
+    bool infinite = light->flags & (LIGHT_INFINITE | LIGHT_DELTA_DIRECTION);
+    if (infinite) v.flags |= VERTEX_INFINITE;
+    v.p = les.ray.o;
+    v.ng = les.nLight;
+    v.ns = les.nLight;
+    v.setThroughput(les.L);
+    v.pdfFwd = les.pdfPos * pmf;
+    bsdfs[0] = BSDF();
+    Float cosL = les.nLight == Normal3(0, 0, 0) ? 1 : AbsDot(les.nLight, les.ray.d);
+    Spectrum beta = les.L * (cosL / (pmf * les.pdfPos * les.pdfDir));
+    int n = RandomWalk(ctx, les.ray, beta, les.pdfDir, sampler, arena, TransportMode::Importance, 1, maxVertices,
+                       path, bsdfs);
+    if (infinite) {
+        // Infinite/distant lights: the origin density is directional and the
+        // first hit's density is the disk's positional density projected onto it.
+        if (n > 1) {
+            path[1].pdfFwd = les.pdfPos;
+            if (path[1].onSurface()) path[1].pdfFwd *= AbsDot(les.ray.d, Vec3(path[1].ng));
+        }
+        path[0].pdfFwd = InfiniteLightDensity(ctx, -les.ray.d);
+    }
+    return n;
+}
+
+const Light *EmitterOf(const BidirContext &ctx, const PathVertex &v) {
+    if (v.type == VertexType::Light) return v.light;
+    if (v.type == VertexType::Surface && v.geomId >= 0) {
+        const GeometryRecord &g = ctx.scene->geometry[v.geomId];
+        if (!g.areaLights.empty()) return g.areaLights[v.primId];
+    }
+    return nullptr;
+}
+
+bool IsConnectible(const PathVertex &v, const BSDF *bsdf) {
+    switch (v.type) {
+    case VertexType::Camera: return true;
+    case VertexType::Light: return !(v.light && (v.light->flags & LIGHT_DELTA_DIRECTION));
+    case VertexType::Surface: return bsdf && bsdf->hasNonSpecular();
+    }
+    return false;
+}
+
+Float PdfLightOrigin(const BidirContext &ctx, const PathVertex &v, const PathVertex &next) {
+    Vec3 w = next.p - v.p;
+    if (w.lengthSquared() == 0) return 0;
+    w = Normalize(w);
+    if (v.isInfiniteLight()) return InfiniteLightDensity(ctx, -w);
+    const Light *light = EmitterOf(ctx, v);
+    if (!light) return 0;
+    Float pdfPos, pdfDir;
+    light->pdfLe(Ray(v.p, w), v.ng, &pdfPos, &pdfDir);
+    return ctx.lightSampler->pmf(light) * pdfPos;
+}
+
+Float PdfLightDirection(const BidirContext &ctx, const PathVertex &v, const PathVertex &next) {
+    Vec3 w = next.p - v.p;
+    Float d2 = w.lengthSquared();
+    if (d2 == 0) return 0;
+    w = w / std::sqrt(d2);
+    Float pdf;
+    if (v.isInfiniteLight()) {
+        // Positional density on the disk perpendicular to the direction (all
+        // infinite/distant lights share the scene's bounding disk).
+        const Light *l = v.light ? v.light : (ctx.scene->infiniteLights.empty() ? nullptr : ctx.scene->infiniteLights[0]);
+        if (!l) return 0;
+        Float pdfPos, pdfDir;
+        l->pdfLe(Ray(next.p, -w), Normal3(0, 0, 0), &pdfPos, &pdfDir);
+        pdf = pdfPos;
+    } else {
+        const Light *light = EmitterOf(ctx, v);
+        if (!light) return 0;
+        Float pdfPos, pdfDir;
+        light->pdfLe(Ray(v.p, w), v.ng, &pdfPos, &pdfDir);
+        pdf = pdfDir / d2;
+    }
+    if (next.onSurface()) pdf *= AbsDot(Vec3(next.ng), w);
+    return pdf;
+}
+
+Float PdfArea(const BidirContext &ctx, const PathVertex &cur, const BSDF *bsdf, const PathVertex *prev,
+              const PathVertex &next, TransportMode mode) {
+    if (cur.type == VertexType::Light) return PdfLightDirection(ctx, cur, next);
+    Vec3 wn = next.p - cur.p;
+    if (wn.lengthSquared() == 0) return 0;
+    wn = Normalize(wn);
+    Float pdf = 0;
+    if (cur.type == VertexType::Camera) {
+        Float pdfPos;
+        ctx.camera->pdfWe(Ray(cur.p, wn), &pdfPos, &pdf);
+    } else {
+        if (!prev || !bsdf || !*bsdf) return 0;
+        Vec3 wp = prev->p - cur.p;
+        if (wp.lengthSquared() == 0) return 0;
+        pdf = bsdf->pdf(Normalize(wp), wn, mode);
+    }
+    return ConvertDensity(pdf, cur, next);
+}
+
+Spectrum EvalBSDF(const PathVertex &cur, const BSDF &bsdf, const PathVertex &next, TransportMode mode) {
+    Vec3 wi = next.p - cur.p;
+    if (wi.lengthSquared() == 0) return Spectrum(0);
+    wi = Normalize(wi);
+    Vec3 wo = cur.wo;
+    Spectrum f = bsdf.f(wo, wi, mode);
+    if (mode == TransportMode::Importance) f *= ShadingCorrection(cur, wo, wi);
+    return f;
+}
+
+Spectrum EmittedRadiance(const BidirContext &ctx, const PathVertex &v, const PathVertex &towards) {
+    if (v.isInfiniteLight()) {
+        Vec3 d = Normalize(v.p - towards.p);  // direction from the scene towards the light
+        Spectrum Le(0);
+        for (const Light *l : ctx.scene->infiniteLights) Le += l->Le(Ray(towards.p, d));
+        return Le;
+    }
+    const Light *light = EmitterOf(ctx, v);
+    if (!light || !(light->flags & LIGHT_AREA)) return Spectrum(0);
+    Vec3 w = towards.p - v.p;
+    if (w.lengthSquared() == 0) return Spectrum(0);
+    return static_cast<const AreaLight *>(light)->L(Interaction(v.p, v.ng, v.wo), Normalize(w));
+}
+
+BSDF RebuildBSDF(const BidirContext &ctx, const PathVertex &v, TransportMode mode, Arena &arena) {
+    if (v.type != VertexType::Surface || v.geomId < 0) return BSDF();
+    const GeometryRecord &g = ctx.scene->geometry[v.geomId];
+    SurfaceInteraction si;
+    if (g.mesh) {
+        g.mesh->interaction(v.primId, v.b1, v.b2, v.wo, &si);
+    } else {
+        Vec3 wo = v.wo;
+        g.sphere->interaction(Ray(v.p + wo, -wo), 1, &si);
+        si.wo = wo;
+    }
+    si.p = v.p;
+    si.material = g.material;
+    si.areaLight = g.areaLights.empty() ? nullptr : g.areaLights[v.primId];
+    si.geomId = v.geomId;
+    si.primId = v.primId;
+    return g.material ? g.material->getBSDF(si, arena, mode) : BSDF();
+}
+
+bool EdgeConnectible(const BidirContext &ctx, const PathVertex &a, const PathVertex &b) {
+    if (a.isInfiniteLight() || b.isInfiniteLight()) return true;
+    return DistanceSquared(a.p, b.p) >= ctx.minConnectDist * ctx.minConnectDist;
+}
+
+Float MISWeight(const BidirContext &ctx, SubpathView light, SubpathView camera, int s, int t,
+                const PathVertex *sampled) {
+    if (s + t == 2) return 1;
+    auto Lv = [&](int i) -> const PathVertex & { return (s == 1 && i == 0 && sampled) ? *sampled : light.v[i]; };
+    auto Cv = [&](int i) -> const PathVertex & { return (t == 1 && i == 0 && sampled) ? *sampled : camera.v[i]; };
+    auto Lb = [&](int i) -> const BSDF * { return light.bsdf ? &light.bsdf[i] : nullptr; };
+    auto Cb = [&](int i) -> const BSDF * { return camera.bsdf ? &camera.bsdf[i] : nullptr; };
+
+    // Reverse densities that depend on the other subpath (Veach 1997, Sec. 10.2).
+    Float ptRev = 0, ptMinusRev = 0, qsRev = 0, qsMinusRev = 0;
+    if (t > 0) {
+        const PathVertex &pt = Cv(t - 1);
+        if (s > 0)
+            ptRev = PdfArea(ctx, Lv(s - 1), Lb(s - 1), s > 1 ? &Lv(s - 2) : nullptr, pt, TransportMode::Importance);
+        else if (t > 1)
+            ptRev = PdfLightOrigin(ctx, pt, Cv(t - 2));
+        if (t > 1) {
+            if (s > 0)
+                ptMinusRev = PdfArea(ctx, pt, Cb(t - 1), &Lv(s - 1), Cv(t - 2), TransportMode::Importance);
+            else
+                ptMinusRev = PdfLightDirection(ctx, pt, Cv(t - 2));
+        }
+    }
+    if (s > 0) {
+        const PathVertex &qs = Lv(s - 1);
+        qsRev = PdfArea(ctx, Cv(t - 1), Cb(t - 1), t > 1 ? &Cv(t - 2) : nullptr, qs, TransportMode::Radiance);
+        if (s > 1) qsMinusRev = PdfArea(ctx, qs, Lb(s - 1), &Cv(t - 1), Lv(s - 2), TransportMode::Radiance);
+    }
+    auto camRev = [&](int i) { return i == t - 1 ? ptRev : (i == t - 2 ? ptMinusRev : Cv(i).pdfRev); };
+    auto lightRev = [&](int i) { return i == s - 1 ? qsRev : (i == s - 2 ? qsMinusRev : Lv(i).pdfRev); };
+    // Endpoints of the current strategy are connectible by construction.
+    auto camDelta = [&](int i) { return i != t - 1 && Cv(i).delta(); };
+    auto lightDelta = [&](int i) { return i != s - 1 && Lv(i).delta(); };
+    auto remap = [](Float f) { return f != 0 ? f : Float(1); };
+    const bool power = ctx.heuristic == MISHeuristic::Power;
+
+    Float sumRi = 0;
+    // Strategies with fewer camera vertices: (s + t - i, i), connection edge C[i] -- C[i-1].
+    Float ri = 1;
+    for (int i = t - 1; i > 0; --i) {
+        ri *= remap(camRev(i)) / remap(Cv(i).pdfFwd);
+        int sp = s + t - i;
+        if (sp == 1 && i == 1) continue;  // (1,1) is not evaluated
+        if (camDelta(i) || Cv(i - 1).delta()) continue;
+        if (!EdgeConnectible(ctx, Cv(i), Cv(i - 1))) continue;
+        sumRi += power ? ri * ri : ri;
+    }
+    // Strategies with fewer light vertices: (i, s + t - i), connection edge L[i-1] -- L[i].
+    ri = 1;
+    for (int i = s - 1; i >= 0; --i) {
+        ri *= remap(lightRev(i)) / remap(Lv(i).pdfFwd);
+        int tp = s + t - i;
+        if (i == 1 && tp == 1) continue;
+        bool deltaPrev = i > 0 ? Lv(i - 1).delta() : Lv(0).isDeltaLight();
+        if (lightDelta(i) || deltaPrev) continue;
+        if (i > 0 && !EdgeConnectible(ctx, Lv(i - 1), Lv(i))) continue;
+        sumRi += power ? ri * ri : ri;
+    }
+    return 1 / (1 + sumRi);
+}
+
+bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera, int s, int t,
+                 const ConnectSamples &u, ConnectResult *res) {
+    *res = ConnectResult();
+    if (t < 1 || (s == 1 && t == 1)) return false;
+    const Scene &scene = *ctx.scene;
+    // An infinite-light vertex ends the camera path: only s = 0 uses it.
+    if (s > 0 && camera.v[t - 1].type == VertexType::Light) return false;
+    PathVertex sampled;
+    bool haveSampled = false;
+    Spectrum L(0);
+    if (s == 0) {
+        const PathVertex &pt = camera.v[t - 1];
+        if (t < 2) return false;
+        L = pt.throughput() * EmittedRadiance(ctx, pt, camera.v[t - 2]);
+    } else if (t == 1) {
+        const PathVertex &qs = light.v[s - 1];
+        const BSDF *qb = light.bsdf ? &light.bsdf[s - 1] : nullptr;
+        if (!IsConnectible(qs, qb) || qs.type != VertexType::Surface) return false;
+        CameraWiSample cws;
+        if (!ctx.camera->sampleWi(AsInteraction(qs), u.uLens, &cws) || cws.pdf == 0) return false;
+        sampled.type = VertexType::Camera;
+        sampled.p = cws.pLens.p;
+        sampled.ng = cws.pLens.n;
+        sampled.ns = cws.pLens.n;
+        sampled.setThroughput(cws.We / cws.pdf);
+        sampled.pdfFwd = 1;
+        haveSampled = true;
+        if (!EdgeConnectible(ctx, qs, sampled)) return false;
+        L = qs.throughput() * EvalBSDF(qs, *qb, sampled, TransportMode::Importance) * (cws.We / cws.pdf) *
+            AbsDot(cws.wi, Vec3(qs.ns));
+        if (L.isBlack()) return false;
+        res->shadowRayTraced = true;
+        if (!scene.unoccluded(AsInteraction(qs), cws.pLens)) return false;
+        res->splat = true;
+        res->pRaster = cws.pRaster;
+    } else if (s == 1) {
+        const PathVertex &pt = camera.v[t - 1];
+        const BSDF *pb = camera.bsdf ? &camera.bsdf[t - 1] : nullptr;
+        if (!IsConnectible(pt, pb) || pt.type != VertexType::Surface) return false;
+        Float pmf;
+        const Light *lt = ctx.lightSampler->sample(u.uLightSelect, &pmf);
+        if (!lt || pmf == 0) return false;
+        LightLiSample ls;
+        if (!lt->sampleLi(AsInteraction(pt), u.uLight, &ls) || ls.pdf == 0 || ls.L.isBlack()) return false;
+        sampled.type = VertexType::Light;
+        sampled.light = lt;
+        if (IsDeltaLight(lt->flags)) sampled.flags |= VERTEX_DELTA_LIGHT;
+        if (lt->flags & (LIGHT_INFINITE | LIGHT_DELTA_DIRECTION)) sampled.flags |= VERTEX_INFINITE;
+        sampled.p = ls.pLight.p;
+        sampled.ng = ls.pLight.n;
+        sampled.ns = ls.pLight.n;
+        sampled.setThroughput(ls.L / (ls.pdf * pmf));
+        sampled.pdfFwd = PdfLightOrigin(ctx, sampled, pt);
+        haveSampled = true;
+        if (!EdgeConnectible(ctx, sampled, pt)) return false;
+        L = pt.throughput() * EvalBSDF(pt, *pb, sampled, TransportMode::Radiance) * (ls.L / (ls.pdf * pmf)) *
+            AbsDot(ls.wi, Vec3(pt.ns));
+        if (L.isBlack()) return false;
+        res->shadowRayTraced = true;
+        if (!scene.unoccluded(AsInteraction(pt), ls.pLight)) return false;
+    } else {
+        const PathVertex &qs = light.v[s - 1], &pt = camera.v[t - 1];
+        const BSDF *qb = light.bsdf ? &light.bsdf[s - 1] : nullptr;
+        const BSDF *pb = camera.bsdf ? &camera.bsdf[t - 1] : nullptr;
+        if (!IsConnectible(qs, qb) || !IsConnectible(pt, pb)) return false;
+        if (qs.type != VertexType::Surface || pt.type != VertexType::Surface) return false;
+        if (!EdgeConnectible(ctx, qs, pt)) return false;
+        L = qs.throughput() * EvalBSDF(qs, *qb, pt, TransportMode::Importance) *
+            EvalBSDF(pt, *pb, qs, TransportMode::Radiance) * pt.throughput();
+        if (L.isBlack()) return false;
+        // Geometry term with shading-normal cosines (the adjoint correction
+        // in EvalBSDF accounts for the geometric ones on the light side).
+        Vec3 d = qs.p - pt.p;
+        Float d2 = d.lengthSquared();
+        d = d / std::sqrt(d2);
+        L *= AbsDot(Vec3(qs.ns), d) * AbsDot(Vec3(pt.ns), d) / d2;
+        if (L.isBlack()) return false;
+        res->shadowRayTraced = true;
+        if (!scene.unoccluded(AsInteraction(qs), AsInteraction(pt))) return false;
+    }
+    if (L.isBlack()) return false;
+    Float w = MISWeight(ctx, light, camera, s, t, haveSampled ? &sampled : nullptr);
+    res->weight = w;
+    res->unweighted = L;
+    res->L = L * w;
+    return w > 0;
+}
+
+}  // namespace gradus

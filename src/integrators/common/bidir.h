@@ -1,0 +1,124 @@
+// Bidirectional path sampling shared by BDPT and its descendants: camera and
+// light subpath generation, area-measure pdfs of vertices in both directions,
+// the connection of light vertex s with camera vertex t for every strategy,
+// and the MIS weight of a strategy.
+//
+// Notation (Veach 1997, ch. 10): a path x_0 ... x_{k} runs from the light
+// (x_0) to the camera (x_k). Strategy (s, t) takes s vertices of the light
+// subpath and t of the camera subpath: s = 0 is a camera path that hits an
+// emitter, s = 1 samples a point on a light from the camera vertex (next-event
+// estimation), t = 1 samples a lens point from the light vertex (light
+// tracing, splatted to a raster position). (s, t) = (1, 1) is not evaluated.
+//
+// MIS: pbrt-v3's on-the-fly remapping (Veach 1997, Sec. 10.2 and Eq. 10.9):
+// every vertex stores the area density with which its own subpath generated it
+// (pdfFwd) and the density with which the opposite subpath would have
+// (pdfRev); the weight of (s, t) is 1 / sum_i (p_i / p_s)^beta with the ratio
+// p_i / p_{i+1} = pdfRev / pdfFwd of the vertex that changes sides (Eq. 10.9).
+// A connection evaluates the four reverse pdfs that depend on the other
+// subpath (both endpoints and their predecessors) without modifying the
+// subpaths. Delta pdfs (specular lobes, delta lights) are stored as 0 and
+// remapped to 1 in the ratios; strategies whose connection would touch a
+// delta vertex are left out of the sum. Strategies that are never evaluated
+// ((1,1), t = 0) and connections across near-coincident vertices (edge length
+// below BidirContext::minConnectDist) are left out both from the estimate and
+// from the MIS sums of all strategies of that path, so the weights of the
+// evaluated strategies sum to one.
+#pragma once
+#include <vector>
+
+#include "core/arena.h"
+#include "integrators/common/path_vertex.h"
+#include "lights/light_sampler.h"
+#include "render/scene.h"
+#include "samplers/sampler.h"
+
+namespace gradus {
+
+enum class MISHeuristic { Balance, Power };
+
+// Everything the connection code needs besides the subpaths (read-only, shared by threads).
+struct BidirContext {
+    const Scene *scene = nullptr;
+    const Camera *camera = nullptr;
+    const LightSampler *lightSampler = nullptr;
+    MISHeuristic heuristic = MISHeuristic::Balance;
+    Float minConnectDist = 0;  // connections over shorter edges are rejected (set by Init)
+    // Sets scene/camera/light sampler and the near-coincidence threshold
+    // (1e-5 of the scene's bounding-sphere diameter).
+    void init(const Scene &s, const LightSampler &ls, MISHeuristic h);
+};
+
+// ---------------------------------------------------------------- subpaths
+// Camera subpath from a camera ray: vertex 0 on the lens, then up to
+// maxVertices - 1 scattering vertices (an escaped ray adds an infinite-light
+// vertex when the scene has infinite lights). Returns the number of vertices.
+// Sampler use per bounce: 1D (lobe) + 2D (direction).
+int GenerateCameraSubpath(const BidirContext &ctx, const Ray &ray, Sampler &sampler, Arena &arena,
+                          int maxVertices, PathVertex *path, BSDF *bsdfs);
+// Light subpath: picks a light (1D), samples emission (2D position + 2D direction),
+// then up to maxVertices - 1 scattering vertices. Returns the number of vertices.
+int GenerateLightSubpath(const BidirContext &ctx, Sampler &sampler, Arena &arena, int maxVertices,
+                         PathVertex *path, BSDF *bsdfs);
+
+// ---------------------------------------------------------------- vertex queries
+// Area density at `next` of sampling it from `cur` (arrived at from `prev`;
+// ignored for camera and light vertices), in the given transport mode.
+Float PdfArea(const BidirContext &ctx, const PathVertex &cur, const BSDF *bsdf, const PathVertex *prev,
+              const PathVertex &next, TransportMode mode);
+// Density of `v` (an emitter: light vertex or emissive surface) as the origin of
+// a light subpath that continues towards `next` (light pmf x position pdf; for
+// infinite lights the directional density of all infinite lights).
+Float PdfLightOrigin(const BidirContext &ctx, const PathVertex &v, const PathVertex &next);
+// Area density at `next` of the emission direction sampled at emitter vertex `v`.
+Float PdfLightDirection(const BidirContext &ctx, const PathVertex &v, const PathVertex &next);
+// BSDF value at `cur` towards `next` (with the adjoint shading-normal correction
+// in Importance mode, Veach 1997 Sec. 5.3.4), not multiplied by any cosine.
+Spectrum EvalBSDF(const PathVertex &cur, const BSDF &bsdf, const PathVertex &next, TransportMode mode);
+// Emitted radiance from emitter vertex `v` towards `towards`.
+Spectrum EmittedRadiance(const BidirContext &ctx, const PathVertex &v, const PathVertex &towards);
+// The light whose emission a vertex carries (area light of a surface vertex, light of a light vertex).
+const Light *EmitterOf(const BidirContext &ctx, const PathVertex &v);
+// True when a connection can end at this vertex (non-specular BSDF, not a
+// delta-direction light).
+bool IsConnectible(const PathVertex &v, const BSDF *bsdf);
+
+// Rebuilds the surface interaction and the BSDF of a stored surface vertex
+// (for integrators that store vertices across an iteration). Returns an empty
+// BSDF for non-surface vertices.
+BSDF RebuildBSDF(const BidirContext &ctx, const PathVertex &v, TransportMode mode, Arena &arena);
+
+// ---------------------------------------------------------------- connections
+struct ConnectSamples {
+    Float uLightSelect = 0;  // s = 1: light choice
+    Point2 uLight;           // s = 1: point on the light
+    Point2 uLens;            // t = 1: lens point
+};
+
+struct ConnectResult {
+    Spectrum L;            // MIS-weighted contribution
+    Spectrum unweighted;   // contribution of the strategy alone (L / weight)
+    Float weight = 0;      // MIS weight
+    bool splat = false;    // t = 1: add L at pRaster on the film (light tracing)
+    Point2 pRaster;
+    bool shadowRayTraced = false;
+};
+
+// Connects light vertex s-1 with camera vertex t-1 (strategy (s, t)); s = 1 and
+// t = 1 sample a fresh light/lens vertex with `u`. Works on any pair of
+// subpaths with BSDFs (stored subpaths: rebuild them first). Returns false when
+// the strategy contributes nothing.
+bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera, int s, int t,
+                 const ConnectSamples &u, ConnectResult *res);
+
+// MIS weight of strategy (s, t) for the path formed by light[0..s-1] and
+// camera[t-1..0]. `sampled` replaces light[s-1] (s = 1) or camera[t-1] (t = 1)
+// when the connection sampled a new endpoint (nullptr: use the subpath's).
+Float MISWeight(const BidirContext &ctx, SubpathView light, SubpathView camera, int s, int t,
+                const PathVertex *sampled);
+
+// True when strategy (s, t) of the full path could produce it: both endpoints
+// connectible and the connection edge not degenerate (used by MISWeight and tests).
+bool EdgeConnectible(const BidirContext &ctx, const PathVertex &a, const PathVertex &b);
+
+}  // namespace gradus

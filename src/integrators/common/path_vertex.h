@@ -1,0 +1,89 @@
+// Compact path vertices shared by the bidirectional integrators (BDPT, and the
+// base for M-BDPT, G-BDPT, VCM, MLT).
+//
+// Storage choice: a vertex holds no pointer into a per-sample arena. It keeps
+// what a connection needs (position, geometric and shading normals, wo,
+// throughput, area-measure pdfs, flags) plus the Embree (geomId, primId) and
+// the triangle barycentrics, from which RebuildBSDF() (bidir.h) recreates the
+// full SurfaceInteraction and the material's BSDF. Integrators that connect
+// within one sample (BDPT) keep the BSDFs built during the random walk in a
+// parallel array (SubpathView::bsdf) and never rebuild; integrators that store
+// vertices across an iteration (M-BDPT, VCM) store PathVertex only and rebuild
+// the BSDF of a stored vertex when they connect/merge with it.
+// Normals and directions are unit vectors stored in float (enough for cosines
+// and BSDF frames); the position stays double (ray offsets, short edges).
+#pragma once
+#include <cstdint>
+
+#include "core/geometry.h"
+#include "core/spectrum.h"
+#include "materials/bsdf.h"
+
+namespace gradus {
+
+class Light;
+class Material;
+
+struct PackedVec3 {
+    float x = 0, y = 0, z = 0;
+    PackedVec3() = default;
+    PackedVec3(const Vec3 &v) : x(float(v.x)), y(float(v.y)), z(float(v.z)) {}
+    operator Vec3() const { return Vec3(x, y, z); }
+    bool isZero() const { return x == 0 && y == 0 && z == 0; }
+};
+
+enum class VertexType : uint8_t { Camera, Light, Surface };
+
+enum VertexFlags : uint8_t {
+    VERTEX_DELTA = 1,        // the direction sampled at this vertex was a specular (delta) lobe
+    VERTEX_DELTA_LIGHT = 2,  // light vertex of a delta-position or delta-direction light
+    VERTEX_INFINITE = 4,     // light vertex of an infinite or distant light (direction only)
+    // Bits 3-4: RoughnessClass of the BSDF (shift mappings).
+};
+
+struct PathVertex {
+    Point3 p;                 // position (for infinite-light vertices: a point along the direction)
+    PackedVec3 ng;            // geometric normal (zero for point lights; infinite: towards the scene)
+    PackedVec3 ns;            // shading normal (after bump mapping)
+    PackedVec3 wo;            // unit direction towards the previous vertex of its own subpath
+    float beta[3] = {0, 0, 0};// subpath throughput up to and including this vertex
+    Float pdfFwd = 0;         // area density of generating this vertex from its own subpath
+    Float pdfRev = 0;         // area density of generating it from the opposite direction
+    union {
+        const Material *material;  // Surface
+        const Light *light;        // Light (nullptr for the infinite vertex of an escaped camera path)
+    };
+    int32_t geomId = -1, primId = -1;
+    float b1 = 0, b2 = 0;     // triangle barycentrics (RebuildBSDF)
+    VertexType type = VertexType::Surface;
+    uint8_t flags = 0;
+
+    PathVertex() : material(nullptr) {}
+
+    Spectrum throughput() const { return Spectrum(beta[0], beta[1], beta[2]); }
+    void setThroughput(const Spectrum &s) {
+        beta[0] = float(s.r);
+        beta[1] = float(s.g);
+        beta[2] = float(s.b);
+    }
+    bool delta() const { return flags & VERTEX_DELTA; }
+    bool isInfiniteLight() const { return type == VertexType::Light && (flags & VERTEX_INFINITE); }
+    bool isDeltaLight() const { return type == VertexType::Light && (flags & VERTEX_DELTA_LIGHT); }
+    // Area-measure conversions use the cosine at vertices that lie on a surface.
+    bool onSurface() const {
+        return type == VertexType::Surface || (type == VertexType::Light && !isInfiniteLight() && !ng.isZero());
+    }
+    RoughnessClass roughnessClass() const { return RoughnessClass((flags >> 3) & 3); }
+    void setRoughnessClass(RoughnessClass c) { flags = uint8_t((flags & ~(3 << 3)) | (int(c) << 3)); }
+};
+
+// One subpath: vertices and (optionally) the BSDFs of its surface vertices.
+// bsdf may be nullptr for stored subpaths; the connection code then needs
+// rebuilt BSDFs (see RebuildBSDF) passed through a view that has them.
+struct SubpathView {
+    const PathVertex *v = nullptr;
+    const BSDF *bsdf = nullptr;
+    int n = 0;
+};
+
+}  // namespace gradus

@@ -161,8 +161,8 @@ def scene_section(scene, summary_rows, assets, integrators, baseline, report_bud
 
     # Table.
     h.append("<table><tr><th class=l>integrator</th><th>budget (s)</th><th>runs</th>"
-             "<th>render s</th><th>spp</th><th>relMSE</th><th>relMSE untrimmed</th>"
-             "<th>MSE</th><th>PSNR (dB)</th><th>speed-up vs %s</th></tr>"
+             "<th>render s</th><th>spp</th><th>relMSE</th><th>relMSE &minus; ref noise</th>"
+             "<th>relMSE untrimmed</th><th>MSE</th><th>PSNR (dB)</th><th>speed-up vs %s</th></tr>"
              % html.escape(baseline))
     for r in sorted(summary_rows, key=lambda r: (integrators.index(r["integrator"])
                                                  if r["integrator"] in integrators else 99,
@@ -176,10 +176,14 @@ def scene_section(scene, summary_rows, assets, integrators, baseline, report_bud
             sp = '<span class="warn">at noise floor</span>'
         else:
             sp = "&ndash;"
+        floor = r.get("ref_noise")
+        net = (r["relmse"] - floor) if (floor is not None and r["relmse"] is not None) else None
+        net_txt = _fmt(net) if net is None or net > 0 else '<span class="warn">&le; 0</span>'
         h.append("<tr><td class=l>%s</td><td>%s</td><td>%d</td><td>%s</td><td>%s</td><td>%s</td>"
-                 "<td>%s</td><td>%s</td><td>%s</td><td>%s</td></tr>"
+                 "<td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td></tr>"
                  % (html.escape(r["integrator"]), _fmt(r["budget"]), r["runs"],
                     _fmt(r["seconds"], 3), _fmt(r["spp"], 5), _pm(r["relmse"], r["relmse_stderr"]),
+                    net_txt,
                     _pm(r["relmse_untrimmed"], r["relmse_untrimmed_stderr"]),
                     _pm(r["mse"], r["mse_stderr"]), _pm(r["psnr"], r["psnr_stderr"]), sp))
     h.append("</table>")
@@ -202,9 +206,12 @@ def scene_section(scene, summary_rows, assets, integrators, baseline, report_bud
     if assets["crops"]:
         h.append("<h3>Crops</h3><table>")
         labels = ["reference"] + [i for i in integrators if i in assets["images"]]
-        h.append("<tr>" + "".join("<th>%s</th>" % html.escape(l) for l in labels) + "</tr>")
+        h.append("<tr><th></th>" + "".join("<th>%s</th>" % html.escape(l) for l in labels)
+                 + "</tr>")
         for c in range(len(assets["crops"])):
-            h.append("<tr>" + "".join(
+            rgb = images.CROP_COLOURS[c % len(images.CROP_COLOURS)]
+            h.append('<tr><td style="background: rgb(%d,%d,%d)"></td>'
+                     % tuple(int(255 * v) for v in rgb) + "".join(
                 '<td><img class="px" src="%s" alt="%s crop %d"></td>'
                 % (_rel(assets["crop_images"][l][c], out), html.escape(l), c)
                 for l in labels) + "</tr>")

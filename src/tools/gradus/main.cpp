@@ -108,7 +108,8 @@ int main(int argc, char **argv) {
         auto t0 = std::chrono::steady_clock::now();
         SceneDesc desc = ParseFile(sceneFile);
         RenderJob job = BuildRenderJob(desc, bo);
-        for (const auto &w : job.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+        if (printStats)  // notes about the scene integrator's parameters that an override ignores
+            for (const auto &w : job.warnings) std::fprintf(stderr, "note: %s\n", w.c_str());
         double loadSec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         if (printStats) std::fprintf(stderr, "%s", job.scene->features.describe().c_str());
         if (ro.spp <= 0) ro.spp = job.sampler->samplesPerPixel();

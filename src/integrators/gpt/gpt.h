@@ -1,0 +1,67 @@
+// Gradient-domain path tracing (Kettunen et al. 2015, "Gradient-Domain Path
+// Tracing"; summary in gradient-domain-bdpt.md Sec. 2.1-2.2 and 4).
+//
+// Each camera sample traces a base path (next-event estimation + BSDF
+// sampling, power-heuristic MIS, pbrt-v3 "path" conventions) and four offset
+// paths shifted by one pixel (+x, -x, +y, -y). The offset follows the base
+// with half-vector copy (or random replay) until the base has two consecutive
+// rough vertices, then reconnects (gradient/shift.h). Gradients use the
+// symmetric estimator with gradient MIS combined with NEE/BSDF MIS (G-BDPT
+// Eq. 8 with the power heuristic); failed or non-invertible shifts fall back
+// to counting the base contribution alone (Sec. 2.2). The primal and
+// gradients are reconstructed at the end (screened Poisson).
+//
+// Parameters:
+//   integer maxdepth 5               maximum number of bounces
+//   float rrthreshold 1              Russian roulette threshold (pbrt-v3, after 3 bounces)
+//   string lightsamplestrategy "spatial"
+//   float shiftthreshold 0.001       roughness below which a vertex is not reconnected
+//   string shift "halfvector"        halfvector (G-PT) | hybrid (random replay until reconnection)
+//   string reconstruction "l1"       l1 | l2 | weighted: the image in the unprefixed R,G,B
+//   float alpha 0.2                  screened-Poisson primal weight
+//   integer pixelbounds              accepted (use --cropwindow)
+#pragma once
+#include <memory>
+
+#include "integrators/gradient/gradient_film.h"
+#include "integrators/gradient/shift.h"
+#include "integrators/integrator.h"
+#include "lights/light_sampler.h"
+
+namespace gradus {
+
+class GPTIntegrator : public SampleIntegrator {
+  public:
+    enum class ShiftMode { HalfVector, Hybrid };
+    explicit GPTIntegrator(const EntityDesc &desc);
+    std::string name() const override { return "gpt"; }
+    void preprocess(const Scene &scene, Film &film) override;
+    RenderStats render(const Scene &scene, Film &film, const Sampler &sampler, const RenderOptions &opts) override;
+    void estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const override;
+    void finish(const Film &film, Image *out) override;
+    std::string statistics() const override;
+
+    // One camera sample without a film (for tests): primal and the four neighbour
+    // differences; `pixelInside` says which neighbours exist.
+    GradientSample sample(const CameraSample &cs, Sampler &sampler, Arena &arena,
+                          const bool neighbourInside[kNumNeighbours]) const;
+    const ShiftStats &shiftStats() const { return stats_; }
+
+  private:
+    int maxDepth_;
+    Float rrThreshold_;
+    std::string strategy_;
+    Float shiftThreshold_;
+    ShiftMode mode_;
+    ReconstructionNorm norm_;
+    Float alpha_;
+    FileLoc loc_;
+    LightSampler lightSampler_;
+    GradientFilm gfilm_;
+    Bounds2i filmBounds_;
+    double spp_ = 0;
+    std::string reconReport_;
+    mutable ShiftStats stats_;
+};
+
+}  // namespace gradus

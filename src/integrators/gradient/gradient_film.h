@@ -1,0 +1,53 @@
+// Film channels of gradient-domain integrators and the reconstruction step.
+//
+// Per-pixel layers (box-filter semantics, averaged by the pixel's sample
+// count): the primal image and the forward differences
+//   dx(x,y) = I(x+1,y) - I(x,y),  dy(x,y) = I(x,y+1) - I(x,y).
+// dx at p sums two independent halves: shifts from base paths at p towards
+// p+(1,0) ("forward") and from base paths at p+(1,0) towards p ("backward").
+// Each half keeps per-sample sums of squares, so the variance of the mean is
+//   var = (E[v^2] - E[v]^2) / N   per half, summed over the halves.
+// finish() writes primal, dx, dy, primal_var, dx_var, dy_var,
+// reconstructed_l1, reconstructed_l2 (and reconstructed_weighted when chosen)
+// and sets the unprefixed R, G, B to the chosen reconstruction.
+#pragma once
+#include <string>
+
+#include "core/spectrum.h"
+#include "image/image.h"
+#include "reconstruction/reconstruction.h"
+#include "render/driver.h"
+#include "render/film.h"
+
+namespace gradus {
+
+// The four neighbour shifts of a base path: +x, -x, +y, -y.
+constexpr int kNumNeighbours = 4;
+extern const Point2i kNeighbourOffsets[kNumNeighbours];
+
+struct GradientSample {
+    Spectrum primal{0};
+    // Estimates of I(p + offset) - I(p), one per neighbour shift.
+    Spectrum diff[kNumNeighbours] = {Spectrum(0), Spectrum(0), Spectrum(0), Spectrum(0)};
+    bool active[kNumNeighbours] = {false, false, false, false};
+};
+
+class GradientFilm {
+  public:
+    // Adds the internal accumulation layers to the film.
+    void init(Film &film);
+    // Records one camera sample's primal value and neighbour differences.
+    void record(SampleRecorder &rec, const GradientSample &s) const;
+    // Builds the output image from the film (replaces *out, keeping its metadata).
+    // `samplesPerPixel` is the N of the variance of the mean.
+    void finish(const Film &film, double samplesPerPixel, ReconstructionNorm norm, double alpha, Image *out,
+                std::string *report = nullptr) const;
+    // Extracts the gradient images (with variances) from the film.
+    GradientImages images(const Film &film, double samplesPerPixel) const;
+
+  private:
+    enum { Primal, PrimalSq, DxF, DxFSq, DxB, DxBSq, DyF, DyFSq, DyB, DyBSq, NumLayers };
+    int layer_[NumLayers] = {};
+};
+
+}  // namespace gradus

@@ -80,6 +80,8 @@ def parser():
     p.add_argument("--no-floor-correction", action="store_true",
                    help="do not subtract the reference noise floor before computing speed-ups")
     p.add_argument("--no-report", action="store_true", help="only the CSV/JSON results")
+    p.add_argument("--report-only", metavar="DIR", help="rebuild summary, plots and report of "
+                   "an earlier run from DIR/results.json, without rendering")
     p.add_argument("--fail-fast", action="store_true", help="stop at the first failed render")
     p.add_argument("--dry-run", action="store_true", help="print the plan and exit")
     p.add_argument("--list-scenes", action="store_true", help="print the scene list and exit")
@@ -130,6 +132,8 @@ def _main(args, argv):
         return 0
 
     tools = Tools(find_bin_dir(args.bin_dir), verbose=args.verbose)
+    if args.report_only:
+        return _report_only(tools, args)
     available = tools.list_integrators()
 
     # Every name is checked before the first render.
@@ -212,11 +216,41 @@ def _main(args, argv):
         return 0
 
     rows = runs.run_all(tools, chosen, integrators, budgets, seeds, args)
+    meta.update({"scenes": [s.as_dict() for s in chosen], "integrators": integrators,
+                 "baseline": baseline, "budgets": budgets, "report_budget": report_budget,
+                 "discard_fraction": args.discard_fraction, "discard_count": args.discard_count,
+                 "layer": args.layer})
+    return _finish(tools, args, meta, chosen, rows)
+
+
+def _report_only(tools, args):
+    """Summary, plots and report again from an earlier run's results.json."""
+    src = os.path.abspath(args.report_only)
+    try:
+        with open(os.path.join(src, "results.json")) as f:
+            data = json.load(f)
+    except (OSError, ValueError) as e:
+        raise HarnessError("cannot read %s/results.json: %s" % (src, e))
+    meta = data["meta"]
+    args.out = src
+    args.discard_fraction = meta.get("discard_fraction")
+    args.discard_count = meta.get("discard_count")
+    args.layer = meta.get("layer")
+    if args.baseline:
+        meta["baseline"] = args.baseline
+    if args.report_time:
+        meta["report_budget"] = args.report_time
+    chosen = [scenes_mod.Scene(**d) for d in meta["scenes"]]
+    return _finish(tools, args, meta, chosen, data["runs"])
+
+
+def _finish(tools, args, meta, chosen, rows):
+    integrators, baseline = meta["integrators"], meta["baseline"]
+    budgets, report_budget = meta["budgets"], meta.get("report_budget") or max(meta["budgets"])
     floor = not args.no_floor_correction
+    meta["floor_correction"] = floor
     summary = runs.analyse(rows, baseline, floor)
     runs.write_summary(summary, args.out)
-    meta.update({"scenes": [s.as_dict() for s in chosen], "integrators": integrators,
-                 "baseline": baseline, "budgets": budgets, "floor_correction": floor})
     with open(os.path.join(args.out, "results.json"), "w") as f:
         json.dump({"meta": meta, "runs": rows, "summary": summary}, f, indent=1)
 

@@ -69,14 +69,15 @@ def prepare_scene_assets(tools, scene, summary_rows, rows, integrators, baseline
         os.remove(pfm)
         assets["images"][integ] = png
 
-    # One colour scale for every error map of the scene: the 99th percentile of the
-    # baseline's per-pixel relMSE (or of the first integrator's).
+    # One colour scale for every error map of the scene: the geometric mean over the
+    # integrators of each one's 99th percentile of per-pixel relMSE, so neither a much
+    # worse nor a much better method makes the others all white or all black.
     key = baseline if baseline in err_maps else (next(iter(err_maps)) if err_maps else None)
     vmax = None
     if key is not None:
-        vmax = float(np.percentile(err_maps[key], 99.0))
-        if not vmax > 0:
-            vmax = float(err_maps[key].max()) or 1.0
+        p99 = [float(np.percentile(m, 99.0)) for m in err_maps.values()]
+        p99 = [p for p in p99 if p > 0]
+        vmax = float(np.exp(np.mean(np.log(p99)))) if p99 else 1.0
         for integ, r in chosen.items():
             fc = os.path.join(d, "%s-error.png" % integ)
             tools.falsecolor(os.path.join(out, r["image"]), scene.reference, fc, vmax,
@@ -120,15 +121,15 @@ th { background: #eee; } td.l, th.l { text-align: left; }
 .row { display: flex; flex-wrap: wrap; gap: 10px; align-items: flex-start; }
 figure { margin: 0; text-align: center; } figcaption { font-size: 0.85em; }
 img.px { image-rendering: pixelated; }
+img.full { width: 400px; max-width: 100%; }
 .note { color: #555; font-size: 0.9em; } .warn { color: #a40; }
 code { background: #f3f3f3; padding: 0 0.2em; }
 """
 
 
-def _figure(path, out, caption, width=None):
-    w = ' width="%d"' % width if width else ""
-    return ('<figure><img class="px" src="%s"%s alt="%s"><figcaption>%s</figcaption></figure>'
-            % (_rel(path, out), w, html.escape(caption), caption))
+def _figure(path, out, caption):
+    return ('<figure><img class="px full" src="%s" alt="%s"><figcaption>%s</figcaption></figure>'
+            % (_rel(path, out), html.escape(caption), html.escape(caption)))
 
 
 def scene_section(scene, summary_rows, assets, integrators, baseline, report_budget, args,

@@ -1,11 +1,40 @@
 #include "lights/light_sampler.h"
 
+#include <tbb/concurrent_hash_map.h>
+
 #include "core/error.h"
 
 namespace gradus {
 
+namespace {
+// Plain radical inverse in the prime base of dimension dim (Halton points).
+Float RadicalInverse(int dim, uint64_t a) {
+    static const int primes[] = {2, 3, 5, 7, 11};
+    const int base = primes[dim];
+    Float inv = Float(1) / base, f = inv, r = 0;
+    while (a) {
+        r += Float(a % base) * f;
+        a /= base;
+        f *= inv;
+    }
+    return r;
+}
+}  // namespace
+
+struct LightSampler::Grid {
+    Bounds3 bounds;
+    int res[3] = {1, 1, 1};
+    tbb::concurrent_hash_map<uint64_t, std::shared_ptr<Distribution1D>> voxels;
+    std::atomic<int64_t> built{0};
+};
+
+LightSampler::LightSampler() = default;
+LightSampler::~LightSampler() = default;
+LightSampler::LightSampler(LightSampler &&) noexcept = default;
+LightSampler &LightSampler::operator=(LightSampler &&) noexcept = default;
+
 LightSampler::LightSampler(const std::vector<std::shared_ptr<Light>> &lights, const std::string &strategy,
-                           const FileLoc &loc)
+                           const FileLoc &loc, const Bounds3 &bounds)
     : strategy_(strategy) {
     if (strategy != "uniform" && strategy != "power" && strategy != "spatial")
         throw Error(loc, "unknown light sample strategy \"" + strategy + "\" (valid: uniform, power, spatial)");
@@ -16,6 +45,62 @@ LightSampler::LightSampler(const std::vector<std::shared_ptr<Light>> &lights, co
         w.push_back(strategy == "uniform" ? 1 : std::max<Float>(0, l->power().y()));
     }
     if (!w.empty()) distrib_ = Distribution1D(w.data(), int(w.size()));
+    if (strategy == "spatial" && lights_.size() > 1 && !bounds.empty()) {
+        grid_ = std::make_unique<Grid>();
+        grid_->bounds = bounds;
+        Vec3 d = bounds.diagonal();
+        Float maxExtent = MaxComponent(d);
+        for (int i = 0; i < 3; ++i)
+            grid_->res[i] = maxExtent > 0 ? std::max(1, int(std::round(64 * d[i] / maxExtent))) : 1;
+    }
+}
+
+int64_t LightSampler::voxelsBuilt() const { return grid_ ? grid_->built.load() : 0; }
+
+const Distribution1D &LightSampler::lookup(const Point3 &p) const {
+    const Grid &g = *grid_;
+    int vi[3];
+    for (int i = 0; i < 3; ++i) {
+        Float ext = g.bounds.pMax[i] - g.bounds.pMin[i];
+        Float t = ext > 0 ? (p[i] - g.bounds.pMin[i]) / ext : 0;
+        vi[i] = Clamp(int(t * g.res[i]), 0, g.res[i] - 1);
+    }
+    uint64_t key = (uint64_t(vi[0]) << 40) | (uint64_t(vi[1]) << 20) | uint64_t(vi[2]);
+    {
+        tbb::concurrent_hash_map<uint64_t, std::shared_ptr<Distribution1D>>::const_accessor a;
+        if (g.voxels.find(a, key)) return *a->second;
+    }
+    // Estimate each light's contribution at 128 low-discrepancy points of the voxel.
+    Bounds3 vb;
+    for (int i = 0; i < 3; ++i) {
+        Float ext = g.bounds.pMax[i] - g.bounds.pMin[i];
+        vb.pMin[i] = g.bounds.pMin[i] + ext * vi[i] / g.res[i];
+        vb.pMax[i] = g.bounds.pMin[i] + ext * (vi[i] + 1) / g.res[i];
+    }
+    const int nSamples = 128;
+    std::vector<Float> contrib(lights_.size(), 0);
+    for (int s = 0; s < nSamples; ++s) {
+        Point3 po(Lerp(RadicalInverse(0, s), vb.pMin.x, vb.pMax.x), Lerp(RadicalInverse(1, s), vb.pMin.y, vb.pMax.y),
+                  Lerp(RadicalInverse(2, s), vb.pMin.z, vb.pMax.z));
+        Interaction ref(po, Normal3(0, 0, 0), Vec3(0, 0, 0));
+        Point2 u(RadicalInverse(3, s), RadicalInverse(4, s));
+        for (size_t j = 0; j < lights_.size(); ++j) {
+            LightLiSample ls;
+            if (lights_[j]->sampleLi(ref, u, &ls) && ls.pdf > 0) contrib[j] += ls.L.y() / ls.pdf;
+        }
+    }
+    Float sum = 0;
+    for (Float c : contrib) sum += c;
+    Float avg = sum / (nSamples * Float(contrib.size()));
+    Float floorC = avg > 0 ? 1e-3 * avg : 1;
+    for (Float &c : contrib) c = std::max(c, floorC);
+    auto dist = std::make_shared<Distribution1D>(contrib.data(), int(contrib.size()));
+    tbb::concurrent_hash_map<uint64_t, std::shared_ptr<Distribution1D>>::accessor a;
+    if (grid_->voxels.insert(a, key)) {
+        a->second = dist;
+        ++grid_->built;
+    }
+    return *a->second;
 }
 
 const Light *LightSampler::sample(Float u, Float *pmf) const {
@@ -28,6 +113,19 @@ Float LightSampler::pmf(const Light *light) const {
     auto it = index_.find(light);
     if (it == index_.end()) return 0;
     return distrib_.discretePmf(it->second);
+}
+
+const Light *LightSampler::sample(const Point3 &p, Float u, Float *pmf) const {
+    if (!grid_) return sample(u, pmf);
+    int i = lookup(p).sampleDiscrete(u, pmf);
+    return lights_[i];
+}
+
+Float LightSampler::pmf(const Point3 &p, const Light *light) const {
+    if (!grid_) return pmf(light);
+    auto it = index_.find(light);
+    if (it == index_.end()) return 0;
+    return lookup(p).discretePmf(it->second);
 }
 
 }  // namespace gradus

@@ -113,3 +113,54 @@ TEST(PathTracer, CornellBoxErrorFallsWithSamples) {
         prev = m.relmse;
     }
 }
+
+// The three light-selection strategies estimate the same image: z-test of the
+// image means (two-sided, |z| < 4.4, false-positive rate 1e-5 per comparison).
+TEST(PathTracer, LightStrategiesAgree) {
+    auto scene = [](const std::string &strategy) {
+        std::ostringstream s;
+        s << "LookAt 0 3 6  0 0.5 0  0 1 0\nCamera \"perspective\" \"float fov\" [45]\n"
+          << "Sampler \"random\"\nFilm \"image\" \"integer xresolution\" [32] \"integer yresolution\" [24]\n"
+          << "Integrator \"path\" \"integer maxdepth\" [3] \"string lightsamplestrategy\" \"" << strategy << "\"\n"
+          << "WorldBegin\n"
+          << "Material \"matte\" \"rgb Kd\" [0.6 0.6 0.6]\n"
+          << "Shape \"trianglemesh\" \"point P\" [-5 0 -5 5 0 -5 5 0 5 -5 0 5] \"integer indices\" [0 2 1 0 3 2]\n"
+          << "Shape \"sphere\" \"float radius\" [0.7]\n"
+          << "AttributeBegin\nTranslate -3 2 0\nAreaLightSource \"diffuse\" \"rgb L\" [2000 2000 2000]\n"
+          << "Shape \"sphere\" \"float radius\" [0.05]\nAttributeEnd\n"
+          << "AttributeBegin\nTranslate 2.5 1.2 1\nAreaLightSource \"diffuse\" \"rgb L\" [0.5 0.5 2]\n"
+          << "Shape \"sphere\" \"float radius\" [1]\nAttributeEnd\n"
+          << "LightSource \"point\" \"point from\" [0 3 -2] \"rgb I\" [3 2 1]\n"
+          << "WorldEnd\n";
+        return s.str();
+    };
+    // Paired test per 8x8-pixel block and channel: the per-pixel differences of
+    // two independent renders have mean zero when both are unbiased, and their
+    // spread measures the noise alone (image structure cancels). 12 blocks x 3
+    // channels x 3 pairs at |z| < 4.4: family-wise false-positive rate ~1e-3.
+    const char *names[3] = {"uniform", "power", "spatial"};
+    Image img[3];
+    for (int i = 0; i < 3; ++i) img[i] = RenderSceneText(scene(names[i]), 128, 100 + i).image;
+    for (int by = 0; by < 3; ++by)
+        for (int bx = 0; bx < 4; ++bx)
+            for (int c = 0; c < 3; ++c)
+                for (int i = 0; i < 3; ++i)
+                    for (int j = i + 1; j < 3; ++j) {
+                        double s = 0, s2 = 0;
+                        int n = 0;
+                        for (int y = by * 8; y < by * 8 + 8; ++y)
+                            for (int x = bx * 8; x < bx * 8 + 8; ++x, ++n) {
+                                double d = double(img[i].at(x, y, c)) - img[j].at(x, y, c);
+                                s += d;
+                                s2 += d * d;
+                            }
+                        double m = s / n;
+                        double se = std::sqrt(std::max(0.0, s2 / n - m * m) / (n - 1));
+                        if (se == 0) {
+                            EXPECT_EQ(m, 0.0);
+                            continue;
+                        }
+                        EXPECT_LT(std::abs(m / se), 4.4) << names[i] << " vs " << names[j] << " block " << bx << ","
+                                                        << by << " channel " << c << ": mean difference " << m;
+                    }
+}

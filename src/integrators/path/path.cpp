@@ -16,7 +16,7 @@ PathIntegrator::PathIntegrator(const EntityDesc &desc) : loc_(desc.loc) {
 }
 
 void PathIntegrator::preprocess(const Scene &scene, Film &) {
-    lightSampler_ = LightSampler(scene.lights, strategy_, loc_);
+    lightSampler_ = LightSampler(scene.lights, strategy_, loc_, scene.bounds);
 }
 
 void PathIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const {
@@ -50,7 +50,7 @@ Spectrum PathIntegrator::Li(const Ray &cameraRay, Sampler &sampler, Arena &arena
                 if (specularBounce) {
                     L += beta * Le;
                 } else {
-                    Float lightPdf = lightSampler_.pmf(isect.areaLight) * isect.areaLight->pdfLi(prevIt, ray.d);
+                    Float lightPdf = lightSampler_.pmf(prevIt.p, isect.areaLight) * isect.areaLight->pdfLi(prevIt, ray.d);
                     L += beta * Le * PowerHeuristic(1, prevBsdfPdf, 1, lightPdf);
                 }
             }
@@ -61,7 +61,7 @@ Spectrum PathIntegrator::Li(const Ray &cameraRay, Sampler &sampler, Arena &arena
                 if (specularBounce) {
                     L += beta * Le;
                 } else {
-                    Float lightPdf = lightSampler_.pmf(light) * light->pdfLi(prevIt, ray.d);
+                    Float lightPdf = lightSampler_.pmf(prevIt.p, light) * light->pdfLi(prevIt, ray.d);
                     L += beta * Le * PowerHeuristic(1, prevBsdfPdf, 1, lightPdf);
                 }
             }
@@ -82,7 +82,7 @@ Spectrum PathIntegrator::Li(const Ray &cameraRay, Sampler &sampler, Arena &arena
         // Next-event estimation (skipped at purely specular vertices).
         if (bsdf.hasNonSpecular() && !scene.lights.empty()) {
             Float pmf;
-            const Light *light = lightSampler_.sample(sampler.get1D(), &pmf);
+            const Light *light = lightSampler_.sample(isect.p, sampler.get1D(), &pmf);
             Point2 uLight = sampler.get2D();
             LightLiSample ls;
             if (light && pmf > 0 && light->sampleLi(isect, uLight, &ls) && ls.pdf > 0) {

@@ -4,7 +4,7 @@
 // Parameters (pbrt-v3 names and defaults):
 //   integer maxdepth 5            maximum number of bounces
 //   float rrthreshold 1           Russian roulette starts when max(beta) < rrthreshold (after 3 bounces)
-//   string lightsamplestrategy "spatial"   uniform | power | spatial (spatial = power for now)
+//   string lightsamplestrategy "spatial"   uniform | power | spatial (see light_sampler.h)
 //   integer pixelbounds [x0 x1 y0 y1]      accepted (use --cropwindow instead)
 #pragma once
 #include "integrators/integrator.h"

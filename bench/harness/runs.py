@@ -11,11 +11,12 @@ from . import analysis
 CSV_COLUMNS = ["scene", "integrator", "seconds", "spp", "relmse", "mse", "psnr",
                "budget", "seed", "wall_seconds", "relmse_untrimmed",
                "discard_fraction", "discard_count", "discarded_pixels", "ref_noise",
-               "image", "status", "error"]
+               "cpu_seconds", "loadavg", "image", "status", "error"]
 
 SUMMARY_COLUMNS = ["scene", "integrator", "budget", "runs", "seconds", "seconds_stderr", "spp",
                    "relmse", "relmse_stderr", "relmse_untrimmed", "relmse_untrimmed_stderr",
-                   "mse", "mse_stderr", "psnr", "psnr_stderr", "ref_noise", "speedup",
+                   "mse", "mse_stderr", "psnr", "psnr_stderr", "cpu_seconds", "loadavg",
+                   "ref_noise", "speedup",
                    "speedup_extrapolated", "baseline_seconds", "at_noise_floor"]
 
 
@@ -53,9 +54,14 @@ def measure(tools, scene, integ, budget, seed, args):
            "discard_fraction": frac, "discard_count": count, "ref_noise": scene.noise,
            "image": os.path.relpath(path, args.out), "status": "ok", "error": ""}
     try:
+        row["loadavg"] = os.getloadavg()[0]
+    except OSError:
+        row["loadavg"] = None
+    try:
         meta, wall = tools.render(scene.scene, path, integrator=integ, seconds=budget,
                                   seed=seed, nthreads=args.nthreads)
         row["wall_seconds"] = wall
+        row["cpu_seconds"] = tools.last_cpu_seconds
         row["seconds"] = float(meta.get("render_seconds", wall))
         row["spp"] = int(float(meta.get("spp", 0)))
         if meta.get("integrator") and meta["integrator"] != integ:

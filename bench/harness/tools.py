@@ -9,6 +9,7 @@ PSNR), merges renders and draws false-colour error maps.
 
 import json
 import os
+import resource
 import subprocess
 import time
 
@@ -82,9 +83,12 @@ class Tools:
         if nthreads:
             argv += ["--nthreads", str(int(nthreads))]
         os.makedirs(os.path.dirname(os.path.abspath(outfile)), exist_ok=True)
+        r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0 = time.monotonic()
         self._run(argv, "gradus render of %s" % scene)
         wall = time.monotonic() - t0
+        r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        self.last_cpu_seconds = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
         return self.metadata(outfile), wall
 
     # -- imgtool ---------------------------------------------------------

@@ -48,7 +48,7 @@ class HarnessTiny(unittest.TestCase):
             self.assertTrue(os.path.isfile(os.path.join(d, name)), name)
         with open(os.path.join(d, "ref.json")) as f:
             info = json.load(f)
-        self.assertEqual(info["total_spp"], 4096)
+        self.assertEqual(info["total_spp"], 2048)
         self.assertEqual(len({r["seed"] for r in info["runs"]}), 2, "runs must use distinct seeds")
         self.assertGreater(info["noise"], 0.0)
 

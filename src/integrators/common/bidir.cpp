@@ -266,7 +266,9 @@ Float PdfLightDirection(const BidirContext &ctx, const PathVertex &v, const Path
 
 Float PdfArea(const BidirContext &ctx, const PathVertex &cur, const BSDF *bsdf, const PathVertex *prev,
               const PathVertex &next, TransportMode mode) {
-    if (cur.type == VertexType::Light) return PdfLightDirection(ctx, cur, next);
+    // A light vertex, or an emissive surface vertex used as the origin of a light subpath.
+    if (cur.type == VertexType::Light || (cur.type == VertexType::Surface && !prev && EmitterOf(ctx, cur)))
+        return PdfLightDirection(ctx, cur, next);
     Vec3 wn = next.p - cur.p;
     if (wn.lengthSquared() == 0) return 0;
     wn = Normalize(wn);

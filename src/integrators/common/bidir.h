@@ -63,7 +63,8 @@ int GenerateLightSubpath(const BidirContext &ctx, Sampler &sampler, Arena &arena
 
 // ---------------------------------------------------------------- vertex queries
 // Area density at `next` of sampling it from `cur` (arrived at from `prev`;
-// ignored for camera and light vertices), in the given transport mode.
+// ignored for camera and light vertices; nullptr at an emissive surface vertex
+// makes it the origin of a light subpath), in the given transport mode.
 Float PdfArea(const BidirContext &ctx, const PathVertex &cur, const BSDF *bsdf, const PathVertex *prev,
               const PathVertex &next, TransportMode mode);
 // Density of `v` (an emitter: light vertex or emissive surface) as the origin of

@@ -1,0 +1,108 @@
+// Shared helpers of the BDPT tests: small scenes built in code and
+// independent-run statistics for z-tests.
+#pragma once
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "image/image.h"
+#include "parser/scene_desc.h"
+#include "render/driver.h"
+#include "render/scene_builder.h"
+
+namespace gradus::bdpt_test {
+
+inline std::string Quad(const std::string &mat, const char *P, const char *N = nullptr) {
+    std::string s = "AttributeBegin\n" + mat + "\nShape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [" + P + "]";
+    if (N) s += std::string(" \"normal N\" [") + N + "]";
+    return s + "\nAttributeEnd\n";
+}
+
+// Box [-1,1] x [0,2] x [-1,1] open towards +z, camera at z = 3.5.
+// `floorNormals` tilts the floor's shading normals (tests the adjoint correction).
+inline std::string BoxScene(const std::string &integrator, const std::string &lights, const std::string &objects,
+                            int res = 16, const std::string &camera = "Camera \"perspective\" \"float fov\" [40]",
+                            bool floorNormals = false, const std::string &floorMat = "Material \"matte\" \"rgb Kd\" [0.7 0.7 0.7]") {
+    std::string s = "Integrator \"" + integrator + "\" \"integer maxdepth\" [4]\n";
+    s += "Sampler \"random\" \"integer pixelsamples\" [4]\nPixelFilter \"box\"\n";
+    s += "Film \"image\" \"integer xresolution\" [" + std::to_string(res) + "] \"integer yresolution\" [" +
+         std::to_string(res) + "] \"string filename\" [\"unused.exr\"]\n";
+    s += "LookAt 0 1 3.5  0 1 0  0 1 0\n" + camera + "\nWorldBegin\n";
+    s += lights;
+    s += Quad(floorMat, "-1 0 -1  -1 0 1  1 0 1  1 0 -1",
+              floorNormals ? "0.35 1 0.2  0.35 1 0.2  -0.2 1 -0.3  -0.2 1 -0.3" : nullptr);
+    s += Quad("Material \"matte\" \"rgb Kd\" [0.7 0.7 0.7]", "-1 2 -1  1 2 -1  1 2 1  -1 2 1");
+    s += Quad("Material \"matte\" \"rgb Kd\" [0.7 0.7 0.7]", "-1 0 -1  1 0 -1  1 2 -1  -1 2 -1");
+    s += Quad("Material \"matte\" \"rgb Kd\" [0.63 0.065 0.05]", "-1 0 -1  -1 2 -1  -1 2 1  -1 0 1");
+    s += Quad("Material \"matte\" \"rgb Kd\" [0.14 0.45 0.09]", "1 0 -1  1 0 1  1 2 1  1 2 -1");
+    s += objects;
+    return s + "WorldEnd\n";
+}
+
+inline std::string CeilingLight(Float half = 0.3, Float L = 10) {
+    char buf[512];
+    std::snprintf(buf, sizeof buf,
+                  "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [%g %g %g]\nMaterial \"matte\" \"rgb Kd\" [0 0 0]\n"
+                  "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [%g 1.98 %g  %g 1.98 %g  %g 1.98 %g  %g 1.98 %g]\n"
+                  "AttributeEnd\n",
+                  L, L, L, -half, -half, half, -half, half, half, -half, half);
+    return buf;
+}
+
+inline std::string Sphere(const std::string &mat, Float x, Float y, Float z, Float r) {
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "AttributeBegin\n%s\nTranslate %g %g %g\nShape \"sphere\" \"float radius\" [%g]\nAttributeEnd\n",
+                  mat.c_str(), x, y, z, r);
+    return buf;
+}
+
+// Renders `text` with the given integrator; returns the film image (with layers).
+inline Image Render(const std::string &text, const std::string &integrator, int spp, uint64_t seed,
+                    const std::string &extraParams = "") {
+    SceneDesc desc = ParseString(text);
+    BuildOptions bo;
+    bo.integratorOverride = integrator;
+    bo.sppOverride = spp;
+    bo.seed = seed;
+    bo.quiet = true;
+    RenderJob job = BuildRenderJob(desc, bo);
+    job.integrator->preprocess(*job.scene, *job.film);
+    RenderOptions ro;
+    ro.spp = spp;
+    ro.seed = seed;
+    ro.quiet = true;
+    ro.nthreads = 1;
+    job.integrator->render(*job.scene, *job.film, *job.sampler, ro);
+    return job.film->toImage();
+}
+
+// Mean luminance of layer `layer` over the pixel block [x0,x1) x [y0,y1).
+inline double BlockMean(const Image &img, int x0, int y0, int x1, int y1, const std::string &layer = "") {
+    Image rgb = layer.empty() ? img : img.layerRGB(layer);
+    double sum = 0;
+    for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x)
+            sum += 0.2126 * rgb.at(x, y, 0) + 0.7152 * rgb.at(x, y, 1) + 0.0722 * rgb.at(x, y, 2);
+    return sum / (double(x1 - x0) * (y1 - y0));
+}
+
+struct RunStats {
+    double mean = 0, var = 0;  // over runs; var of one run
+    int n = 0;
+};
+inline RunStats Stats(const std::vector<double> &v) {
+    RunStats s;
+    s.n = int(v.size());
+    for (double x : v) s.mean += x;
+    s.mean /= s.n;
+    for (double x : v) s.var += (x - s.mean) * (x - s.mean);
+    s.var /= (s.n - 1);
+    return s;
+}
+// Welch z statistic of two sets of independent runs.
+inline double ZScore(const RunStats &a, const RunStats &b) {
+    double se = std::sqrt(a.var / a.n + b.var / b.n);
+    return se > 0 ? (a.mean - b.mean) / se : (a.mean == b.mean ? 0 : 1e9);
+}
+
+}  // namespace gradus::bdpt_test

@@ -1,0 +1,214 @@
+// Property tests of the shared bidirectional core on random paths:
+//  - the MIS weights of all evaluated strategies of a path sum to one
+//    (balance and power heuristics, with delta vertices and an infinite light);
+//  - the pdfs a connection evaluates in the reverse direction equal the
+//    forward pdfs the opposite random walk produces (and an independent
+//    evaluation from the BSDF and the geometry). Tolerance 3e-3 relative: the
+//    walk samples directions from the ray, the connection code recomputes them
+//    from hit points refined from float barycentrics (angular error ~1e-5 on
+//    short edges, amplified by glossy lobes).
+#include <gtest/gtest.h>
+
+#include "bdpt_test_util.h"
+#include "integrators/common/bidir.h"
+#include "lights/light_sampler.h"
+
+namespace gradus::bdpt_test {
+namespace {
+
+struct Fixture {
+    RenderJob job;
+    LightSampler ls;
+    BidirContext ctx;
+    std::unique_ptr<Sampler> sampler;
+    explicit Fixture(const std::string &text, MISHeuristic h = MISHeuristic::Balance) {
+        BuildOptions bo;
+        bo.quiet = true;
+        job = BuildRenderJob(ParseString(text), bo);
+        ls = LightSampler(job.scene->lights, "power", FileLoc());
+        ctx.init(*job.scene, ls, h);
+        sampler = job.sampler->clone();
+    }
+};
+
+std::string MixedScene() {
+    std::string objects = Sphere("Material \"mirror\"", 0.5, 0.35, 0.3, 0.35) +
+                          Sphere("Material \"plastic\" \"rgb Kd\" [0.3 0.3 0.3] \"rgb Ks\" [0.5 0.5 0.5] \"float roughness\" [0.1]",
+                                 -0.4, 0.5, -0.2, 0.5);
+    return BoxScene("bdpt", CeilingLight(0.3, 10) + "LightSource \"point\" \"point from\" [0 1.5 0.5] \"rgb I\" [1 1 1]\n",
+                    objects, 16, "Camera \"perspective\" \"float fov\" [40]", true);
+}
+
+std::string EnvScene() {
+    return "Sampler \"random\" \"integer pixelsamples\" [4]\nFilm \"image\" \"integer xresolution\" [16] "
+           "\"integer yresolution\" [16] \"string filename\" [\"unused.exr\"]\n"
+           "LookAt 0 1.5 4  0 0.4 0  0 1 0\nCamera \"perspective\" \"float fov\" [45] \"float lensradius\" [0.1] "
+           "\"float focaldistance\" [4]\nWorldBegin\n"
+           "LightSource \"infinite\" \"rgb L\" [0.4 0.5 0.7]\n"
+           "LightSource \"distant\" \"point from\" [1 3 1] \"point to\" [0 0 0] \"rgb L\" [1 1 1]\n" +
+           Quad("Material \"matte\" \"rgb Kd\" [0.6 0.6 0.6]", "-3 0 -3  -3 0 3  3 0 3  3 0 -3") +
+           Sphere("Material \"mirror\"", -0.5, 0.5, 0, 0.5) +
+           Sphere("Material \"matte\" \"rgb Kd\" [0.5 0.5 0.5]", 0.6, 0.4, 0.3, 0.4) + "WorldEnd\n";
+}
+
+struct Subpaths {
+    std::vector<PathVertex> cv, lv;
+    std::vector<BSDF> cb, lb;
+    int nC = 0, nL = 0;
+};
+
+Subpaths Generate(Fixture &f, Arena &arena, int i, int maxDepth) {
+    Subpaths sp;
+    sp.cv.resize(maxDepth + 2);
+    sp.cb.resize(maxDepth + 2);
+    sp.lv.resize(maxDepth + 1);
+    sp.lb.resize(maxDepth + 1);
+    f.sampler->startPixelSample({i % 16, (i / 16) % 16}, i / 256);
+    CameraSample cs;
+    Point2 u = f.sampler->get2D();
+    cs.pFilm = Point2(i % 16 + u.x, (i / 16) % 16 + u.y);
+    cs.pLens = f.sampler->get2D();
+    Ray ray;
+    f.job.scene->camera->generateRay(cs, &ray);
+    sp.nC = GenerateCameraSubpath(f.ctx, ray, *f.sampler, arena, maxDepth + 2, sp.cv.data(), sp.cb.data());
+    sp.nL = GenerateLightSubpath(f.ctx, *f.sampler, arena, maxDepth + 1, sp.lv.data(), sp.lb.data());
+    return sp;
+}
+
+// Sum over the evaluated strategies of the MIS weights of the path x (light to camera).
+double WeightSum(const BidirContext &ctx, std::vector<PathVertex> x, const std::vector<BSDF> &b, int *nValid) {
+    const int k = int(x.size());
+    auto fwdL = [&](int i) {
+        if (i == 0) return PdfLightOrigin(ctx, x[0], x[1]);
+        return PdfArea(ctx, x[i - 1], &b[i - 1], i >= 2 ? &x[i - 2] : nullptr, x[i], TransportMode::Importance);
+    };
+    auto fwdC = [&](int i) {  // density of x[i] generated from the camera side
+        if (i == k - 1) return Float(1);
+        return PdfArea(ctx, x[i + 1], &b[i + 1], i + 2 <= k - 1 ? &x[i + 2] : nullptr, x[i], TransportMode::Radiance);
+    };
+    double sum = 0;
+    *nValid = 0;
+    for (int sp = 0; sp < k; ++sp) {
+        int tp = k - sp;
+        std::vector<PathVertex> L(x.begin(), x.begin() + sp), C;
+        std::vector<BSDF> LB(b.begin(), b.begin() + sp), CB;
+        for (int i = 0; i < sp; ++i) {
+            L[i].pdfFwd = fwdL(i);
+            L[i].pdfRev = fwdC(i);
+        }
+        for (int j = 0; j < tp; ++j) {
+            int i = k - 1 - j;
+            C.push_back(x[i]);
+            CB.push_back(b[i]);
+            C.back().pdfFwd = fwdC(i);
+            C.back().pdfRev = fwdL(i);
+        }
+        bool valid;
+        if (sp == 1 && tp == 1)
+            valid = false;
+        else if (sp == 0)
+            valid = tp >= 2 && (x[0].isInfiniteLight() || EmitterOf(ctx, x[0])) && !x[0].isDeltaLight();
+        else
+            valid = !x[sp].delta() && (sp == 1 || !x[sp - 1].delta()) && EdgeConnectible(ctx, x[sp - 1], x[sp]) &&
+                    x[sp].type != VertexType::Light;
+        if (!valid) continue;
+        ++*nValid;
+        sum += MISWeight(ctx, {L.data(), LB.data(), sp}, {C.data(), CB.data(), tp}, sp, tp, nullptr);
+    }
+    return sum;
+}
+
+void CheckWeightSums(const std::string &scene, MISHeuristic h) {
+    Fixture f(scene, h);
+    Arena arena;
+    int checked = 0, withDelta = 0;
+    for (int i = 0; i < 3000 && checked < 400; ++i) {
+        arena.reset();
+        Subpaths sp = Generate(f, arena, i, 5);
+        // Paths from (s >= 2, t >= 2) connections and from camera paths that hit emitters.
+        for (int t = 2; t <= sp.nC; ++t)
+            for (int s = 0; s <= sp.nL; ++s) {
+                if (s == 1 || s + t - 2 > 5) continue;
+                std::vector<PathVertex> x;
+                std::vector<BSDF> b;
+                if (s == 0) {
+                    if (t < 2 || EmittedRadiance(f.ctx, sp.cv[t - 1], sp.cv[t - 2]).isBlack()) continue;
+                } else {
+                    ConnectResult r;
+                    if (!ConnectBDPT(f.ctx, {sp.lv.data(), sp.lb.data(), sp.nL}, {sp.cv.data(), sp.cb.data(), sp.nC},
+                                     s, t, ConnectSamples(), &r))
+                        continue;
+                }
+                for (int j = 0; j < s; ++j) x.push_back(sp.lv[j]), b.push_back(sp.lb[j]);
+                for (int j = t - 1; j >= 0; --j) x.push_back(sp.cv[j]), b.push_back(sp.cb[j]);
+                // The connection endpoints scatter through the connection (non-delta).
+                if (s > 0) x[s - 1].flags &= ~VERTEX_DELTA;
+                x[s].flags &= ~VERTEX_DELTA;
+                bool delta = false;
+                for (auto &v : x) delta |= v.delta();
+                int nValid;
+                double sum = WeightSum(f.ctx, x, b, &nValid);
+                ASSERT_NEAR(sum, 1.0, 1e-9) << "s=" << s << " t=" << t << " valid strategies " << nValid;
+                ++checked;
+                withDelta += delta;
+            }
+    }
+    EXPECT_GE(checked, 200);
+    EXPECT_GT(withDelta, 0);
+}
+
+TEST(BDPTMIS, WeightsSumToOneBalance) { CheckWeightSums(MixedScene(), MISHeuristic::Balance); }
+TEST(BDPTMIS, WeightsSumToOnePower) { CheckWeightSums(MixedScene(), MISHeuristic::Power); }
+TEST(BDPTMIS, WeightsSumToOneEnvironmentThinLens) { CheckWeightSums(EnvScene(), MISHeuristic::Balance); }
+
+// The random walks store pdfFwd/pdfRev; the connection code recomputes the
+// same quantities with PdfArea. They must agree, and agree with a direct
+// evaluation (BSDF solid-angle pdf x |cos| / d^2).
+void CheckReversePdfs(const std::string &scene) {
+    Fixture f(scene);
+    Arena arena;
+    int checked = 0;
+    auto rel = [](double a, double b) { return std::abs(a - b) / std::max({std::abs(a), std::abs(b), 1e-300}); };
+    for (int i = 0; i < 500; ++i) {
+        arena.reset();
+        Subpaths sp = Generate(f, arena, i, 5);
+        for (int side = 0; side < 2; ++side) {
+            const auto &v = side ? sp.lv : sp.cv;
+            const auto &b = side ? sp.lb : sp.cb;
+            int n = side ? sp.nL : sp.nC;
+            TransportMode mode = side ? TransportMode::Importance : TransportMode::Radiance;
+            TransportMode rev = side ? TransportMode::Radiance : TransportMode::Importance;
+            for (int k = 2; k < n; ++k) {
+                if (v[k - 1].delta() || v[k].type != VertexType::Surface) continue;
+                // Forward pdf of vertex k as the connection code computes it.
+                double fwd = PdfArea(f.ctx, v[k - 1], &b[k - 1], &v[k - 2], v[k], mode);
+                ASSERT_LT(rel(fwd, v[k].pdfFwd), 3e-3) << "side " << side << " k " << k;
+                // Independent evaluation.
+                Vec3 wi = v[k].p - v[k - 1].p;
+                double d2 = wi.lengthSquared();
+                wi = wi / std::sqrt(d2);
+                double direct = b[k - 1].pdf(Normalize(v[k - 2].p - v[k - 1].p), wi, mode) *
+                                AbsDot(Vec3(v[k].ng), wi) / d2;
+                ASSERT_LT(rel(direct, fwd), 1e-4);
+                // Reverse pdf of vertex k-1 (stored when k sampled k+1) as a connection through k computes it.
+                if (k + 1 < n && !v[k].delta() && v[k + 1].type == VertexType::Surface) {
+                    double r = PdfArea(f.ctx, v[k], &b[k], &v[k + 1], v[k - 1], rev);
+                    ASSERT_LT(rel(r, v[k - 1].pdfRev), 3e-3) << "side " << side << " k " << k;
+                }
+                ++checked;
+            }
+        }
+    }
+    EXPECT_GT(checked, 50);
+}
+
+TEST(BDPTMIS, ReversePdfsMatchForwardPdfs) { CheckReversePdfs(MixedScene()); }
+TEST(BDPTMIS, ReversePdfsMatchForwardPdfsEnvironment) { CheckReversePdfs(EnvScene()); }
+
+TEST(BDPTMIS, CompactVertex) {
+    // Stored light vertices must stay small (M-BDPT / VCM keep one iteration's worth).
+    EXPECT_LE(sizeof(PathVertex), 120u);
+}
+
+}  // namespace
+}  // namespace gradus::bdpt_test

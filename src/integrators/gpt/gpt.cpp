@@ -19,6 +19,10 @@ GPTIntegrator::GPTIntegrator(const EntityDesc &desc) : loc_(desc.loc) {
     std::string mode = ps.getString("shift", "halfvector");
     std::string rec = ps.getString("reconstruction", "l1");
     alpha_ = ps.getFloat("alpha", 0.2);
+    std::string pf = ps.getString("pixelfilter", "box");
+    if (pf != "box" && pf != "film")
+        throw Error(ps.locOf("pixelfilter", desc.loc), "unknown \"pixelfilter\" \"" + pf + "\" (box, film)");
+    filmFilter_ = pf == "film";
     ps.getInts("pixelbounds");
     if (maxDepth_ < 0) throw Error(ps.locOf("maxdepth", desc.loc), "\"maxdepth\" must be >= 0");
     if (!(shiftThreshold_ >= 0)) throw Error(ps.locOf("shiftthreshold", desc.loc), "\"shiftthreshold\" must be >= 0");
@@ -39,7 +43,7 @@ GPTIntegrator::GPTIntegrator(const EntityDesc &desc) : loc_(desc.loc) {
 
 void GPTIntegrator::preprocess(const Scene &scene, Film &film) {
     lightSampler_ = LightSampler(scene.lights, strategy_, loc_);
-    gfilm_.init(film);
+    gfilm_.init(film, filmFilter_);
     filmBounds_ = film.pixelBounds();
     scene_ = &scene;
     stats_.reset();
@@ -54,9 +58,11 @@ RenderStats GPTIntegrator::render(const Scene &scene, Film &film, const Sampler 
 void GPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const {
     bool inside[kNumNeighbours];
     Point2i p = rec.pixel();
+    // Box: only pairs of film pixels need gradients. Film filter: samples of
+    // pixels around the film reach it too (targets outside are dropped).
     for (int k = 0; k < kNumNeighbours; ++k)
-        inside[k] = filmBounds_.inside(p) &&
-                    filmBounds_.inside({p.x + kNeighbourOffsets[k].x, p.y + kNeighbourOffsets[k].y});
+        inside[k] = filmFilter_ || (filmBounds_.inside(p) && filmBounds_.inside({p.x + kNeighbourOffsets[k].x,
+                                                                                 p.y + kNeighbourOffsets[k].y}));
     GradientSample s = sample(cs, sampler, arena, inside);
     gfilm_.record(rec, s);
 }

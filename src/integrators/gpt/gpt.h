@@ -19,6 +19,7 @@
 //   string shift "halfvector"        halfvector (G-PT) | hybrid (random replay until reconnection)
 //   string reconstruction "l1"       l1 | l2 | weighted: the image in the unprefixed R,G,B
 //   float alpha 0.2                  screened-Poisson primal weight
+//   string pixelfilter "box"         box (a sample counts in its own pixel) | film (the film's filter)
 //   integer pixelbounds              accepted (use --cropwindow)
 #pragma once
 #include <memory>
@@ -55,6 +56,7 @@ class GPTIntegrator : public SampleIntegrator {
     ShiftMode mode_;
     ReconstructionNorm norm_;
     Float alpha_;
+    bool filmFilter_;
     FileLoc loc_;
     LightSampler lightSampler_;
     GradientFilm gfilm_;

@@ -1,22 +1,59 @@
 #include "integrators/gradient/gradient_film.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 
 namespace gradus {
 
 const Point2i kNeighbourOffsets[kNumNeighbours] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
 
-void GradientFilm::init(Film &film) {
+void GradientFilm::init(Film &film, bool useFilmFilter) {
+    filter_ = useFilmFilter ? &film.filter() : nullptr;
+    filterNorm_ = footprint_ = 1;
+    if (filter_) {
+        // Integral of the filter by the midpoint rule over its support.
+        const int n = 256;
+        Vec2 r = filter_->radius;
+        double sum = 0;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i)
+                sum += filter_->evaluate(Point2((2 * (i + 0.5) / n - 1) * r.x, (2 * (j + 0.5) / n - 1) * r.y));
+        double integral = sum * (4 * r.x * r.y) / (double(n) * n);
+        filterNorm_ = integral > 0 ? 1 / integral : 1;
+        footprint_ = std::max<Float>(1, 4 * r.x * r.y);
+    }
     static const char *names[NumLayers] = {"gd.primal", "gd.primal2", "gd.dxf", "gd.dxf2", "gd.dxb",
                                            "gd.dxb2",   "gd.dyf",     "gd.dyf2", "gd.dyb", "gd.dyb2"};
     for (int i = 0; i < NumLayers; ++i) layer_[i] = film.addLayer(names[i]);
 }
 
+void GradientFilm::splat(SampleRecorder &rec, int layer, int layerSq, const Spectrum &v, Point2i offset) const {
+    if (!filter_) {
+        rec.addLayer(layer_[layer], v, offset);
+        rec.addLayer(layer_[layerSq], v * v, offset);
+        return;
+    }
+    // Pixels q whose centre lies within the filter radius of the sample.
+    const Vec2 r = filter_->radius;
+    Point2 pd(rec.pFilm().x - 0.5, rec.pFilm().y - 0.5);
+    int x0 = int(std::ceil(pd.x - r.x)), x1 = int(std::floor(pd.x + r.x));
+    int y0 = int(std::ceil(pd.y - r.y)), y1 = int(std::floor(pd.y + r.y));
+    Point2i p = rec.pixel();
+    for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+            Float h = filter_->evaluate(Point2(x - pd.x, y - pd.y)) * filterNorm_;
+            if (h == 0) continue;
+            Spectrum hv = v * h;
+            Point2i at{x - p.x + offset.x, y - p.y + offset.y};
+            rec.addLayer(layer_[layer], hv, at);
+            rec.addLayer(layer_[layerSq], hv * hv, at);
+        }
+}
+
 void GradientFilm::record(SampleRecorder &rec, const GradientSample &s) const {
     if (!s.primal.isFinite()) return;
-    rec.addLayer(layer_[Primal], s.primal);
-    rec.addLayer(layer_[PrimalSq], s.primal * s.primal);
+    splat(rec, Primal, PrimalSq, s.primal, {0, 0});
     // +x: dx at p; -x: dx at p-(1,0) with the sign flipped (I(p) - I(p-1)). Same for y.
     const int lay[kNumNeighbours][2] = {{DxF, DxFSq}, {DxB, DxBSq}, {DyF, DyFSq}, {DyB, DyBSq}};
     for (int k = 0; k < kNumNeighbours; ++k) {
@@ -25,8 +62,7 @@ void GradientFilm::record(SampleRecorder &rec, const GradientSample &s) const {
         bool forward = off.x + off.y > 0;
         Spectrum v = forward ? s.diff[k] : s.diff[k] * -1.0;
         Point2i at = forward ? Point2i{0, 0} : off;
-        rec.addLayer(layer_[lay[k][0]], v, at);
-        rec.addLayer(layer_[lay[k][1]], v * v, at);
+        splat(rec, lay[k][0], lay[k][1], v, at);
     }
 }
 
@@ -47,7 +83,7 @@ GradientImages GradientFilm::images(const Film &film, double spp) const {
     double invN = spp > 0 ? 1 / spp : 0;
     auto var = [&](int mean, int sq, size_t i) {
         double m = L[mean].data()[i], m2 = L[sq].data()[i];
-        return std::max(0.0, (m2 - m * m) * invN);
+        return std::max(0.0, (m2 - m * m / footprint_) * invN);
     };
     for (size_t i = 0; i < n; ++i) {
         g.primal[i] = L[Primal].data()[i];

@@ -45,6 +45,7 @@ bool ShiftHalfVector(const Vec3 &woX, const Vec3 &wiX, const Vec3 &woY, Float et
         if (!(len2 > kShiftEps)) return false;
         h = h / std::sqrt(len2);
         Vec3 wi = bxdfutil::Reflect(woY, h);
+        if (wi.z * woY.z <= 0) return false;  // below the surface: no (invertible) reflection
         Float den = AbsDot(wiX, h);
         if (!(den > kShiftEps)) return false;
         out->wi = Normalize(wi);

@@ -14,9 +14,9 @@ void DeviceError(void *, RTCError code, const char *str) {
     throw Error(std::string("Embree error ") + std::to_string(int(code)) + ": " + (str ? str : ""));
 }
 
-void SphereBounds(const RTCBoundsFunctionArguments *args) {
-    auto *sphere = static_cast<const Sphere *>(args->geometryUserPtr);
-    Bounds3 b = sphere->worldBound();
+void AnalyticBounds(const RTCBoundsFunctionArguments *args) {
+    auto *shape = static_cast<const AnalyticShape *>(args->geometryUserPtr);
+    Bounds3 b = shape->worldBound();
     // Conservative float bounds.
     auto lo = [](double v) { return std::nextafter(float(v), -INFINITY); };
     auto hi = [](double v) { return std::nextafter(float(v), INFINITY); };
@@ -28,20 +28,20 @@ void SphereBounds(const RTCBoundsFunctionArguments *args) {
     args->bounds_o->upper_z = hi(b.pMax.z);
 }
 
-// Double-precision world-space test of a user sphere against a single Embree ray.
-bool SphereHit(const Sphere *s, const RTCRay &ray, Float *t) {
+// Double-precision world-space test of an analytic shape against a single Embree ray.
+bool AnalyticHit(const AnalyticShape *s, const RTCRay &ray, Float *t) {
     Ray r(Point3(ray.org_x, ray.org_y, ray.org_z), Vec3(ray.dir_x, ray.dir_y, ray.dir_z), ray.tfar);
     Interaction hit;
     if (!s->intersectP(r, t, &hit)) return false;
     return *t > ray.tnear;
 }
 
-void SphereIntersect(const RTCIntersectFunctionNArguments *args) {
+void AnalyticIntersect(const RTCIntersectFunctionNArguments *args) {
     if (args->N != 1 || !args->valid[0]) return;
-    auto *s = static_cast<const Sphere *>(args->geometryUserPtr);
+    auto *s = static_cast<const AnalyticShape *>(args->geometryUserPtr);
     auto *rh = reinterpret_cast<RTCRayHit *>(args->rayhit);
     Float t;
-    if (!SphereHit(s, rh->ray, &t)) return;
+    if (!AnalyticHit(s, rh->ray, &t)) return;
     rh->ray.tfar = float(t);
     rh->hit.u = 0;
     rh->hit.v = 0;
@@ -52,13 +52,33 @@ void SphereIntersect(const RTCIntersectFunctionNArguments *args) {
     rh->hit.instID[0] = args->context->instID[0];
 }
 
-void SphereOccluded(const RTCOccludedFunctionNArguments *args) {
+void AnalyticOccluded(const RTCOccludedFunctionNArguments *args) {
     if (args->N != 1 || !args->valid[0]) return;
-    auto *s = static_cast<const Sphere *>(args->geometryUserPtr);
+    auto *s = static_cast<const AnalyticShape *>(args->geometryUserPtr);
     auto *ray = reinterpret_cast<RTCRay *>(args->ray);
     Float t;
-    if (SphereHit(s, *ray, &t)) ray->tfar = -INFINITY;
+    if (AnalyticHit(s, *ray, &t)) ray->tfar = -INFINITY;
 }
+
+// Alpha cut-outs (pbrt-v3 semantics): a hit where the alpha texture is exactly
+// 0 is ignored; shadow rays also ignore hits where "shadowalpha" is 0.
+void AlphaFilter(const RTCFilterFunctionNArguments *args, bool shadow) {
+    auto *mesh = static_cast<const TriangleMesh *>(args->geometryUserPtr);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+        Float b1 = RTCHitN_u(args->hit, args->N, i), b2 = RTCHitN_v(args->hit, args->N, i);
+        Vec3 d(RTCRayN_dir_x(args->ray, args->N, i), RTCRayN_dir_y(args->ray, args->N, i),
+               RTCRayN_dir_z(args->ray, args->N, i));
+        SurfaceInteraction si;
+        mesh->interaction(int(prim), b1, b2, -Normalize(d), &si);
+        bool cut = (mesh->alpha && mesh->alpha->evaluate(si) == 0) ||
+                   (shadow && mesh->shadowAlpha && mesh->shadowAlpha->evaluate(si) == 0);
+        if (cut) args->valid[i] = 0;
+    }
+}
+void AlphaIntersectFilter(const RTCFilterFunctionNArguments *args) { AlphaFilter(args, false); }
+void AlphaOccludedFilter(const RTCFilterFunctionNArguments *args) { AlphaFilter(args, true); }
 
 void ToRTCRay(const Ray &r, RTCRay *ray) {
     ray->org_x = float(r.o.x);
@@ -104,23 +124,29 @@ int EmbreeAccel::addMesh(std::shared_ptr<const TriangleMesh> mesh) {
     auto *idx = static_cast<unsigned *>(
         rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), nt));
     for (size_t i = 0; i < 3 * nt; ++i) idx[i] = unsigned(mesh->indices[i]);
+    if (mesh->alpha || mesh->shadowAlpha) {
+        rtcSetGeometryUserData(g, const_cast<TriangleMesh *>(mesh.get()));
+        rtcSetGeometryIntersectFilterFunction(g, AlphaIntersectFilter);
+        rtcSetGeometryOccludedFilterFunction(g, AlphaOccludedFilter);
+        alphaMeshes_.push_back(mesh);
+    }
     rtcCommitGeometry(g);
     rtcAttachGeometryByID(scene_, g, unsigned(nextId_));
     rtcReleaseGeometry(g);
     return nextId_++;
 }
 
-int EmbreeAccel::addSphere(std::shared_ptr<const Sphere> sphere) {
+int EmbreeAccel::addAnalytic(std::shared_ptr<const AnalyticShape> shape) {
     RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_USER);
     rtcSetGeometryUserPrimitiveCount(g, 1);
-    rtcSetGeometryUserData(g, const_cast<Sphere *>(sphere.get()));
-    rtcSetGeometryBoundsFunction(g, SphereBounds, nullptr);
-    rtcSetGeometryIntersectFunction(g, SphereIntersect);
-    rtcSetGeometryOccludedFunction(g, SphereOccluded);
+    rtcSetGeometryUserData(g, const_cast<AnalyticShape *>(shape.get()));
+    rtcSetGeometryBoundsFunction(g, AnalyticBounds, nullptr);
+    rtcSetGeometryIntersectFunction(g, AnalyticIntersect);
+    rtcSetGeometryOccludedFunction(g, AnalyticOccluded);
     rtcCommitGeometry(g);
     rtcAttachGeometryByID(scene_, g, unsigned(nextId_));
     rtcReleaseGeometry(g);
-    spheres_.push_back(std::move(sphere));
+    analytic_.push_back(std::move(shape));
     return nextId_++;
 }
 

@@ -1,11 +1,12 @@
-// Embree 3 behind one small interface: triangle meshes (native) and
-// analytic spheres (user geometry, double-precision intersection).
+// Embree 3 behind one small interface: triangle meshes (native, with alpha
+// cut-outs through intersection/occlusion filter functions) and analytic
+// shapes (user geometry, double-precision intersection).
 #pragma once
 #include <memory>
 #include <vector>
 
 #include "core/geometry.h"
-#include "shapes/sphere.h"
+#include "shapes/analytic.h"
 #include "shapes/triangle.h"
 
 struct RTCDeviceTy;
@@ -28,7 +29,8 @@ class EmbreeAccel {
 
     // Returns the geometry id (dense, from 0, in call order).
     int addMesh(std::shared_ptr<const TriangleMesh> mesh);
-    int addSphere(std::shared_ptr<const Sphere> sphere);
+    int addAnalytic(std::shared_ptr<const AnalyticShape> shape);
+    int addSphere(std::shared_ptr<const AnalyticShape> sphere) { return addAnalytic(std::move(sphere)); }
     void commit();
 
     bool intersect(const Ray &r, RayHit *hit) const;
@@ -38,7 +40,8 @@ class EmbreeAccel {
     RTCDeviceTy *device_ = nullptr;
     RTCSceneTy *scene_ = nullptr;
     int nextId_ = 0;
-    std::vector<std::shared_ptr<const Sphere>> spheres_;  // kept alive for user callbacks
+    std::vector<std::shared_ptr<const AnalyticShape>> analytic_;  // kept alive for user callbacks
+    std::vector<std::shared_ptr<const TriangleMesh>> alphaMeshes_;  // kept alive for filter callbacks
 };
 
 }  // namespace gradus

@@ -75,6 +75,11 @@ class AreaLight : public Light {
     bool twoSided_;
 };
 
+class Image;
+// Environment light (lat-long map, or constant L when map is null); used by
+// CreateLight and by tests that build a map in memory.
+std::shared_ptr<Light> CreateInfiniteLight(const Transform &worldFromLight, const Spectrum &L, const Image *map);
+
 // Creates a LightSource of pbrt-v3 type desc.type (point, spot, distant,
 // infinite; goniometric and projection give UnsupportedError).
 std::shared_ptr<Light> CreateLight(const LightDesc &desc, const SceneDesc &scene);

@@ -51,7 +51,7 @@ bool AreaLight::sampleLe(Point2 u1, Point2 u2, LightLeSample *s) const {
 }
 
 void AreaLight::pdfLe(const Ray &ray, const Normal3 &n, Float *pdfPos, Float *pdfDir) const {
-    *pdfPos = 1 / shape_->area();
+    *pdfPos = shape_->pdfArea(Interaction(ray.o, n, Vec3(0, 0, 0)));
     Float c = Dot(n, ray.d);
     *pdfDir = twoSided_ ? 0.5 * CosineHemispherePdf(std::abs(c)) : (c > 0 ? CosineHemispherePdf(c) : 0);
 }
@@ -111,7 +111,11 @@ class SpotLight : public Light {
         Float delta = (c - cosTotal_) / (cosFalloffStart_ - cosTotal_);
         return (delta * delta) * (delta * delta);
     }
-    Spectrum power() const override { return I_ * (2 * Pi * (1 - 0.5 * (cosFalloffStart_ + cosTotal_))); }
+    // Exact integral of I falloff over the sphere: the quartic ramp integrates to
+    // (cosStart - cosTotal) / 5 in cos(theta) (pbrt-v3 used a midpoint approximation).
+    Spectrum power() const override {
+        return I_ * (2 * Pi * ((1 - cosFalloffStart_) + (cosFalloffStart_ - cosTotal_) / 5));
+    }
     bool sampleLi(const Interaction &ref, Point2, LightLiSample *s) const override {
         Vec3 d = pos_ - ref.p;
         Float d2 = d.lengthSquared();
@@ -231,11 +235,15 @@ class InfiniteLight : public Light {
         return Lscale_ * lookup(st);
     }
     Spectrum Le(const Ray &r) const override { return radiance(r.d); }
+    // Flux through the scene's bounding disk: pi r^2 times the integral of L
+    // over directions (texels weighted by their solid angle).
     Spectrum power() const override {
-        Spectrum avg(0);
-        for (const auto &t : texels_) avg += t;
-        avg = avg / Float(texels_.size());
-        return Lscale_ * avg * (Pi * radius_ * radius_ * 4 * Pi);
+        Spectrum sum(0);
+        for (int y = 0; y < h_; ++y) {
+            Float dOmega = (2 * Pi / w_) * (std::cos(Pi * y / h_) - std::cos(Pi * (y + 1) / h_));
+            for (int x = 0; x < w_; ++x) sum += lookupTexel(x, y) * dOmega;
+        }
+        return Lscale_ * sum * (Pi * radius_ * radius_);
     }
     Vec3 directionFrom(Point2 uv, Float *pdf) const {
         Float mapPdf;
@@ -295,6 +303,10 @@ class InfiniteLight : public Light {
 };
 
 }  // namespace
+
+std::shared_ptr<Light> CreateInfiniteLight(const Transform &worldFromLight, const Spectrum &L, const Image *map) {
+    return std::make_shared<InfiniteLight>(worldFromLight, L, map);
+}
 
 std::shared_ptr<Light> CreateLight(const LightDesc &desc, const SceneDesc &scene) {
     const ParamSet &ps = desc.params;

@@ -26,11 +26,11 @@ bool Scene::intersect(const Ray &r, SurfaceInteraction *si) const {
     if (g.mesh) {
         g.mesh->interaction(h.primId, h.b1, h.b2, wo, si);
     } else {
-        // Refine the sphere hit in double precision along the original ray.
+        // Refine the analytic hit in double precision along the original ray.
         Float t;
         Interaction tmp;
-        if (!g.sphere->intersectP(r, &t, &tmp)) t = h.t;
-        g.sphere->interaction(r, t, si);
+        if (!g.analytic->intersectP(r, &t, &tmp)) t = h.t;
+        g.analytic->interaction(r, t, si);
     }
     si->material = g.material;
     si->areaLight = g.areaLights.empty() ? nullptr : g.areaLights[h.primId];
@@ -49,7 +49,7 @@ std::string SceneFeatures::describe() const {
     std::ostringstream os;
     auto yn = [](bool b) { return b ? "yes" : "no"; };
     os << "Scene features:\n"
-       << "  triangles: " << numTriangles << ", spheres: " << numSpheres << ", lights: " << numLights << "\n"
+       << "  triangles: " << numTriangles << ", spheres: " << numSpheres << ", other analytic shapes: " << numAnalytic << ", lights: " << numLights << "\n"
        << "  specular surfaces: " << yn(specularSurfaces) << "\n"
        << "  near-specular surfaces (roughness < 0.001): " << yn(nearSpecularSurfaces) << "\n"
        << "  lowest material roughness: " << minRoughness << "\n"

@@ -26,12 +26,15 @@ struct SceneFeatures {
     int numLights = 0;
     int64_t numTriangles = 0;
     int numSpheres = 0;
+    int numAnalytic = 0;  // analytic shapes other than spheres (disk, cylinder, ...)
     std::string describe() const;
 };
 
 struct GeometryRecord {
     std::shared_ptr<const TriangleMesh> mesh;  // or
-    std::shared_ptr<const Sphere> sphere;
+    std::shared_ptr<const AnalyticShape> analytic;  // sphere, disk, cylinder, cone, paraboloid, hyperboloid
+    // Same object as `analytic` (older name, kept while callers move to `analytic`).
+    std::shared_ptr<const AnalyticShape> sphere;
     const Material *material = nullptr;
     std::vector<const AreaLight *> areaLights;  // per primitive; empty if not emissive
 };

@@ -5,6 +5,9 @@
 #include "core/error.h"
 #include "parser/ply.h"
 #include "samplers/sampling.h"
+#include "shapes/loopsubdiv.h"
+#include "shapes/quadrics.h"
+#include "shapes/sphere.h"
 
 namespace gradus {
 
@@ -12,20 +15,42 @@ namespace {
 
 struct ShapeBuild {
     std::shared_ptr<TriangleMesh> mesh;
-    std::shared_ptr<Sphere> sphere;
+    std::shared_ptr<AnalyticShape> analytic;
+    bool subdivision = false;
 };
 
-ShapeBuild CreateShape(const ShapeDesc &sd, const SceneDesc &scene) {
+// pbrt-v3 alpha parameters: "texture alpha" names a float texture; a constant
+// "float alpha" 0 cuts the whole mesh away, any other constant keeps it.
+std::shared_ptr<const FloatTexture> AlphaTexture(const ParamSet &ps, const std::string &name, const FileLoc &loc,
+                                                 const NamedTextures &textures) {
+    if (!ps.has(name)) return nullptr;
+    std::string tex = ps.getTexture(name);
+    if (!tex.empty()) {
+        auto it = textures.floats.find(tex);
+        if (it == textures.floats.end())
+            throw Error(ps.locOf(name, loc), "\"" + name + "\": unknown float texture \"" + tex + "\"");
+        return it->second;
+    }
+    if (ps.getFloat(name, 1) == 0) return std::make_shared<ConstantTexture<Float>>(0);
+    return nullptr;
+}
+
+ShapeBuild CreateShape(const ShapeDesc &sd, const SceneDesc &scene, const NamedTextures &textures) {
     const ParamSet &ps = sd.params;
     const std::string &t = sd.type;
+    const Transform &xf = sd.worldFromObject;
+    const bool ro = sd.reverseOrientation;
     ShapeBuild b;
-    auto checkAlpha = [&]() {
-        if (ps.has("alpha") || ps.has("shadowalpha")) {
-            const Param *p = ps.find("alpha");
-            if (!p) p = ps.find("shadowalpha");
-            bool constantOne = p->type == "float" && p->numbers.size() == 1 && p->numbers[0] == 1;
-            if (!constantOne) throw UnsupportedError(p->loc, "alpha cut-outs on shapes");
-        }
+    auto setAlpha = [&]() {
+        b.mesh->alpha = AlphaTexture(ps, "alpha", sd.loc, textures);
+        b.mesh->shadowAlpha = AlphaTexture(ps, "shadowalpha", sd.loc, textures);
+    };
+    auto positive = [&](const char *name, Float v) {
+        if (!(v > 0) || !std::isfinite(v))
+            throw Error(ps.locOf(name, sd.loc), "Shape \"" + t + "\": \"" + name + "\" must be > 0 and finite");
+    };
+    auto finiteParam = [&](const char *name, Float v) {
+        if (!std::isfinite(v)) throw Error(ps.locOf(name, sd.loc), "Shape \"" + t + "\": \"" + name + "\" is not finite");
     };
     if (t == "trianglemesh") {
         std::vector<int> idx = ps.getInts("indices");
@@ -39,9 +64,9 @@ ShapeBuild CreateShape(const ShapeDesc &sd, const SceneDesc &scene) {
         if (uv.empty()) uv = ps.getPoint2s("st");
         std::vector<Normal3> N = ps.getNormals("N");
         std::vector<Vec3> S = ps.getVector3s("S");
-        checkAlpha();
-        b.mesh = TriangleMesh::Create(sd.worldFromObject, sd.reverseOrientation, std::move(P), std::move(idx),
-                                      std::move(N), std::move(S), std::move(uv), sd.loc);
+        b.mesh = TriangleMesh::Create(xf, ro, std::move(P), std::move(idx), std::move(N), std::move(S),
+                                      std::move(uv), sd.loc);
+        setAlpha();
     } else if (t == "plymesh") {
         std::string fn = ps.getString("filename", "");
         if (fn.empty()) throw Error(sd.loc, "plymesh: missing \"string filename\"");
@@ -51,22 +76,67 @@ ShapeBuild CreateShape(const ShapeDesc &sd, const SceneDesc &scene) {
         } catch (const Error &e) {
             throw Error(ps.locOf("filename", sd.loc), e.what());
         }
-        checkAlpha();
         if (ps.has("displacement")) throw UnsupportedError(ps.locOf("displacement", sd.loc), "plymesh displacement");
-        b.mesh = TriangleMesh::Create(sd.worldFromObject, sd.reverseOrientation, std::move(ply.P),
-                                      std::move(ply.indices), std::move(ply.N), {}, std::move(ply.uv), sd.loc);
+        b.mesh = TriangleMesh::Create(xf, ro, std::move(ply.P), std::move(ply.indices), std::move(ply.N), {},
+                                      std::move(ply.uv), ps.locOf("filename", sd.loc));
+        setAlpha();
+    } else if (t == "loopsubdiv") {
+        int levels = ps.getInt("levels", 3);
+        if (ps.has("nlevels")) levels = ps.getInt("nlevels", levels);
+        std::vector<int> idx = ps.getInts("indices");
+        std::vector<Point3> P = ps.getPoint3s("P");
+        if (P.empty()) throw Error(sd.loc, "loopsubdiv: missing \"point P\"");
+        if (idx.empty()) throw Error(sd.loc, "loopsubdiv: missing \"integer indices\"");
+        LoopSubdivResult sub = LoopSubdivide(P, idx, levels, sd.loc);
+        b.mesh = TriangleMesh::Create(xf, ro, std::move(sub.P), std::move(sub.indices), std::move(sub.N), {}, {},
+                                      sd.loc);
+        b.subdivision = true;
     } else if (t == "sphere") {
         Float r = ps.getFloat("radius", 1);
         Float zmin = ps.getFloat("zmin", -r), zmax = ps.getFloat("zmax", r), phimax = ps.getFloat("phimax", 360);
-        if (!(r > 0)) throw Error(ps.locOf("radius", sd.loc), "sphere: \"radius\" must be > 0");
-        b.sphere = std::make_shared<Sphere>(sd.worldFromObject, sd.reverseOrientation, r, zmin, zmax, phimax);
-    } else if (t == "disk" || t == "cylinder" || t == "cone" || t == "paraboloid" || t == "hyperboloid" ||
-               t == "loopsubdiv" || t == "curve" || t == "nurbs" || t == "heightfield") {
+        positive("radius", r);
+        finiteParam("zmin", zmin), finiteParam("zmax", zmax), finiteParam("phimax", phimax);
+        b.analytic = std::make_shared<Sphere>(xf, ro, r, zmin, zmax, phimax);
+    } else if (t == "disk") {
+        Float h = ps.getFloat("height", 0), r = ps.getFloat("radius", 1), ri = ps.getFloat("innerradius", 0);
+        Float phimax = ps.getFloat("phimax", 360);
+        positive("radius", r);
+        finiteParam("height", h), finiteParam("phimax", phimax);
+        if (!(ri >= 0 && ri < r))
+            throw Error(ps.locOf("innerradius", sd.loc), "disk: \"innerradius\" must be in [0, radius)");
+        b.analytic = std::make_shared<Disk>(xf, ro, h, r, ri, phimax);
+    } else if (t == "cylinder") {
+        Float r = ps.getFloat("radius", 1), zmin = ps.getFloat("zmin", -1), zmax = ps.getFloat("zmax", 1);
+        Float phimax = ps.getFloat("phimax", 360);
+        positive("radius", r);
+        finiteParam("zmin", zmin), finiteParam("zmax", zmax), finiteParam("phimax", phimax);
+        b.analytic = std::make_shared<Cylinder>(xf, ro, r, zmin, zmax, phimax);
+    } else if (t == "cone") {
+        Float h = ps.getFloat("height", 1), r = ps.getFloat("radius", 1), phimax = ps.getFloat("phimax", 360);
+        positive("height", h), positive("radius", r), finiteParam("phimax", phimax);
+        b.analytic = std::make_shared<Cone>(xf, ro, h, r, phimax);
+    } else if (t == "paraboloid") {
+        Float r = ps.getFloat("radius", 1), zmin = ps.getFloat("zmin", 0), zmax = ps.getFloat("zmax", 1);
+        Float phimax = ps.getFloat("phimax", 360);
+        positive("radius", r), finiteParam("zmin", zmin), finiteParam("phimax", phimax);
+        if (!(std::max(zmin, zmax) > 0) || !std::isfinite(zmax))
+            throw Error(ps.locOf("zmax", sd.loc), "paraboloid: \"zmax\" must be > 0 and finite");
+        b.analytic = std::make_shared<Paraboloid>(xf, ro, r, zmin, zmax, phimax);
+    } else if (t == "hyperboloid") {
+        Point3 p1 = ps.getPoint3("p1", Point3(0, 0, 0)), p2 = ps.getPoint3("p2", Point3(1, 1, 1));
+        Float phimax = ps.getFloat("phimax", 360);
+        finiteParam("phimax", phimax);
+        if (!p1.isFinite() || !p2.isFinite()) throw Error(sd.loc, "hyperboloid: \"p1\"/\"p2\" not finite");
+        if (p1.z == p2.z)
+            throw UnsupportedError(ps.locOf("p2", sd.loc),
+                                   "hyperboloid with p1.z == p2.z (a flat annulus: use a \"disk\")");
+        b.analytic = std::make_shared<Hyperboloid>(xf, ro, p1, p2, phimax);
+    } else if (t == "curve" || t == "nurbs" || t == "heightfield") {
         throw UnsupportedError(sd.loc, "Shape \"" + t + "\"");
     } else {
         throw Error(sd.loc, "unknown shape \"" + t +
-                                "\" (valid: trianglemesh, plymesh, sphere; pbrt-v3 also has disk, cylinder, cone, "
-                                "paraboloid, hyperboloid, loopsubdiv, curve, nurbs, heightfield)");
+                                "\" (valid: trianglemesh, plymesh, loopsubdiv, sphere, disk, cylinder, cone, "
+                                "paraboloid, hyperboloid; pbrt-v3 also has curve, nurbs, heightfield)");
     }
     ps.checkUnused("Shape \"" + t + "\"");
     return b;
@@ -118,24 +188,25 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
         }
     }
     for (const auto &sd : shapes) {
-        ShapeBuild b = CreateShape(sd, desc);
+        ShapeBuild b = CreateShape(sd, desc, textures);
         GeometryRecord rec;
         rec.material = sd.material >= 0 ? matByIndex[sd.material] : defaultMaterial.get();
         if (sd.material >= 0 && matByIndex[sd.material]) {
             Float r = matByIndex[sd.material]->minRoughness();
             feat.minRoughness = std::min(feat.minRoughness, r);
         }
-        std::vector<std::shared_ptr<Shape>> prims;
         if (b.mesh) {
             if (b.mesh->numTriangles() == 0) continue;  // empty mesh: nothing to add
             rec.mesh = b.mesh;
             feat.numTriangles += b.mesh->numTriangles();
-            scene->bounds.expand(Bounds3());
+            if (b.subdivision) feat.subdivisionSurfaces = true;
             for (const auto &p : b.mesh->p) scene->bounds.expand(p);
         } else {
-            rec.sphere = b.sphere;
-            feat.numSpheres++;
-            scene->bounds.expand(b.sphere->worldBound());
+            rec.analytic = b.analytic;
+            rec.sphere = b.analytic;
+            if (dynamic_cast<const Sphere *>(b.analytic.get())) feat.numSpheres++;
+            else feat.numAnalytic++;
+            scene->bounds.expand(b.analytic->worldBound());
         }
         if (sd.areaLight >= 0) {
             const EntityDesc &ad = desc.areaLights[sd.areaLight];
@@ -148,7 +219,7 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
             if (b.mesh) {
                 for (int t = 0; t < b.mesh->numTriangles(); ++t) {
                     auto tri = std::make_shared<Triangle>(b.mesh, t);
-                    if (tri->area() <= 0) {
+                    if (!(tri->area() > 0)) {  // zero-area triangles emit nothing
                         rec.areaLights.push_back(nullptr);
                         continue;
                     }
@@ -156,14 +227,16 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
                     rec.areaLights.push_back(al.get());
                     scene->lights.push_back(al);
                 }
-            } else {
-                auto al = std::make_shared<AreaLight>(b.sphere, L, twoSided);
+            } else if (b.analytic->area() > 0) {
+                auto al = std::make_shared<AreaLight>(b.analytic, L, twoSided);
                 rec.areaLights.push_back(al.get());
                 scene->lights.push_back(al);
+            } else {
+                rec.areaLights.push_back(nullptr);
             }
             feat.areaLights = true;
         }
-        int id = b.mesh ? scene->accel.addMesh(b.mesh) : scene->accel.addSphere(b.sphere);
+        int id = b.mesh ? scene->accel.addMesh(b.mesh) : scene->accel.addAnalytic(b.analytic);
         if (id != int(scene->geometry.size())) throw Error("internal: geometry ids out of order");
         scene->geometry.push_back(std::move(rec));
     }

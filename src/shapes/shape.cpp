@@ -22,7 +22,7 @@ Float Shape::pdfFrom(const Interaction &ref, const Vec3 &wi) const {
     if (!intersectP(ray, &tHit, &hit)) return 0;
     Float cosL = AbsDot(hit.n, -wi);
     if (cosL == 0) return 0;
-    Float pdf = DistanceSquared(ref.p, hit.p) / (cosL * area());
+    Float pdf = DistanceSquared(ref.p, hit.p) * pdfArea(hit) / cosL;
     return std::isfinite(pdf) ? pdf : 0;
 }
 

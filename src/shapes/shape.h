@@ -17,6 +17,12 @@ class Shape {
     virtual Bounds3 worldBound() const = 0;
     // Uniform point on the surface; *pdf is w.r.t. area.
     virtual Interaction sampleArea(Point2 u, Float *pdf) const = 0;
+    // Area density of sampleArea() at a surface point (1 / area unless the
+    // world transform scales non-uniformly).
+    virtual Float pdfArea(const Interaction &it) const {
+        Float a = area();
+        return a > 0 ? 1 / a : 0;
+    }
     // Point as seen from `ref`; *pdf is w.r.t. solid angle at ref (0 on failure).
     virtual Interaction sampleFrom(const Interaction &ref, Point2 u, Float *pdf) const;
     // Solid-angle pdf of sampleFrom() producing direction wi from ref.

@@ -24,11 +24,23 @@ std::shared_ptr<TriangleMesh> TriangleMesh::Create(const Transform &xf, bool rev
     if (!uv.empty() && uv.size() != P.size())
         throw Error(loc, "triangle mesh: \"uv\" has " + std::to_string(uv.size()) + " entries, \"P\" has " +
                              std::to_string(P.size()));
+    auto finite = [&](const char *what, size_t i, bool ok) {
+        if (!ok)
+            throw Error(loc, std::string("triangle mesh: \"") + what + "\" of vertex " + std::to_string(i) +
+                                 " is not finite (NaN or Inf)");
+    };
+    for (size_t i = 0; i < P.size(); ++i) finite("P", i, P[i].isFinite());
+    for (size_t i = 0; i < N.size(); ++i) finite("N", i, N[i].isFinite());
+    for (size_t i = 0; i < S.size(); ++i) finite("S", i, S[i].isFinite());
+    for (size_t i = 0; i < uv.size(); ++i) finite("uv", i, std::isfinite(uv[i].x) && std::isfinite(uv[i].y));
     auto m = std::make_shared<TriangleMesh>();
     m->reverseOrientation = reverseOrientation;
     m->transformSwapsHandedness = xf.swapsHandedness();
     m->p.resize(P.size());
-    for (size_t i = 0; i < P.size(); ++i) m->p[i] = xf.applyPoint(P[i]);
+    for (size_t i = 0; i < P.size(); ++i) {
+        m->p[i] = xf.applyPoint(P[i]);
+        finite("P", i, m->p[i].isFinite());  // also catches overflow by the transform
+    }
     m->n.resize(N.size());
     for (size_t i = 0; i < N.size(); ++i) {
         Normal3 n = xf.applyNormal(N[i]);

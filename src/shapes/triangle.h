@@ -5,6 +5,7 @@
 
 #include "core/error.h"
 #include "shapes/shape.h"
+#include "textures/texture.h"
 
 namespace gradus {
 
@@ -16,8 +17,12 @@ struct TriangleMesh {
     std::vector<int> indices;  // 3 per triangle
     bool reverseOrientation = false;
     bool transformSwapsHandedness = false;
+    // Alpha cut-outs (pbrt-v3): hits where alpha is 0 are ignored; shadow rays
+    // also ignore hits where shadowAlpha is 0. Null when absent.
+    std::shared_ptr<const FloatTexture> alpha, shadowAlpha;
     int numTriangles() const { return int(indices.size() / 3); }
-    // Builds the world-space mesh; validates indices (throws Error at loc).
+    // Builds the world-space mesh; validates indices and rejects non-finite
+    // P, N, S or uv values (throws Error at loc naming the vertex).
     static std::shared_ptr<TriangleMesh> Create(const Transform &worldFromObject, bool reverseOrientation,
                                                 std::vector<Point3> P, std::vector<int> indices,
                                                 std::vector<Normal3> N, std::vector<Vec3> S,

@@ -1,0 +1,120 @@
+// Matrix bidirectional path tracing (Chaitanya, Belcour, Hachisuka, Premoze,
+// Pantaleoni, Nowrouzezahrai 2018; /work/shared/papers/matrix-bdpt.md),
+// built on the shared bidirectional core in integrators/common/.
+//
+// One iteration (Algorithm 1) = one sample per pixel:
+//   1. generation: one camera subpath per sampled pixel and as many light
+//      subpaths (N = L), stored compactly (vertices only; BSDFs are rebuilt
+//      at connection time with RebuildBSDF);
+//   2. reordering: for every camera prefix length t and light prefix length
+//      s the eligible subpaths (enough vertices, connectible end vertex) are
+//      sorted by the Sec. 4.2 metric with tbb::parallel_sort;
+//   3. connection: the image is split into tiles of camera subpaths; each
+//      camera subpath connects, for every strategy (s >= 2, t >= 2), to m
+//      light subpaths chosen by a stratified 2D point set over the reordered
+//      matrix M_{s,t} (Sec. 4.3). s = 0 (emitter hits), s = 1 (next-event
+//      estimation with a fresh light sample, as in pbrt-v3) and t = 1 (light
+//      tracing) use the diagonal (Sec. 5.1, Fig. 5): plain BDPT.
+// Random numbers are addressed by (pixel, iteration) and the seed; the
+// result does not depend on the thread count.
+//
+// Parameters (besides bdpt's maxdepth, lightsamplestrategy, misheuristic,
+// visualizestrategies -> layers "mbdpt_s<S>_t<T>", visualizeweights, pixelbounds):
+//   string reorder "distance"       distance (Sec. 4.2) | morton (end vertex) | none
+//   integer connections 1           m: light subpaths per camera subpath and strategy
+//   string matrixrows "matched"     matched: a camera subpath takes part in M_{s,t} with probability
+//                                   L_s / L (same expected connections as BDPT) | all: always
+//   bool combinatorial false        connect every camera subpath to all columns (Eq. 6; quadratic cost)
+//   string matrixsampler "lattice"  lattice (rank-1 lattice, 2D low discrepancy) | lhs | random | diagonal
+//   string visualizematrix ""       "s,t": image of the matrix M_{s,t} of the first iteration (Fig. 4)
+//   integer matrixresolution 256    its maximum width/height (rows and columns subsampled evenly)
+//   string matrixfile ""            where to write it (default: <film name>_matrix_s<S>_t<T>.exr);
+//                                   main RGB = reordered matrix, layer "unordered" = index order
+#pragma once
+#include <atomic>
+#include <string>
+#include <vector>
+
+#include "image/image.h"
+#include "integrators/common/bidir.h"
+#include "integrators/integrator.h"
+#include "integrators/mbdpt/matrix.h"
+#include "lights/light_sampler.h"
+
+namespace gradus {
+
+struct MBDPTSettings {
+    int maxDepth = 5;
+    std::string lightStrategy = "power";
+    MISHeuristic heuristic = MISHeuristic::Balance;
+    mbdpt::Reorder reorder = mbdpt::Reorder::Distance;
+    mbdpt::MatrixSampling sampling = mbdpt::MatrixSampling::Lattice;
+    int connections = 1;
+    bool combinatorial = false;
+    bool allRows = false;
+    bool visStrategies = false, visWeights = false;
+    int visS = -1, visT = -1;  // visualised matrix
+    int matrixResolution = 256;
+    std::string matrixFile;
+};
+
+// Subpaths of one iteration, indexed in generation order (tile by tile).
+struct SubpathStore {
+    std::vector<PathVertex> v;
+    std::vector<uint8_t> connectible;  // per vertex: a connection may end here (surface, non-specular)
+    std::vector<uint32_t> offset;      // subpath i: v[offset[i], offset[i+1])
+    int count(size_t i) const { return int(offset[i + 1] - offset[i]); }
+    const PathVertex *path(size_t i) const { return v.data() + offset[i]; }
+    bool eligible(size_t i, int len) const { return count(i) >= len && connectible[offset[i] + len - 1]; }
+    size_t bytes() const {
+        return v.capacity() * sizeof(PathVertex) + connectible.capacity() + offset.capacity() * sizeof(uint32_t);
+    }
+};
+
+class MBDPTIntegrator : public Integrator {
+  public:
+    explicit MBDPTIntegrator(const EntityDesc &desc);
+    std::string name() const override { return "mbdpt"; }
+    void preprocess(const Scene &scene, Film &film) override;
+    RenderStats render(const Scene &scene, Film &film, const Sampler &sampler, const RenderOptions &opts) override;
+    std::string statistics() const override;
+
+    const MBDPTSettings &settings() const { return set_; }
+    static std::string LayerName(int s, int t);
+    // Matrix visualisation of the first iteration (empty unless visualizematrix is set).
+    const Image &matrixImage() const { return matrixImage_; }
+    // Bytes of stored subpaths and reordering tables per sampled pixel (last iteration).
+    double bytesPerPixel() const { return bytesPerPixel_; }
+
+  private:
+    void generate(const Scene &scene, const Film &film, const Sampler &proto, int iteration);
+    void reorder(const Scene &scene);
+    void connect(const Scene &scene, Film &film, int iteration, uint64_t seed);
+    void visualizeMatrix(const Scene &scene, uint64_t seed);
+    int strategyLayer(int s, int t) const;
+
+    MBDPTSettings set_;
+    FileLoc loc_;
+    LightSampler lightSampler_;
+    BidirContext ctx_;
+    std::vector<int> layers_;
+    Float splatScale_ = 1;
+
+    // Per-iteration data (reused across iterations).
+    std::vector<Point2i> tileMin_, tileMax_;   // tiles of sampled pixels
+    std::vector<uint32_t> tileStart_;          // first subpath of each tile
+    SubpathStore cam_, light_;
+    std::vector<Point2> pFilm_;                // per camera subpath
+    std::vector<float> camWeight_;             // camera ray weight
+    std::vector<std::vector<uint32_t>> rows_;  // [t]: eligible camera subpaths in reordered order
+    std::vector<std::vector<int32_t>> rank_;   // [t][p]: rank of camera subpath p in rows_[t], or -1
+    std::vector<std::vector<uint32_t>> cols_;  // [s]: eligible light subpaths in reordered order
+
+    Image matrixImage_;
+    double bytesPerPixel_ = 0;
+    int iterations_ = 0;
+    double secGen_ = 0, secSort_ = 0, secConnect_ = 0;
+    std::atomic<uint64_t> nConnect_{0}, nShadow_{0}, nCamVerts_{0}, nLightVerts_{0};
+};
+
+}  // namespace gradus

@@ -10,7 +10,7 @@ import shlex
 import sys
 
 from . import overhead as overhead_mod
-from . import reference, report, runs, scenes as scenes_mod
+from . import reference, runs, scenes as scenes_mod
 from .tools import HarnessError, Tools, find_bin_dir, git_commit, repo_root
 
 DESCRIPTION = """\
@@ -175,12 +175,6 @@ def _main(args, argv):
             reference.make_reference(tools, s, args)
         return 0
 
-    missing = [s.name for s in chosen if not s.reference]
-    if missing:
-        raise HarnessError("no reference for %s: make one first, e.g. bench/run --make-reference "
-                           "--scenes %s --ref-spp 4096 --refdir %s"
-                           % (", ".join(missing), ",".join(missing), args.refdir))
-
     if not args.out:
         stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
         args.out = os.path.join(root, "bench", "out", stamp)
@@ -192,8 +186,14 @@ def _main(args, argv):
             "bin_dir": tools.bin_dir, "shared_dir": sdir, "nthreads": args.nthreads,
             "seeds": seeds, "available_integrators": available}
 
-    if args.overhead:
+    if args.overhead:  # equal-spp timing needs no reference
         return _overhead(tools, chosen, pairs, seeds, args, meta)
+
+    missing = [s.name for s in chosen if not s.reference]
+    if missing:
+        raise HarnessError("no reference for %s: make one first, e.g. bench/run --make-reference "
+                           "--scenes %s --ref-spp 4096 --refdir %s"
+                           % (", ".join(missing), ",".join(missing), args.refdir))
 
     integrators = wanted
     baseline = args.baseline or integrators[0]
@@ -255,7 +255,9 @@ def _finish(tools, args, meta, chosen, rows):
         json.dump({"meta": meta, "runs": rows, "summary": summary}, f, indent=1)
 
     if not args.no_report:
-        sections = []
+        from . import report  # matplotlib loads only when a report is made
+        sections = [report.overview_section(summary, chosen, integrators, baseline,
+                                            report_budget)]
         for s in chosen:
             srows = [r for r in summary if r["scene"] == s.name]
             if not srows:
@@ -300,7 +302,7 @@ def _header(meta, integrators, baseline, budgets, chosen):
 
 
 def _overhead(tools, chosen, pairs, seeds, args, meta):
-    from . import plots
+    from . import plots, report
     if args.dry_run:
         for s in chosen:
             for g, p in pairs:

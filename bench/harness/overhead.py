@@ -36,11 +36,13 @@ def run_overhead(tools, scenes, pairs, spp, seeds, args):
     os.makedirs(args.out, exist_ok=True)
     for scene in scenes:
         for grad, prim in pairs:
-            times = {grad: [], prim: []}
-            for seed in seeds:
-                for integ in (prim, grad):
+            times = {"gradient": [], "primal": []}  # by role: a pair may name one integrator twice
+            for k, seed in enumerate(seeds):
+                # Alternate which one goes first, so a drift of machine load cancels out.
+                order = [("primal", prim), ("gradient", grad)]
+                for role, integ in (order if k % 2 == 0 else order[::-1]):
                     path = os.path.join(args.out, "renders", scene.name,
-                                        "overhead-%s-spp%d-s%d.exr" % (integ, spp, seed))
+                                        "overhead-%s-%s-spp%d-s%d.exr" % (role, integ, spp, seed))
                     meta, wall = tools.render(scene.scene, path, integrator=integ, spp=spp,
                                               seed=seed, nthreads=args.nthreads)
                     got = int(float(meta.get("spp", spp)))
@@ -49,8 +51,8 @@ def run_overhead(tools, scenes, pairs, spp, seeds, args):
                                            "rounding?); choose a power of two"
                                            % (integ, got, spp, scene.name))
                     secs = float(meta.get("render_seconds", wall))
-                    times[integ].append(secs)
-                    raw.append({"scene": scene.name, "integrator": integ, "spp": spp,
+                    times[role].append(secs)
+                    raw.append({"scene": scene.name, "integrator": integ, "role": role, "spp": spp,
                                 "seed": seed, "seconds": secs, "wall_seconds": wall})
                     if not args.quiet:
                         print("[overhead] %s %s %d spp seed %d: %.2f s"
@@ -70,8 +72,8 @@ def run_overhead(tools, scenes, pairs, spp, seeds, args):
 
 
 def _ratio(scene, grad, prim, spp, times):
-    gm, gse, n = analysis.mean_stderr(times[grad])
-    pm, pse, _ = analysis.mean_stderr(times[prim])
+    gm, gse, n = analysis.mean_stderr(times["gradient"])
+    pm, pse, _ = analysis.mean_stderr(times["primal"])
     ratio = gm / pm if gm and pm else None
     ratio_se = None
     if ratio and gse is not None and pse is not None:

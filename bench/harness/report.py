@@ -238,6 +238,36 @@ def scene_section(scene, summary_rows, assets, integrators, baseline, report_bud
     return "\n".join(h)
 
 
+def overview_section(summary, scenes, integrators, baseline, report_budget):
+    """One table for the whole run: relMSE and speed-up of every integrator per scene at
+    the report budget."""
+    h = ["<h2>Overview at %s s</h2>" % _fmt(float(report_budget)),
+         "<table><tr><th class=l>scene</th><th>ref noise</th>"]
+    for integ in integrators:
+        h.append("<th>%s relMSE</th>" % html.escape(integ))
+        if integ != baseline:
+            h.append("<th>%s speed-up</th>" % html.escape(integ))
+    h.append("</tr>")
+    for s in scenes:
+        h.append('<tr><td class=l><a href="#scene-%s">%s</a></td><td>%s</td>'
+                 % (html.escape(s.name), html.escape(s.name), _fmt(s.noise, 3)))
+        for integ in integrators:
+            r = [x for x in summary if x["scene"] == s.name and x["integrator"] == integ
+                 and float(x["budget"]) == float(report_budget)]
+            r = r[0] if r else None
+            h.append("<td>%s</td>" % (_pm(r["relmse"], r["relmse_stderr"]) if r else "&ndash;"))
+            if integ != baseline:
+                if r and r.get("speedup") is not None:
+                    h.append("<td>&times;%.2f%s</td>" % (r["speedup"],
+                                                        "*" if r["speedup_extrapolated"] else ""))
+                else:
+                    h.append("<td>&ndash;</td>")
+        h.append("</tr>")
+    h.append("</table><p class=note>Speed-up against %s; * = extrapolated beyond %s's measured "
+             "curve.</p>" % (html.escape(baseline), html.escape(baseline)))
+    return "\n".join(h)
+
+
 def overhead_section(rows, plot_png, out):
     h = ["<section id=\"overhead\"><h2>Overhead at equal base samples</h2>",
          '<p class="note">Render time of the gradient integrator divided by that of its primal '

@@ -38,8 +38,8 @@ def harness(bin_dir, *args, timeout=300, tmp=None):
 
 
 def make_tiny_reference(bin_dir, refdir, tmp=None):
-    """Reference of the tiny scene: 2 x 1024 spp (a few seconds on two threads)."""
-    p = harness(bin_dir, "--make-reference", "--scenes", TINY, "--ref-spp", 1024,
+    """Reference of the tiny scene: 2 x 512 spp (a few seconds on two threads)."""
+    p = harness(bin_dir, "--make-reference", "--scenes", TINY, "--ref-spp", 512,
                 "--ref-runs", 2, "--refdir", refdir, "--nthreads", 2, "--quiet", tmp=tmp)
     if p.returncode != 0:
         raise AssertionError("reference mode failed:\n" + p.stdout + p.stderr)

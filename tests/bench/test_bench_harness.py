@@ -48,7 +48,7 @@ class HarnessTiny(unittest.TestCase):
             self.assertTrue(os.path.isfile(os.path.join(d, name)), name)
         with open(os.path.join(d, "ref.json")) as f:
             info = json.load(f)
-        self.assertEqual(info["total_spp"], 2048)
+        self.assertEqual(info["total_spp"], 1024)
         self.assertEqual(len({r["seed"] for r in info["runs"]}), 2, "runs must use distinct seeds")
         self.assertGreater(info["noise"], 0.0)
 
@@ -103,6 +103,42 @@ class HarnessTiny(unittest.TestCase):
         import re
         for src in re.findall(r'src="([^"]+)"', page):
             self.assertTrue(os.path.isfile(os.path.join(self.out, src)), src)
+
+
+class Overhead(unittest.TestCase):
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp(prefix="gradus-bench-test-")
+
+    def tearDown(self):
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    def test_equal_spp_timing(self):
+        out = os.path.join(self.tmp, "out")
+        p = bu.harness(BIN, "--overhead", "path:path", "--spp", 4, "--seeds", 2,
+                       "--scenes", bu.TINY, "--refdir", self.tmp, "--out", out,
+                       "--nthreads", 2, "--quiet", tmp=self.tmp)
+        self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
+        with open(os.path.join(out, "overhead.csv"), newline="") as f:
+            rows = list(csv.DictReader(f))
+        self.assertEqual(len(rows), 1)
+        r = rows[0]
+        self.assertEqual((r["gradient"], r["primal"], r["spp"], r["runs"]),
+                         ("path", "path", "4", "2"))
+        ratio = float(r["gradient_seconds"]) / float(r["primal_seconds"])
+        self.assertAlmostEqual(float(r["overhead"]), ratio, places=4)
+        with open(os.path.join(out, "overhead.json")) as f:
+            runs = json.load(f)["runs"]
+        self.assertEqual(len(runs), 4)
+        self.assertTrue(all(x["spp"] == 4 for x in runs))
+        self.assertTrue(os.path.isfile(os.path.join(out, "report.html")))
+
+    def test_unknown_name_in_pair(self):
+        out = os.path.join(self.tmp, "out")
+        p = bu.harness(BIN, "--overhead", "no-such-gpt:path", "--scenes", bu.TINY,
+                       "--out", out, tmp=self.tmp)
+        self.assertEqual(p.returncode, 2)
+        self.assertIn("unknown integrator no-such-gpt", p.stderr)
+        self.assertFalse(os.path.exists(out))
 
 
 class HarnessErrors(unittest.TestCase):

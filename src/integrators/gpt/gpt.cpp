@@ -42,7 +42,7 @@ GPTIntegrator::GPTIntegrator(const EntityDesc &desc) : loc_(desc.loc) {
 }
 
 void GPTIntegrator::preprocess(const Scene &scene, Film &film) {
-    lightSampler_ = LightSampler(scene.lights, strategy_, loc_);
+    lightSampler_ = LightSampler(scene.lights, strategy_, loc_, scene.bounds);
     gfilm_.init(film, filmFilter_);
     filmBounds_ = film.pixelBounds();
     scene_ = &scene;
@@ -193,7 +193,7 @@ GradientSample GPTIntegrator::sample(const CameraSample &cs, Sampler &sampler, A
                     if (!(light->flags & LIGHT_INFINITE)) return Le;
                     Le = light->Le(r);
                 }
-                if (!specular && !Le.isBlack()) *lightPdf = lightSampler_.pmf(light) * light->pdfLi(from, r.d);
+                if (!specular && !Le.isBlack()) *lightPdf = lightSampler_.pmf(from.p, light) * light->pdfLi(from, r.d);
                 return Le;
             };
             for (int i = 0; i < nkeys; ++i) {
@@ -259,7 +259,7 @@ GradientSample GPTIntegrator::sample(const CameraSample &cs, Sampler &sampler, A
         // ---- Next-event estimation ----
         if (bsdf.hasNonSpecular() && !scene.lights.empty()) {
             Float pmf;
-            const Light *light = lightSampler_.sample(sampler.get1D(), &pmf);
+            const Light *light = lightSampler_.sample(isect.p, sampler.get1D(), &pmf);
             Point2 uLight = sampler.get2D();
             LightLiSample ls;
             if (light && pmf > 0 && light->sampleLi(isect, uLight, &ls) && ls.pdf > 0) {
@@ -289,6 +289,8 @@ GradientSample GPTIntegrator::sample(const CameraSample &cs, Sampler &sampler, A
                             Cy = o.beta * fy * ls.L / nx;
                     } else if (o.state == OffsetPath::Diverged && o.bsdf.hasNonSpecular()) {
                         const Vec3 woY = o.isect.wo;
+                        // The offset keeps the base's light; its own selection pmf enters the MIS only.
+                        const Float pmfY = lightSampler_.pmf(o.isect.p, light);
                         Vec3 wiY;
                         Spectrum Ly;
                         Interaction pLy;
@@ -299,20 +301,20 @@ GradientSample GPTIntegrator::sample(const CameraSample &cs, Sampler &sampler, A
                                 wiY = rc.wi;
                                 J = rc.jacobian;
                                 Ly = static_cast<const AreaLight *>(light)->L(ls.pLight, -wiY);
-                                ny = pmf * light->pdfLi(o.isect, wiY);
+                                ny = pmfY * light->pdfLi(o.isect, wiY);
                                 pLy = ls.pLight;
                             }
                         } else if (light->flags & LIGHT_INFINITE) {
                             wiY = ls.wi;  // environment shift: same direction, |T'| = 1
                             Ly = ls.L;
-                            ny = pmf * light->pdfLi(o.isect, wiY);
+                            ny = pmfY * light->pdfLi(o.isect, wiY);
                             pLy = Interaction(o.isect.p + (ls.pLight.p - isect.p), ls.pLight.n, Vec3());
                         } else {  // delta lights: same position or direction
                             LightLiSample lsy;
                             if (light->sampleLi(o.isect, uLight, &lsy) && lsy.pdf > 0) {
                                 wiY = lsy.wi;
                                 Ly = lsy.L;
-                                ny = pmf * lsy.pdf;
+                                ny = pmfY * lsy.pdf;
                                 pLy = lsy.pLight;
                             }
                         }

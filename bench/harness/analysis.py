@@ -4,9 +4,10 @@ Speed-up of integrator A over the baseline B at A's budget t:
     speedup = T_B(e_A(t)) / t_A
 where e_A(t) is A's mean relMSE and T_B(e) is the time B needs to reach error e,
 read off B's convergence curve by linear interpolation of log(relMSE) against
-log(seconds). Outside B's measured range the curve is extended with the slope of
-a least-squares power law fitted to all of B's points (slope -1, the Monte Carlo
-rate, when B has a single point); such values are flagged as extrapolated.
+log(seconds). Outside B's measured range the curve is extended from its nearest end
+with slope -1, the Monte Carlo rate (relMSE ~ 1/time for an unbiased estimator),
+and the value is flagged as extrapolated. A slope fitted to a few short, noisy runs
+is not used for this: one unlucky seed can make it nearly flat and the factor absurd.
 
 Errors may be corrected for the reference's own noise before this: a render
 measured against a noisy reference shows relMSE_true + noise, so noise (the
@@ -15,6 +16,8 @@ placed on a curve and give no speed-up.
 """
 
 import math
+
+MC_SLOPE = -1.0  # log-log slope of relMSE against time for unbiased Monte Carlo
 
 
 def mean_stderr(values):
@@ -105,13 +108,12 @@ def time_to_error(curve, err):
             return math.exp(math.log(t0) + f * (math.log(t1) - math.log(t0))), False
     if len(pts) == 1 and pts[0][1] == err:
         return pts[0][0], False
-    fit = fit_power_law(pts)
-    slope = fit[1] if fit else -1.0
-    if slope >= 0:
-        return None, False
-    # Extend from the end of the curve nearest in error.
+    fit = fit_power_law(pts) if len(pts) > 2 else None
+    if fit and fit[1] >= 0:
+        return None, False  # the curve does not fall with time at all
+    # Extend from the end of the curve nearest in error, at the Monte Carlo rate.
     anchor = min((pts[0], pts[-1]), key=lambda p: abs(math.log(p[1]) - le))
-    lt = math.log(anchor[0]) + (le - math.log(anchor[1])) / slope
+    lt = math.log(anchor[0]) + (le - math.log(anchor[1])) / MC_SLOPE
     return math.exp(lt), True
 
 

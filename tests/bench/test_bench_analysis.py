@@ -56,14 +56,17 @@ class TimeToError(unittest.TestCase):
         t, _ = analysis.time_to_error(curve, 0.1)
         self.assertAlmostEqual(t, 10.0, places=9)  # linear interpolation would give ~91
 
-    def test_extrapolates_with_fitted_slope(self):
-        curve = [(1.0, 1.0), (4.0, 1.0 / 16)]  # relMSE ~ t^-2
+    def test_extrapolates_at_monte_carlo_rate(self):
+        curve = [(1.0, 1.0), (4.0, 1.0 / 16)]  # a steep start must not be extended
         t, ex = analysis.time_to_error(curve, 1.0 / 64)
         self.assertTrue(ex)
-        self.assertAlmostEqual(t, 8.0, places=9)
+        self.assertAlmostEqual(t, 16.0, places=9)
         t, ex = analysis.time_to_error(curve, 4.0)
         self.assertTrue(ex)
-        self.assertAlmostEqual(t, 0.5, places=9)
+        self.assertAlmostEqual(t, 0.25, places=9)
+        # A nearly flat, noisy curve does not blow the factor up either.
+        t, _ = analysis.time_to_error([(5.0, 16.0), (10.0, 13.0)], 0.13)
+        self.assertAlmostEqual(t, 1000.0, places=6)
 
     def test_single_point_assumes_monte_carlo_rate(self):
         t, ex = analysis.time_to_error([(2.0, 0.5)], 0.25)
@@ -71,7 +74,8 @@ class TimeToError(unittest.TestCase):
         self.assertAlmostEqual(t, 4.0)
 
     def test_non_converging_curve_gives_none(self):
-        self.assertEqual(analysis.time_to_error([(1.0, 0.1), (10.0, 0.2)], 0.05), (None, False))
+        curve = [(1.0, 0.1), (10.0, 0.2), (100.0, 0.4)]
+        self.assertEqual(analysis.time_to_error(curve, 0.05), (None, False))
 
 
 class Speedups(unittest.TestCase):

@@ -1,0 +1,394 @@
+#include "integrators/gbdpt/gbdpt.h"
+
+#include <tbb/enumerable_thread_specific.h>
+
+#include <cstdio>
+
+#include "core/error.h"
+#include "integrators/factories.h"
+
+namespace gradus {
+
+std::unique_ptr<Integrator> CreateGBDPTIntegrator(const EntityDesc &d) { return std::make_unique<GBDPTIntegrator>(d); }
+
+namespace {
+// Layers of the light-tracing buffer (same meaning as GradientFilm's).
+enum { LPrimal, LPrimalSq, LDxF, LDxFSq, LDxB, LDxBSq, LDyF, LDyFSq, LDyB, LDyBSq, LNum };
+}  // namespace
+
+struct GBDPTIntegrator::ThreadState {
+    std::vector<double> lt;  // LNum x 3 per film pixel
+    GBDPTLocalStats stats;
+    uint64_t cases[3] = {};  // base connections by case
+};
+struct GBDPTIntegrator::Store {
+    tbb::enumerable_thread_specific<ThreadState> threads;
+    size_t pixels = 0;
+};
+
+GBDPTIntegrator::~GBDPTIntegrator() = default;
+
+GBDPTIntegrator::ThreadState &GBDPTIntegrator::local() const {
+    ThreadState &t = store_->threads.local();
+    if (t.lt.size() != store_->pixels * LNum * 3) t.lt.assign(store_->pixels * LNum * 3, 0.0);
+    return t;
+}
+
+GBDPTIntegrator::GBDPTIntegrator(const EntityDesc &desc) : loc_(desc.loc), store_(new Store) {
+    const ParamSet &ps = desc.params;
+    maxDepth_ = ps.getInt("maxdepth", 5);
+    strategy_ = ps.getString("lightsamplestrategy", "power");
+    threshold_ = ps.getFloat("shiftthreshold", 0.001);
+    std::string shift = ps.getString("shift", "manifold");
+    lightTracing_ = ps.getBool("lighttracing", true);
+    std::string mis = ps.getString("mis", "combined");
+    std::string rec = ps.getString("reconstruction", "l1");
+    alpha_ = ps.getFloat("alpha", 0.2);
+    ps.getInts("pixelbounds");
+    if (maxDepth_ < 0) throw Error(ps.locOf("maxdepth", desc.loc), "\"maxdepth\" must be >= 0");
+    if (!(threshold_ >= 0)) throw Error(ps.locOf("shiftthreshold", desc.loc), "\"shiftthreshold\" must be >= 0");
+    if (!(alpha_ >= 0)) throw Error(ps.locOf("alpha", desc.loc), "\"alpha\" must be >= 0");
+    if (strategy_ == "spatial")
+        throw Error(ps.locOf("lightsamplestrategy", desc.loc),
+                    "\"lightsamplestrategy\" \"spatial\" is not supported by gbdpt (uniform, power)");
+    if (shift == "manifold")
+        manifold_ = true;
+    else if (shift == "halfvector")
+        manifold_ = false;
+    else
+        throw Error(ps.locOf("shift", desc.loc), "unknown \"shift\" \"" + shift + "\" (manifold, halfvector)");
+    if (mis == "combined")
+        mis_ = MIS::Combined;
+    else if (mis == "simple")
+        mis_ = MIS::Simple;
+    else
+        throw Error(ps.locOf("mis", desc.loc), "unknown \"mis\" \"" + mis + "\" (combined, simple)");
+    try {
+        norm_ = ParseReconstructionNorm(rec);
+    } catch (const Error &) {
+        throw Error(ps.locOf("reconstruction", desc.loc),
+                    "unknown \"reconstruction\" \"" + rec + "\" (l1, l2, weighted)");
+    }
+}
+
+void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
+    scene_ = &scene;
+    lightSampler_ = LightSampler(scene.lights, strategy_, loc_);
+    bctx_.init(scene, lightSampler_, MISHeuristic::Balance);  // Eq. 8 uses the balance heuristic
+    mscene_ = std::make_unique<EmbreeManifoldScene>(scene);
+    sctx_.bidir = &bctx_;
+    sctx_.mscene = mscene_.get();
+    sctx_.threshold = threshold_;
+    sctx_.manifold = manifold_;
+    // No specular or near-specular surface: no chain can be non-empty, no walk is attempted.
+    sctx_.trySpecular = scene.features.specularSurfaces || scene.features.nearSpecularSurfaces;
+    gfilm_.init(film);
+    filmBounds_ = film.pixelBounds();
+    Point2i full = film.fullResolution();
+    int64_t sampled = film.sampleBounds().area();
+    splatScale_ = sampled > 0 ? Float(int64_t(full.x) * full.y) / Float(sampled) : 1;
+    store_->threads.clear();
+    store_->pixels = size_t(filmBounds_.area());
+    walkStart_ = GetManifoldStats();
+}
+
+RenderStats GBDPTIntegrator::render(const Scene &scene, Film &film, const Sampler &sampler,
+                                    const RenderOptions &opts) {
+    walkStart_ = GetManifoldStats();
+    RenderStats rs = SampleIntegrator::render(scene, film, sampler, opts);
+    spp_ = rs.passes;
+    return rs;
+}
+
+void GBDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const {
+    bool inside[kNumNeighbours];
+    Point2i p = rec.pixel();
+    for (int k = 0; k < kNumNeighbours; ++k)
+        inside[k] = filmBounds_.inside(p) &&
+                    filmBounds_.inside({p.x + kNeighbourOffsets[k].x, p.y + kNeighbourOffsets[k].y});
+    std::vector<Splat> splats;
+    GradientSample s = sample(cs, sampler, arena, inside, &splats);
+    gfilm_.record(rec, s);
+    if (splats.empty()) return;
+    ThreadState &t = local();
+    const int W = filmBounds_.width();
+    auto add = [&](Point2i px, int layer, const Spectrum &v) {
+        if (!filmBounds_.inside(px) || !v.isFinite()) return;
+        size_t i = (size_t(px.y - filmBounds_.pMin.y) * W + size_t(px.x - filmBounds_.pMin.x)) * LNum * 3 + layer * 3;
+        t.lt[i] += v.r;
+        t.lt[i + 1] += v.g;
+        t.lt[i + 2] += v.b;
+    };
+    const int lay[kNumNeighbours][2] = {{LDxF, LDxFSq}, {LDxB, LDxBSq}, {LDyF, LDyFSq}, {LDyB, LDyBSq}};
+    for (const Splat &sp : splats) {
+        if (!sp.primal.isFinite()) continue;
+        Spectrum v = sp.primal * splatScale_;
+        add(sp.pixel, LPrimal, v);
+        add(sp.pixel, LPrimalSq, v * v);
+        for (int k = 0; k < kNumNeighbours; ++k) {
+            if (!sp.active[k]) continue;
+            Point2i off = kNeighbourOffsets[k];
+            bool forward = off.x + off.y > 0;
+            Spectrum d = sp.diff[k] * (forward ? splatScale_ : -splatScale_);
+            Point2i at = forward ? sp.pixel : Point2i{sp.pixel.x + off.x, sp.pixel.y + off.y};
+            add(at, lay[k][0], d);
+            add(at, lay[k][1], d * d);
+        }
+    }
+}
+
+GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler, Arena &arena,
+                                       const bool inside[kNumNeighbours], std::vector<Splat> *splats) const {
+    GradientSample out;
+    ThreadState &ts = local();
+    GBDPTLocalStats &st = ts.stats;
+    const Scene &scene = *scene_;
+    Ray ray;
+    Float w = scene.camera->generateRay(cs, &ray);
+    if (w == 0) return out;
+    for (int k = 0; k < kNumNeighbours; ++k) out.active[k] = inside[k];
+
+    // [1] camera and light subpaths.
+    const int maxCam = maxDepth_ + 2, maxLight = maxDepth_ + 1;
+    ShiftSubpath cam, light;
+    cam.v = static_cast<PathVertex *>(arena.alloc(sizeof(PathVertex) * maxCam, alignof(PathVertex)));
+    light.v = static_cast<PathVertex *>(arena.alloc(sizeof(PathVertex) * maxLight, alignof(PathVertex)));
+    cam.b = static_cast<BSDF *>(arena.alloc(sizeof(BSDF) * maxCam, alignof(BSDF)));
+    light.b = static_cast<BSDF *>(arena.alloc(sizeof(BSDF) * maxLight, alignof(BSDF)));
+    cam.deltaSample = static_cast<uint8_t *>(arena.alloc(maxCam));
+    light.deltaSample = static_cast<uint8_t *>(arena.alloc(maxLight));
+    for (int i = 0; i < maxCam; ++i) new (&cam.b[i]) BSDF();
+    for (int i = 0; i < maxLight; ++i) new (&light.b[i]) BSDF();
+    cam.n = GenerateCameraSubpath(bctx_, ray, sampler, arena, maxCam, cam.v, cam.b);
+    light.n = scene.lights.empty() ? 0 : GenerateLightSubpath(bctx_, sampler, arena, maxLight, light.v, light.b);
+    PrepareSubpath(sctx_, &cam);
+    PrepareSubpath(sctx_, &light);
+    SubpathView camView = cam.view(), lightView = light.view();
+
+    // [2-5] shift the camera subpath once per neighbour (Eqs. 6 and 7).
+    CameraShift shifts[kNumNeighbours];
+    if (cam.n >= 2)
+        for (int k = 0; k < kNumNeighbours; ++k)
+            if (inside[k]) ShiftCameraSubpath(sctx_, cam, cs, kNeighbourOffsets[k], arena, &shifts[k], &st);
+    // Index of c on the camera subpath (case (i) vs (ii)).
+    int b = -1, c = -1;
+    for (int i = 1; i < cam.n; ++i)
+        if (IsDiffuseVertex(sctx_, cam.v[i], &cam.b[i])) {
+            if (b < 0)
+                b = i;
+            else {
+                c = i;
+                break;
+            }
+        }
+
+    PathVertex lens = cam.v[0];
+    lens.setThroughput(Spectrum(1));
+    lens.pdfFwd = 1;
+    Spectrum primal(0);
+    auto diffuseAt = [&](const ShiftSubpath &p, int i) { return IsDiffuseVertex(sctx_, p.v[i], &p.b[i]); };
+    for (int t = 1; t <= cam.n; ++t) {
+        for (int s = 0; s <= light.n; ++s) {
+            int depth = s + t - 2;
+            if ((s == 1 && t == 1) || depth < 0 || depth > maxDepth_) continue;
+            ConnectSamples u;
+            if (s == 1) {
+                u.uLightSelect = sampler.get1D();
+                u.uLight = sampler.get2D();
+            }
+            if (t == 1) u.uLens = sampler.get2D();
+            // Sec. 3.2: no connections at vertices classified specular.
+            if (s >= 1 && t >= 2 && !diffuseAt(cam, t - 1)) continue;
+            if (s >= 2 && !diffuseAt(light, s - 1)) continue;
+            if (t == 1 && !diffuseAt(light, s - 1)) continue;
+
+            // [6] base path.
+            ConnectResult r;
+            LightPoint lp;
+            bool useLp = false, ok;
+            if (s == 1) {
+                ok = SampleLightPoint(sctx_, cam.v[t - 1], u.uLightSelect, u.uLight, &lp);
+                if (ok && !lp.infinite) {
+                    useLp = true;
+                    ok = ConnectLightPoint(sctx_, lp, camView, t, &r);
+                } else {
+                    ok = ConnectBDPT(bctx_, lightView, camView, s, t, u, &r);
+                }
+            } else {
+                ok = ConnectBDPT(bctx_, lightView, camView, s, t, u, &r);
+            }
+            if (!ok) continue;  // blocked or black base path: nothing to shift (Sec. 4)
+            const Spectrum fx = r.unweighted * w;
+            const Float wx = r.weight;
+
+            if (t == 1) {
+                // [8-11] light-tracing path (case (iii)): shifted one by one.
+                ++ts.cases[2];
+                Splat sp;
+                sp.pixel = Point2i{int(std::floor(r.pRaster.x)), int(std::floor(r.pRaster.y))};
+                sp.primal = r.L;
+                for (int k = 0; k < kNumNeighbours; ++k) {
+                    Point2i off = kNeighbourOffsets[k];
+                    Point2i pj{sp.pixel.x + off.x, sp.pixel.y + off.y};
+                    if (!filmBounds_.inside(sp.pixel) || !filmBounds_.inside(pj)) continue;
+                    sp.active[k] = true;
+                    Spectrum fy;
+                    Float wy = 0, rho = 0;
+                    bool shifted = false;
+                    if (lightTracing_) {
+                        ++st.caseAttempts[2];
+                        shifted = ShiftLightTracingPath(sctx_, light, s, lens, r.pRaster, r.unweighted, off, arena,
+                                                        &fy, &wy, &rho, &st);
+                        if (shifted) ++st.caseSuccesses[2];
+                    }
+                    if (shifted) {
+                        Float wg = mis_ == MIS::Combined ? CombinedWeight(wx, wy, rho) : 0.5 * wx;  // Eq. 8 / Eq. 9
+                        sp.diff[k] = (fy - r.unweighted) * wg;
+                    } else {
+                        sp.diff[k] = r.unweighted * -wx;  // fallback: zero offset, BDPT weight
+                    }
+                }
+                splats->push_back(sp);
+                continue;
+            }
+
+            // [15] primal with the usual BDPT weight.
+            primal += fx * wx;
+            const int kc = t - 1;  // last camera vertex of the base path
+            const int cas = (c >= 0 && kc >= c) ? 0 : 1;
+            ++ts.cases[cas];
+            // [12-14] offsets from the shifted camera subpaths.
+            for (int k = 0; k < kNumNeighbours; ++k) {
+                if (!inside[k]) continue;
+                const CameraShift &sh = shifts[k];
+                ++st.caseAttempts[cas];
+                ConnectResult ry;
+                bool oky = false;
+                if (kc <= sh.validUpTo) {
+                    SubpathView yv = sh.y.view();
+                    if (useLp)
+                        oky = ConnectLightPoint(sctx_, lp, yv, t, &ry);
+                    else if (!(s == 1))  // infinite-light NEE: not shifted (fallback)
+                        oky = ConnectBDPT(bctx_, lightView, yv, s, t, u, &ry);
+                    oky = oky && !ry.unweighted.isBlack() && ry.weight > 0;
+                }
+                if (oky) {
+                    ++st.caseSuccesses[cas];
+                    Spectrum fy = ry.unweighted * w;
+                    Float wg = mis_ == MIS::Combined ? CombinedWeight(wx, ry.weight, sh.rho[kc]) : 0.5 * wx;
+                    out.diff[k] += (fy - fx) * wg;
+                } else {
+                    out.diff[k] += fx * -wx;
+                }
+            }
+        }
+    }
+    out.primal = primal;
+    return out;
+}
+
+void GBDPTIntegrator::finish(const Film &film, Image *out) {
+    GradientImages g = gfilm_.images(film, spp_);
+    // Light-tracing splats: normalised by the number of bidirectional samples
+    // (spp per pixel, the splat scale is already applied), line 16.
+    std::vector<double> lt(store_->pixels * LNum * 3, 0.0);
+    for (const ThreadState &t : store_->threads)
+        if (t.lt.size() == lt.size())
+            for (size_t i = 0; i < lt.size(); ++i) lt[i] += t.lt[i];
+    double invN = spp_ > 0 ? 1 / spp_ : 0;
+    for (size_t px = 0; px < store_->pixels; ++px)
+        for (int ch = 0; ch < 3; ++ch) {
+            const double *L = &lt[px * LNum * 3 + ch];
+            auto at = [&](int layer) { return L[layer * 3]; };
+            size_t i = px * 3 + ch;
+            g.primal[i] += float(at(LPrimal) * invN);
+            g.dx[i] += float((at(LDxF) + at(LDxB)) * invN);
+            g.dy[i] += float((at(LDyF) + at(LDyB)) * invN);
+            // Variance of the splatted part approximated by its second moment / N.
+            g.primalVar[i] += float(at(LPrimalSq) * invN * invN);
+            g.dxVar[i] += float((at(LDxFSq) + at(LDxBSq)) * invN * invN);
+            g.dyVar[i] += float((at(LDyFSq) + at(LDyBSq)) * invN * invN);
+        }
+    auto toImage = [&](const std::vector<float> &v) {
+        Image im = Image::RGB(g.width, g.height);
+        im.data() = v;
+        return im;
+    };
+    Image img = Image::RGB(g.width, g.height);
+    img.metadata = out->metadata;
+    img.setLayerRGB("primal", toImage(g.primal));
+    img.setLayerRGB("dx", toImage(g.dx));
+    img.setLayerRGB("dy", toImage(g.dy));
+    img.setLayerRGB("primal_var", toImage(g.primalVar));
+    img.setLayerRGB("dx_var", toImage(g.dxVar));
+    img.setLayerRGB("dy_var", toImage(g.dyVar));
+    ReconstructionOptions o1 = ReconstructionOptions::L1Default();
+    o1.alpha = alpha_;
+    ReconstructionResult r1 = Reconstruct(g, o1);
+    ReconstructionResult r2 = Reconstruct(g, ReconstructionOptions::L2Exact(alpha_));
+    Image i1 = ResultToImage(r1), i2 = ResultToImage(r2);
+    img.setLayerRGB("reconstructed_l1", i1);
+    img.setLayerRGB("reconstructed_l2", i2);
+    const Image *chosen = norm_ == ReconstructionNorm::L2 ? &i2 : &i1;
+    Image iw;
+    if (norm_ == ReconstructionNorm::Weighted) {
+        ReconstructionResult rw = Reconstruct(g, ReconstructionOptions::Weighted());
+        iw = ResultToImage(rw);
+        img.setLayerRGB("reconstructed_weighted", iw);
+        chosen = &iw;
+    }
+    img.setLayerRGB("", *chosen);
+    img.metadata["reconstruction"] = ReconstructionNormName(norm_);
+    img.metadata["reconstruction_alpha"] = std::to_string(alpha_);
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "Reconstruction: L1 %.3fs, L2 %.3fs (output: %s, alpha %g)\n", r1.stats.seconds,
+                  r2.stats.seconds, ReconstructionNormName(norm_), double(alpha_));
+    reconReport_ = buf;
+    *out = std::move(img);
+}
+
+std::string GBDPTIntegrator::statistics() const {
+    GBDPTLocalStats tot;
+    uint64_t cases[3] = {};
+    ShiftStats ss;
+    for (const ThreadState &t : store_->threads) {
+        ss.add(t.stats.shift);
+        for (int i = 0; i < 3; ++i) {
+            tot.caseAttempts[i] += t.stats.caseAttempts[i];
+            tot.caseSuccesses[i] += t.stats.caseSuccesses[i];
+            cases[i] += t.cases[i];
+        }
+        tot.walks += t.stats.walks;
+        tot.walkFailures += t.stats.walkFailures;
+        tot.unsupportedChains += t.stats.unsupportedChains;
+        for (size_t i = 0; i < size_t(ManifoldStatus::Count); ++i) tot.walkStatus[i] += t.stats.walkStatus[i];
+    }
+    std::string s = ss.format(std::string("G-BDPT shifts (") + (manifold_ ? "manifold" : "halfvector") +
+                              ", threshold " + std::to_string(threshold_) + ")");
+    char buf[256];
+    const char *names[3] = {"(i)   camera subpath, both chains", "(ii)  camera subpath, first chain",
+                            "(iii) light-tracing path"};
+    for (int i = 0; i < 3; ++i) {
+        std::snprintf(buf, sizeof buf, "  case %s: base paths %llu, gradient samples %llu, shifted %llu (%.2f%%)\n",
+                      names[i], (unsigned long long)cases[i], (unsigned long long)tot.caseAttempts[i],
+                      (unsigned long long)tot.caseSuccesses[i],
+                      tot.caseAttempts[i] ? 100.0 * tot.caseSuccesses[i] / tot.caseAttempts[i] : 0.0);
+        s += buf;
+    }
+    if (!sctx_.trySpecular) s += "  manifold walks: skipped (no specular or near-specular surfaces)\n";
+    std::snprintf(buf, sizeof buf, "  manifold walks %llu, failures %llu; second chains with glossy vertices "
+                                   "(fallback) %llu\n",
+                  (unsigned long long)tot.walks, (unsigned long long)tot.walkFailures,
+                  (unsigned long long)tot.unsupportedChains);
+    s += buf;
+    for (size_t i = 1; i < size_t(ManifoldStatus::Count); ++i)
+        if (tot.walkStatus[i]) {
+            std::snprintf(buf, sizeof buf, "    walk failure %-26s %llu\n", ToString(ManifoldStatus(i)),
+                          (unsigned long long)tot.walkStatus[i]);
+            s += buf;
+        }
+    if (!lightTracing_) s += "  light-tracing paths not shifted (lighttracing false)\n";
+    return s + reconReport_;
+}
+
+}  // namespace gradus

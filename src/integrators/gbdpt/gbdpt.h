@@ -1,0 +1,98 @@
+// Gradient-domain bidirectional path tracing (Manzi et al. 2015,
+// gradient-domain-bdpt.md), Algorithm 1 on the shared BDPT core (common/).
+//
+// Per camera sample: a camera and a light subpath (line 1); the camera subpath
+// is shifted once per neighbour (+x, -x, +y, -y; lines 3-5, Eqs. 6 and 7,
+// gbdpt_shift.h); every BDPT strategy whose connection vertices are diffuse
+// (Sec. 3.2: no connections at vertices classified specular) gives a base
+// path (line 6); strategies with t >= 2 reuse the shifted camera subpaths
+// (lines 12-14: case (ii) when the camera part ends at b, else case (i)),
+// light-tracing paths (t = 1, case (iii)) are shifted one by one (lines 9-11).
+// Gradients use the combined MIS of Eq. 8 (or Eq. 9); failed shifts and
+// blocked/black offsets fall back to the base's BDPT weight with a zero offset
+// (Sec. 4); blocked base paths are not shifted. The primal gets the usual
+// BDPT weight (line 15). Light-tracing values are splatted at their raster
+// position and normalised like BDPT's splats (by the number of bidirectional
+// samples, line 16); the screened-Poisson reconstruction runs in finish()
+// (line 17).
+//
+// Parameters:
+//   integer maxdepth 5               maximum path depth (edges - 1)
+//   string lightsamplestrategy "power"  uniform | power (position-free, as the MIS assumes)
+//   float shiftthreshold 0.001       roughness below which a vertex is "specular"
+//   string shift "manifold"          manifold (Sec. 3.1) | halfvector (Kettunen et al. 2015)
+//   bool lighttracing true           false: light-tracing paths are not shifted (their
+//                                    gradients use the unshifted fallback; primal unchanged)
+//   string mis "combined"            combined (Eq. 8) | simple (Eq. 9)
+//   string reconstruction "l1"       l1 | l2 | weighted: the image in the unprefixed R,G,B
+//   float alpha 0.2                  screened-Poisson primal weight
+//   integer pixelbounds              accepted (use --cropwindow)
+// Output layers: primal, dx, dy, *_var, reconstructed_l1, reconstructed_l2
+// (and reconstructed_weighted).
+#pragma once
+#include <memory>
+#include <mutex>
+#include <vector>
+
+#include "integrators/gbdpt/gbdpt_shift.h"
+#include "integrators/gradient/gradient_film.h"
+#include "integrators/integrator.h"
+#include "lights/light_sampler.h"
+
+namespace gradus {
+
+class GBDPTIntegrator : public SampleIntegrator {
+  public:
+    enum class MIS { Combined, Simple };
+    explicit GBDPTIntegrator(const EntityDesc &desc);
+    ~GBDPTIntegrator() override;
+    std::string name() const override { return "gbdpt"; }
+    void preprocess(const Scene &scene, Film &film) override;
+    RenderStats render(const Scene &scene, Film &film, const Sampler &sampler, const RenderOptions &opts) override;
+    void estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const override;
+    void finish(const Film &film, Image *out) override;
+    std::string statistics() const override;
+
+    // Light-tracing contributions of one sample (raster pixel, primal, four differences).
+    struct Splat {
+        Point2i pixel;
+        Spectrum primal{0};
+        Spectrum diff[kNumNeighbours] = {Spectrum(0), Spectrum(0), Spectrum(0), Spectrum(0)};
+        bool active[kNumNeighbours] = {false, false, false, false};
+    };
+    // One camera sample without a film (tests): camera-side primal and
+    // differences, and the light-tracing splats (values before the splat scale).
+    GradientSample sample(const CameraSample &cs, Sampler &sampler, Arena &arena, const bool inside[kNumNeighbours],
+                          std::vector<Splat> *splats) const;
+    const GBDPTShiftContext &shiftContext() const { return sctx_; }
+    const BidirContext &bidirContext() const { return bctx_; }
+    Float splatScale() const { return splatScale_; }
+    int maxDepth() const { return maxDepth_; }
+
+  private:
+    int maxDepth_;
+    std::string strategy_;
+    Float threshold_;
+    bool manifold_, lightTracing_;
+    MIS mis_;
+    ReconstructionNorm norm_;
+    Float alpha_;
+    FileLoc loc_;
+    LightSampler lightSampler_;
+    BidirContext bctx_;
+    std::unique_ptr<EmbreeManifoldScene> mscene_;
+    GBDPTShiftContext sctx_;
+    GradientFilm gfilm_;
+    Bounds2i filmBounds_;
+    Float splatScale_ = 1;
+    double spp_ = 0;
+    std::string reconReport_;
+    // Per-thread light-tracing accumulation and statistics (merged at the end).
+    struct ThreadState;
+    struct Store;
+    std::unique_ptr<Store> store_;
+    ThreadState &local() const;
+    ManifoldStatsSnapshot walkStart_;
+};
+
+}  // namespace gradus

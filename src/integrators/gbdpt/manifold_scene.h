@@ -1,0 +1,42 @@
+// ManifoldScene adapter over the renderer's Embree scene (manifold/manifold.h).
+//
+// primitiveId is the Embree geometry id (one id per shape/mesh, not per
+// triangle): a walk may slide a vertex across triangle edges of one mesh.
+// Interior chain vertices need the shading normal and its derivatives
+// (interpolated normals); the index of refraction is looked up per geometry
+// (recorded by the integrator from the BSDF's refraction samples).
+#pragma once
+#include <atomic>
+#include <memory>
+#include <unordered_map>
+
+#include "integrators/manifold/manifold.h"
+#include "render/interaction.h"
+#include "render/scene.h"
+
+namespace gradus {
+
+class EmbreeManifoldScene : public ManifoldScene {
+  public:
+    explicit EmbreeManifoldScene(const Scene &scene);
+    bool intersect(const Ray &r, ManifoldSurfacePoint *hit) const override;
+    bool visible(const Point3 &a, const Point3 &b) const override;
+
+    // Surface point of a renderer hit (shading normal and its derivatives).
+    ManifoldSurfacePoint fromInteraction(const SurfaceInteraction &si) const;
+    // Index of refraction inside geometry `geomId` (1 = unknown/not refractive).
+    Float eta(int geomId) const;
+    void recordEta(int geomId, Float eta) const;
+    Float epsilon() const { return eps_; }
+    // Geometry id of an area light's shape (-1 if none).
+    int geomOfLight(const Light *l) const;
+
+  private:
+    const Scene &scene_;
+    Float eps_;
+    std::unique_ptr<std::atomic<float>[]> eta_;
+    size_t nGeom_;
+    std::unordered_map<const Light *, int> lightGeom_;
+};
+
+}  // namespace gradus

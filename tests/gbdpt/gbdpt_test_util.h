@@ -1,0 +1,85 @@
+// Helpers for the G-BDPT tests: in-memory renders of scene text and a small
+// scene with diffuse walls, an area light, a glass sphere and a mirror sphere.
+#pragma once
+#include <string>
+
+#include "image/image.h"
+#include "parser/scene_desc.h"
+#include "render/scene_builder.h"
+
+namespace gradus::gbdpttest {
+
+inline RenderJob MakeJob(const std::string &text, int spp, uint64_t seed, const std::string &integrator = "") {
+    SceneDesc desc = ParseString(text, "gbdpt_test.pbrt", ".");
+    BuildOptions bo;
+    bo.sppOverride = spp;
+    bo.seed = seed;
+    bo.integratorOverride = integrator;
+    bo.quiet = true;
+    return BuildRenderJob(desc, bo);
+}
+
+inline Image Render(const std::string &text, int spp, uint64_t seed, const std::string &integrator = "",
+                    std::string *statistics = nullptr) {
+    RenderJob job = MakeJob(text, spp, seed, integrator);
+    RenderOptions ro;
+    ro.spp = spp;
+    ro.seed = seed;
+    ro.quiet = true;
+    job.integrator->preprocess(*job.scene, *job.film);
+    job.integrator->render(*job.scene, *job.film, *job.sampler, ro);
+    Image img = job.film->toImage();
+    job.integrator->finish(*job.film, &img);
+    if (statistics) *statistics = job.integrator->statistics();
+    return img;
+}
+
+// Box scene (open towards the camera): matte walls, a small area light under
+// the ceiling, a glass sphere (caustic: light -> glass -> floor seen by light
+// tracing, and camera -> glass -> floor -> light) and a mirror sphere.
+inline std::string BoxScene(const std::string &integratorLine, int w = 24, int h = 18, bool glossy = false) {
+    std::string mirror = glossy ? R"(Material "metal" "float roughness" [0.0005] "bool remaproughness" "false")"
+                                : R"(Material "mirror")";
+    return R"(
+LookAt 0 1.1 -3.4  0 0.8 0  0 1 0
+Camera "perspective" "float fov" [45]
+Sampler "random" "integer pixelsamples" [16]
+PixelFilter "box"
+Film "image" "integer xresolution" [)" + std::to_string(w) + R"(] "integer yresolution" [)" + std::to_string(h) + R"(]
+  "string filename" ["unused.exr"]
+)" + integratorLine + R"(
+WorldBegin
+AttributeBegin
+  AreaLightSource "diffuse" "rgb L" [6 6 6]
+  Material "matte" "rgb Kd" [0 0 0]
+  Shape "trianglemesh" "integer indices" [0 1 2 0 2 3]
+    "point P" [-0.4 1.95 -0.1  0.4 1.95 -0.1  0.4 1.95 0.6  -0.4 1.95 0.6]
+AttributeEnd
+Material "matte" "rgb Kd" [0.65 0.6 0.55]
+Shape "trianglemesh" "integer indices" [0 1 2 0 2 3]
+  "point P" [-1.2 0 -1.5  1.2 0 -1.5  1.2 0 1.2  -1.2 0 1.2]
+Shape "trianglemesh" "integer indices" [0 1 2 0 2 3]
+  "point P" [-1.2 2 -1.5  -1.2 2 1.2  1.2 2 1.2  1.2 2 -1.5]
+Shape "trianglemesh" "integer indices" [0 1 2 0 2 3]
+  "point P" [-1.2 0 1.2  1.2 0 1.2  1.2 2 1.2  -1.2 2 1.2]
+Material "matte" "rgb Kd" [0.6 0.2 0.15]
+Shape "trianglemesh" "integer indices" [0 1 2 0 2 3]
+  "point P" [-1.2 0 -1.5  -1.2 0 1.2  -1.2 2 1.2  -1.2 2 -1.5]
+Material "matte" "rgb Kd" [0.15 0.5 0.2]
+Shape "trianglemesh" "integer indices" [0 1 2 0 2 3]
+  "point P" [1.2 0 -1.5  1.2 2 -1.5  1.2 2 1.2  1.2 0 1.2]
+AttributeBegin
+  Material "glass"
+  Translate 0.35 0.4 0.1
+  Shape "sphere" "float radius" [0.4]
+AttributeEnd
+AttributeBegin
+  )" + mirror + R"(
+  Translate -0.5 0.35 0.5
+  Shape "sphere" "float radius" [0.35]
+AttributeEnd
+WorldEnd
+)";
+}
+
+}  // namespace gradus::gbdpttest

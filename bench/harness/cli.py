@@ -53,7 +53,9 @@ def parser():
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--scenes", help="comma-separated scene names from the scene list, or paths "
                    "to .pbrt files (default: every listed scene that has a reference)")
-    p.add_argument("--integrators", default="path", help="comma-separated names (default: path)")
+    p.add_argument("--integrators", default="path", help="comma-separated names (default: path); "
+                   "NAME/LAYER measures one layer of NAME's EXR, e.g. gpt/primal, "
+                   "gpt/reconstructed_l2 (one render serves all layers of NAME)")
     p.add_argument("--baseline", help="integrator that speed-ups are measured against "
                    "(default: the first of --integrators)")
     p.add_argument("--times", default="5,15,45,135",
@@ -146,7 +148,8 @@ def _main(args, argv):
         wanted = _names(args.integrators)
         if not wanted:
             raise HarnessError("--integrators is empty")
-    unknown = [n for n in wanted if n not in available]
+    unknown = [n for n in dict.fromkeys(runs.split_label(w)[0] for w in wanted)
+               if n not in available]
     if unknown:
         raise HarnessError("unknown integrator%s %s; gradus --list-integrators offers: %s"
                            % ("s" if len(unknown) > 1 else "", ", ".join(unknown),

@@ -25,6 +25,11 @@ def _pm(m, se):
     return "%s &plusmn; %s" % (_fmt(m), _fmt(se, 2))
 
 
+def _safe(label):
+    """File name part for an integrator label such as 'gpt/primal'."""
+    return "".join(c if c.isalnum() or c in "-_." else "-" for c in label)
+
+
 def _cores(r):
     cpu, wall = r.get("cpu_seconds"), r.get("wall_seconds")
     if not cpu or not wall:
@@ -68,10 +73,11 @@ def prepare_scene_assets(tools, scene, summary_rows, rows, integrators, baseline
     err_maps = {}
     for integ, r in chosen.items():
         src = os.path.join(out, r["image"])
-        png = os.path.join(d, "%s.png" % integ)
-        tools.convert(src, png, exposure=scene.exposure, layer=args.layer)
-        pfm = os.path.join(d, "%s.pfm" % integ)
-        tools.convert(src, pfm, layer=args.layer)
+        png = os.path.join(d, "%s.png" % _safe(integ))
+        layer = r.get("layer") or None
+        tools.convert(src, png, exposure=scene.exposure, layer=layer)
+        pfm = os.path.join(d, "%s.pfm" % _safe(integ))
+        tools.convert(src, pfm, layer=layer)
         err_maps[integ] = images.relmse_map(images.read_pfm(pfm), ref)
         os.remove(pfm)
         assets["images"][integ] = png
@@ -86,10 +92,10 @@ def prepare_scene_assets(tools, scene, summary_rows, rows, integrators, baseline
         p99 = [p for p in p99 if p > 0]
         vmax = float(np.exp(np.mean(np.log(p99)))) if p99 else 1.0
         for integ, r in chosen.items():
-            fc = os.path.join(d, "%s-error.png" % integ)
+            fc = os.path.join(d, "%s-error.png" % _safe(integ))
             tools.falsecolor(os.path.join(out, r["image"]), scene.reference, fc, vmax,
-                             layer=args.layer)
-            big = os.path.join(d, "%s-error-big.png" % integ)
+                             layer=r.get("layer") or None)
+            big = os.path.join(d, "%s-error-big.png" % _safe(integ))
             images.scaled_copy(fc, big)
             assets["errormaps"][integ] = big
     assets["error_max"] = vmax
@@ -108,12 +114,12 @@ def prepare_scene_assets(tools, scene, summary_rows, rows, integrators, baseline
     for label, png in [("reference", ref_png)] + list(assets["images"].items()):
         cut = []
         for i, box in enumerate(boxes):
-            p = os.path.join(d, "%s-crop%d.png" % (label, i))
+            p = os.path.join(d, "%s-crop%d.png" % (_safe(label), i))
             images.crop_png(png, p, box)
             cut.append(p)
         assets["crop_images"][label] = cut
     for integ, png in list(assets["images"].items()):
-        fr = os.path.join(d, "%s-framed.png" % integ)
+        fr = os.path.join(d, "%s-framed.png" % _safe(integ))
         images.framed_copy(png, fr, boxes)
         assets["images"][integ] = fr
     return assets

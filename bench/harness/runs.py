@@ -11,7 +11,7 @@ from . import analysis
 CSV_COLUMNS = ["scene", "integrator", "seconds", "spp", "relmse", "mse", "psnr",
                "budget", "seed", "wall_seconds", "relmse_untrimmed",
                "discard_fraction", "discard_count", "discarded_pixels", "ref_noise",
-               "cpu_seconds", "loadavg", "image", "status", "error"]
+               "cpu_seconds", "loadavg", "layer", "image", "status", "error"]
 
 SUMMARY_COLUMNS = ["scene", "integrator", "budget", "runs", "seconds", "seconds_stderr", "spp",
                    "relmse", "relmse_stderr", "relmse_untrimmed", "relmse_untrimmed_stderr",
@@ -37,82 +37,122 @@ def _tag(x):
     return str(int(x)) if x == int(x) else str(x).replace(".", "p")
 
 
-def plan(scenes, integrators, budgets, seeds):
+def split_label(label):
+    """'gpt/primal' -> ('gpt', 'primal'): an integrator, optionally one layer of its EXR
+    (gradient integrators write primal, reconstructed_l1, reconstructed_l2, ...)."""
+    integ, _, layer = label.partition("/")
+    return integ, (layer or None)
+
+
+def group_labels(labels):
+    """[(integrator, [labels])] in first-seen order: one render serves every layer."""
+    groups = []
+    for label in labels:
+        integ, _ = split_label(label)
+        for g in groups:
+            if g[0] == integ:
+                g[1].append(label)
+                break
+        else:
+            groups.append((integ, [label]))
+    return groups
+
+
+def plan(scenes, labels, budgets, seeds):
     """Run order: seed, budget, scene, integrator - integrators of one budget run one
     after another, so a change of machine load hits all of them alike."""
     for seed in seeds:
         for budget in budgets:
             for scene in scenes:
-                for integ in integrators:
-                    yield scene, integ, budget, seed
+                for integ, group in group_labels(labels):
+                    yield scene, integ, group, budget, seed
 
 
-def measure(tools, scene, integ, budget, seed, args):
+def measure(tools, scene, integ, labels, budget, seed, args):
+    """Renders once and returns one row per label (layer) measured in that render."""
     path = render_path(args.out, scene.name, integ, budget, seed)
     frac, count = trimming(scene, args)
-    row = {"scene": scene.name, "integrator": integ, "budget": budget, "seed": seed,
-           "discard_fraction": frac, "discard_count": count, "ref_noise": scene.noise,
-           "image": os.path.relpath(path, args.out), "status": "ok", "error": ""}
+    base = {"scene": scene.name, "budget": budget, "seed": seed,
+            "discard_fraction": frac, "discard_count": count, "ref_noise": scene.noise,
+            "image": os.path.relpath(path, args.out), "status": "ok", "error": ""}
     try:
-        row["loadavg"] = os.getloadavg()[0]
+        base["loadavg"] = os.getloadavg()[0]
     except OSError:
-        row["loadavg"] = None
+        base["loadavg"] = None
     try:
         meta, wall = tools.render(scene.scene, path, integrator=integ, seconds=budget,
                                   seed=seed, nthreads=args.nthreads)
-        row["wall_seconds"] = wall
-        row["cpu_seconds"] = tools.last_cpu_seconds
-        row["seconds"] = float(meta.get("render_seconds", wall))
-        row["spp"] = int(float(meta.get("spp", 0)))
+        base["wall_seconds"] = wall
+        base["cpu_seconds"] = tools.last_cpu_seconds
+        base["seconds"] = float(meta.get("render_seconds", wall))
+        base["spp"] = int(float(meta.get("spp", 0)))
         if meta.get("integrator") and meta["integrator"] != integ:
             raise RuntimeError("image metadata says integrator '%s', asked for '%s'"
                                % (meta["integrator"], integ))
-        d = tools.diff(path, scene.reference, frac, count, layer=args.layer)
-        row["relmse"] = d["relmse"]
-        row["mse"] = d["mse"]
-        row["psnr"] = d["psnr"]
-        row["discarded_pixels"] = d.get("discarded_pixels", 0)
-        if frac or count:
-            row["relmse_untrimmed"] = tools.diff(path, scene.reference, layer=args.layer)["relmse"]
-        else:
-            row["relmse_untrimmed"] = d["relmse"]
     except RuntimeError as e:
-        row["status"] = "failed"
-        row["error"] = str(e).replace("\n", " ")
-    return row
+        base["status"] = "failed"
+        base["error"] = str(e).replace("\n", " ")
+    rows = []
+    for label in labels:
+        row = dict(base, integrator=label)
+        row["layer"] = split_label(label)[1] or args.layer or ""
+        if row["status"] == "ok":
+            try:
+                layer = row["layer"] or None
+                d = tools.diff(path, scene.reference, frac, count, layer=layer)
+                row["relmse"] = d["relmse"]
+                row["mse"] = d["mse"]
+                row["psnr"] = d["psnr"]
+                row["discarded_pixels"] = d.get("discarded_pixels", 0)
+                if frac or count:
+                    row["relmse_untrimmed"] = tools.diff(path, scene.reference,
+                                                         layer=layer)["relmse"]
+                else:
+                    row["relmse_untrimmed"] = d["relmse"]
+            except RuntimeError as e:
+                row["status"] = "failed"
+                row["error"] = str(e).replace("\n", " ")
+        rows.append(row)
+    return rows
 
 
-def run_all(tools, scenes, integrators, budgets, seeds, args):
+def run_all(tools, scenes, labels, budgets, seeds, args):
     os.makedirs(args.out, exist_ok=True)
     rows = []
-    jobs = list(plan(scenes, integrators, budgets, seeds))
+    jobs = list(plan(scenes, labels, budgets, seeds))
     csv_path = os.path.join(args.out, "results.csv")
     started = time.monotonic()
     with open(csv_path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=CSV_COLUMNS, extrasaction="ignore")
         w.writeheader()
-        for i, (scene, integ, budget, seed) in enumerate(jobs, 1):
+        stop = False
+        for i, (scene, integ, group, budget, seed) in enumerate(jobs, 1):
             if not args.quiet:
                 print("[%d/%d] %s %s %ss seed %d ... " % (i, len(jobs), scene.name, integ,
                                                           _tag(budget), seed),
                       end="", flush=True)
-            row = measure(tools, scene, integ, budget, seed, args)
-            rows.append(row)
-            w.writerow(_csv_row(row))
+            new = measure(tools, scene, integ, group, budget, seed, args)
+            for row in new:
+                rows.append(row)
+                w.writerow(_csv_row(row))
             f.flush()
             if not args.quiet:
-                if row["status"] == "ok":
-                    print("%.2fs %d spp relMSE %.4g" % (row["seconds"], row["spp"], row["relmse"]),
-                          flush=True)
-                else:
+                ok = [r for r in new if r["status"] == "ok"]
+                if ok:
+                    print("%.2fs %d spp relMSE %s" % (ok[0]["seconds"], ok[0]["spp"], ", ".join(
+                        "%s%.4g" % ((r["integrator"] + " ") if len(new) > 1 else "", r["relmse"])
+                        for r in ok)), flush=True)
+                if len(ok) < len(new):
                     print("FAILED", flush=True)
-            if row["status"] != "ok":
-                print("error: %s" % row["error"], file=sys.stderr)
-                if args.fail_fast:
-                    break
+            for row in new:
+                if row["status"] != "ok":
+                    print("error: %s: %s" % (row["integrator"], row["error"]), file=sys.stderr)
+                    stop = stop or args.fail_fast
+            if stop:
+                break
     if not args.quiet:
-        print("measured %d runs in %.0f s; results in %s"
-              % (len(rows), time.monotonic() - started, csv_path))
+        print("measured %d renders (%d rows) in %.0f s; results in %s"
+              % (len(jobs), len(rows), time.monotonic() - started, csv_path))
     return rows
 
 

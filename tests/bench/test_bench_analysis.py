@@ -15,7 +15,7 @@ sys.dont_write_bytecode = True
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(
     os.path.abspath(__file__)))), "bench"))
 
-from harness import analysis, images  # noqa: E402
+from harness import analysis, images, runs  # noqa: E402
 
 
 def row(integ, budget, seconds, relmse, seed=0, noise=None):
@@ -112,6 +112,15 @@ class Speedups(unittest.TestCase):
         s = analysis.speedups(analysis.summarise(rows), "path", floor_correction=False)
         b = {r["budget"]: r for r in s if r["integrator"] == "bdpt"}
         self.assertNotAlmostEqual(b[10.0]["speedup"], 2.0, places=2)
+
+
+class Labels(unittest.TestCase):
+    def test_layers_share_one_render(self):
+        self.assertEqual(runs.split_label("gpt/reconstructed_l2"), ("gpt", "reconstructed_l2"))
+        self.assertEqual(runs.split_label("path"), ("path", None))
+        groups = runs.group_labels(["gpt", "path", "gpt/primal", "bdpt"])
+        self.assertEqual(groups, [("gpt", ["gpt", "gpt/primal"]), ("path", ["path"]),
+                                  ("bdpt", ["bdpt"])])
 
 
 class Images(unittest.TestCase):

@@ -67,7 +67,9 @@ LoopSubdivResult LoopSubdivide(const std::vector<Point3> &P, const std::vector<i
     std::unique_ptr<Far::TopologyRefiner> refiner(
         Factory::Create(desc, Factory::Options(Sdc::SCHEME_LOOP, sdc)));
     if (!refiner) throw Error(loc, "loopsubdiv: OpenSubdiv rejected the mesh topology");
-    refiner->RefineUniform(Far::TopologyRefiner::UniformOptions(levels));
+    Far::TopologyRefiner::UniformOptions uniform(levels);
+    uniform.fullTopologyInLastLevel = true;  // Limit() needs the edges of the last level
+    refiner->RefineUniform(uniform);
 
     // Interpolate positions level by level into one buffer.
     std::vector<OsdPoint> verts(size_t(refiner->GetNumVerticesTotal()));

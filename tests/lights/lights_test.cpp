@@ -1,0 +1,323 @@
+// Light sampling against its own pdfs: chi-square goodness of fit of
+// sampleLi() directions against pdfLi() and of sampleLe() directions against
+// pdfLe(), sampleLe()/pdfLe() agreement, and power() against numerical
+// integrals. Significance: 1% for the whole suite (Sidak-corrected per test).
+#include <gtest/gtest.h>
+
+#include "image/image.h"
+#include "lights/light.h"
+#include "parser/scene_desc.h"
+#include "samplers/chi2_test.h"
+#include "samplers/rng.h"
+#include "samplers/sampling.h"
+#include "shape_cases.h"
+#include "shapes/triangle.h"
+
+namespace gradus {
+namespace {
+
+constexpr int kNumChi2Tests = 40;  // upper bound on chi-square tests in this file
+const double kAlpha = chi2::SidakAlpha(0.01, kNumChi2Tests);
+
+chi2::Options Opts(int64_t samples = 100000) {
+    chi2::Options o;
+    o.xBins = 16;
+    o.yBins = 32;
+    o.samples = samples;
+    o.subdivisions = 24;
+    o.alpha = kAlpha;
+    return o;
+}
+
+Interaction RefAt(const Point3 &p) { return Interaction(p, Normal3(0, 0, 0), Vec3(0, 0, 0)); }
+
+// Direction density of an area light's sampleLi(): each sample picks one
+// point; hidden points of the same shape count too (rendering rejects them by
+// visibility), so the density of w sums over every point of the shape on w.
+Float AreaDirectionDensity(const AreaLight &l, const Interaction &ref, const Vec3 &w, bool coneSampled) {
+    if (coneSampled) return l.pdfLi(ref, w);
+    Float sum = 0;
+    Point3 o = ref.p;
+    for (int k = 0; k < 6; ++k) {
+        Float t;
+        Interaction h;
+        if (!l.shape().intersectP(Ray(o, w), &t, &h)) break;
+        Float cosL = AbsDot(h.n, w);
+        // One-sided lights: samples facing away carry no radiance and are rejected.
+        if (cosL > 0 && (l.twoSided() || Dot(h.n, -w) > 0))
+            sum += l.shape().pdfArea(h) * DistanceSquared(ref.p, h.p) / cosL;
+        o = h.p + w * (1e-9 * (1 + MaxComponent(Abs(h.p))));
+    }
+    return sum;
+}
+
+struct AreaCase {
+    std::string name;
+    std::shared_ptr<const Shape> shape;
+    std::vector<Point3> refs;  // world reference points without grazing lines of sight
+    bool cone = false;         // full sphere: refs[1] is outside (cone sampling)
+};
+
+std::vector<AreaCase> AreaCases() {
+    std::vector<AreaCase> v;
+    Transform xf = Translate(Vec3(0.2, 0.1, 0.3)) * Rotate(25, Vec3(1, 1, 0));
+    auto mesh = TriangleMesh::Create(xf, false, {Point3(-1, -1, 0), Point3(1.5, -0.5, 0.2), Point3(0, 1.2, -0.1)},
+                                     {0, 1, 2}, {}, {}, {}, FileLoc());
+    v.push_back({"triangle", std::make_shared<Triangle>(mesh, 0), {xf.applyPoint(Point3(0.2, 0.1, 1.3)),
+                                                                   xf.applyPoint(Point3(0.1, -0.2, -0.8))}});
+    for (const auto &c : test::AnalyticCases()) {
+        AreaCase a{c.name, c.make(xf, false), {xf.applyPoint(c.inside)}};
+        if (c.name == "disk") a.refs.push_back(xf.applyPoint(Point3(0.3, -0.2, -0.9)));  // behind
+        if (c.name == "sphere_full") {
+            a.refs.push_back(xf.applyPoint(Point3(2.5, -1.5, 2.0)));
+            a.cone = true;
+        }
+        v.push_back(a);
+    }
+    return v;
+}
+
+TEST(AreaLights, SampleLiMatchesPdfLi) {
+    for (const AreaCase &ac : AreaCases())
+        for (bool twoSided : {false, true}) {
+            AreaLight light(ac.shape, Spectrum(1), twoSided);
+            for (size_t k = 0; k < ac.refs.size(); ++k) {
+                Point3 p = ac.refs[k];
+                Interaction ref = RefAt(p);
+                bool cone = ac.cone && k == 1;
+                // Cone-sampled directions are binned in the cone's own frame.
+                Frame frame = cone ? Frame(Normalize(Point3(0.2, 0.1, 0.3) - p)) : Frame();
+                // A one-sided light seen only from behind: no sample may succeed.
+                RNG pre(99);
+                int valid = 0;
+                for (int i = 0; i < 2000; ++i) {
+                    LightLiSample s;
+                    valid += light.sampleLi(ref, Point2(pre.uniform(), pre.uniform()), &s);
+                }
+                if (valid == 0) {
+                    EXPECT_FALSE(twoSided) << ac.name;
+                    for (int i = 0; i < 2000; ++i)
+                        EXPECT_EQ(AreaDirectionDensity(light, ref, SampleUniformSphere(Point2(pre.uniform(), pre.uniform())), cone), 0);
+                    continue;
+                }
+                auto r = test::DirectionalChi2(
+                    [&](RNG &rng, Vec3 *w) {
+                        LightLiSample s;
+                        if (!light.sampleLi(ref, Point2(rng.uniform(), rng.uniform()), &s)) return false;
+                        *w = frame.toLocal(s.wi);
+                        return true;
+                    },
+                    [&](const Vec3 &w) { return AreaDirectionDensity(light, ref, frame.toWorld(w), cone); }, Opts());
+                EXPECT_TRUE(r.pass) << ac.name << (twoSided ? " two-sided" : "") << " from " << p << ": "
+                                    << r.message;
+            }
+        }
+}
+
+// The pdf returned with a sample equals pdfLi() for that direction whenever
+// the sampled point is the first one seen along it.
+TEST(AreaLights, SamplePdfEqualsPdfLi) {
+    for (const AreaCase &ac : AreaCases()) {
+        AreaLight light(ac.shape, Spectrum(1), true);
+        Interaction ref = RefAt(ac.refs.back());
+        RNG rng(3);
+        int checked = 0;
+        for (int i = 0; i < 2000; ++i) {
+            LightLiSample s;
+            if (!light.sampleLi(ref, Point2(rng.uniform(), rng.uniform()), &s)) continue;
+            Float t;
+            Interaction first;
+            if (!ac.shape->intersectP(Ray(ref.p, s.wi), &t, &first)) continue;
+            if (Distance(first.p, s.pLight.p) > 1e-7) continue;
+            ++checked;
+            ASSERT_NEAR(light.pdfLi(ref, s.wi), s.pdf, 1e-6 * s.pdf) << ac.name;
+        }
+        EXPECT_GT(checked, 500) << ac.name;
+    }
+}
+
+TEST(AreaLights, SampleLeMatchesPdfLe) {
+    for (const AreaCase &ac : AreaCases())
+        for (bool twoSided : {false, true}) {
+            AreaLight light(ac.shape, Spectrum(2), twoSided);
+            RNG rng(5);
+            double powerSum = 0;
+            const int n = 200000;
+            for (int i = 0; i < n; ++i) {
+                LightLeSample s;
+                if (!light.sampleLe(Point2(rng.uniform(), rng.uniform()), Point2(rng.uniform(), rng.uniform()), &s))
+                    continue;
+                Float pdfPos, pdfDir;
+                light.pdfLe(s.ray, s.nLight, &pdfPos, &pdfDir);
+                ASSERT_NEAR(pdfPos, s.pdfPos, 1e-9 * s.pdfPos) << ac.name;
+                ASSERT_NEAR(pdfDir, s.pdfDir, 1e-9 * s.pdfDir) << ac.name;
+                powerSum += s.L.y() * AbsDot(s.nLight, s.ray.d) / (s.pdfPos * s.pdfDir);
+            }
+            // Emitted power estimated from the samples equals power().
+            EXPECT_NEAR(powerSum / n, light.power().y(), 1e-6 * light.power().y()) << ac.name;
+            // Power against the closed form L pi A (per side).
+            EXPECT_NEAR(light.power().y(), 2 * Pi * ac.shape->area() * (twoSided ? 2 : 1),
+                        1e-9 * light.power().y());
+        }
+}
+
+// Directions of sampleLe() for a planar light (constant normal) against pdfLe().
+TEST(AreaLights, SampleLeDirectionsChiSquare) {
+    Transform xf = Rotate(30, Vec3(1, 0, 0));
+    for (bool twoSided : {false, true}) {
+        AreaLight light(std::make_shared<Disk>(xf, false, 0, 1, 0, 360), Spectrum(1), twoSided);
+        Normal3 n = Normalize(xf.applyNormal(Normal3(0, 0, 1)));
+        auto r = test::DirectionalChi2(
+            [&](RNG &rng, Vec3 *w) {
+                LightLeSample s;
+                if (!light.sampleLe(Point2(rng.uniform(), rng.uniform()), Point2(rng.uniform(), rng.uniform()), &s))
+                    return false;
+                *w = s.ray.d;
+                return true;
+            },
+            [&](const Vec3 &w) {
+                Float pp, pd;
+                light.pdfLe(Ray(Point3(0, 0, 0), w), n, &pp, &pd);
+                return pd;
+            },
+            Opts());
+        EXPECT_TRUE(r.pass) << (twoSided ? "two-sided: " : "one-sided: ") << r.message;
+    }
+}
+
+// ------------------------------------------------------------------ spot
+std::shared_ptr<Light> MakeLight(const std::string &text) {
+    SceneDesc d = ParseString("WorldBegin\n" + text + "\nWorldEnd\n", "test.pbrt");
+    auto l = CreateLight(d.lights.at(0), d);
+    Bounds3 b;
+    b.expand(Point3(-1, -1, -1));
+    b.expand(Point3(1, 1, 1));
+    l->preprocess(b);
+    return l;
+}
+
+TEST(SpotLight, SampleLeDirectionsAndPower) {
+    auto l = MakeLight(
+        "LightSource \"spot\" \"point from\" [0 0 0] \"point to\" [1 1 0.5] \"float coneangle\" 40 "
+        "\"float conedeltaangle\" 15 \"rgb I\" [3 3 3]");
+    auto r = test::DirectionalChi2(
+        [&](RNG &rng, Vec3 *w) {
+            LightLeSample s;
+            if (!l->sampleLe(Point2(rng.uniform(), rng.uniform()), Point2(rng.uniform(), rng.uniform()), &s))
+                return false;
+            Float pp, pd;
+            l->pdfLe(s.ray, s.nLight, &pp, &pd);
+            EXPECT_NEAR(pd, s.pdfDir, 1e-9);
+            *w = s.ray.d;
+            return true;
+        },
+        [&](const Vec3 &w) {
+            Float pp, pd;
+            l->pdfLe(Ray(Point3(0, 0, 0), w), Normal3(0, 0, 0), &pp, &pd);
+            return pd;
+        },
+        Opts());
+    EXPECT_TRUE(r.pass) << r.message;
+    // power() against a quadrature of I * falloff over the sphere (Li at unit distance).
+    const int n = 2000000;
+    double sum = 0;
+    Vec3 axis = Normalize(Vec3(1, 1, 0.5));
+    Frame f(axis);
+    for (int i = 0; i < n; ++i) {
+        Float c = -1 + 2 * (i + 0.5) / n;
+        Vec3 w = f.toWorld(SphericalDirection(SafeSqrt(1 - c * c), c, 0.3));
+        LightLiSample s;
+        if (l->sampleLi(RefAt(w), Point2(0.5, 0.5), &s)) sum += s.L.y();  // I falloff / 1^2
+    }
+    double numeric = 2 * Pi * sum * 2.0 / n;
+    EXPECT_NEAR(l->power().y(), numeric, 1e-4 * numeric);
+}
+
+TEST(PointAndDistantLights, Power) {
+    auto p = MakeLight("LightSource \"point\" \"rgb I\" [2 2 2]");
+    EXPECT_NEAR(p->power().y(), 4 * Pi * 2, 1e-9);
+    auto d = MakeLight("LightSource \"distant\" \"rgb L\" [2 2 2]");
+    EXPECT_NEAR(d->power().y(), 2 * Pi * 3, 1e-9);  // pi r^2 L with r^2 = 3 (bounds [-1,1]^3)
+}
+
+// ------------------------------------------------------------- infinite
+Image TestMap() {
+    // 16 x 8 map with a bright spot, a gradient and a black band (zero pdf).
+    Image img = Image::RGB(16, 8);
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 16; ++x) {
+            float v = 0.2f + 0.1f * x + (x == 11 && y == 2 ? 20.f : 0.f);
+            if (y == 6) v = 0;
+            img.at(x, y, 0) = v;
+            img.at(x, y, 1) = 0.5f * v;
+            img.at(x, y, 2) = 0.25f * v + 0.1f * y;
+        }
+    return img;
+}
+
+TEST(InfiniteLight, SampleLiMatchesPdfLi) {
+    Image map = TestMap();
+    auto l = CreateInfiniteLight(Rotate(-90, Vec3(1, 0, 0)) * RotateZ(20), Spectrum(1), &map);
+    Bounds3 b;
+    b.expand(Point3(-1, -1, -1));
+    b.expand(Point3(1, 1, 1));
+    l->preprocess(b);
+    Interaction ref = RefAt(Point3(0.1, 0.2, 0.3));
+    auto r = test::DirectionalChi2(
+        [&](RNG &rng, Vec3 *w) {
+            LightLiSample s;
+            if (!l->sampleLi(ref, Point2(rng.uniform(), rng.uniform()), &s)) return false;
+            EXPECT_NEAR(l->pdfLi(ref, s.wi), s.pdf, 1e-6 * s.pdf);
+            *w = s.wi;
+            return true;
+        },
+        [&](const Vec3 &w) { return l->pdfLi(ref, w); }, Opts(200000));
+    EXPECT_TRUE(r.pass) << r.message;
+    // sampleLe directions (towards the scene) against pdfLe.
+    auto r2 = chi2::SphericalTest(
+        [&](RNG &rng, Vec3 *w) {
+            LightLeSample s;
+            if (!l->sampleLe(Point2(rng.uniform(), rng.uniform()), Point2(rng.uniform(), rng.uniform()), &s))
+                return false;
+            Float pp, pd;
+            l->pdfLe(s.ray, s.nLight, &pp, &pd);
+            EXPECT_NEAR(pd, s.pdfDir, 1e-6 * s.pdfDir);
+            EXPECT_NEAR(pp, s.pdfPos, 1e-9 * s.pdfPos);
+            *w = s.ray.d;
+            return true;
+        },
+        [&](const Vec3 &w) {
+            Float pp, pd;
+            l->pdfLe(Ray(Point3(0, 0, 0), w), Normal3(0, 0, 0), &pp, &pd);
+            return pd;
+        },
+        Opts(200000));
+    EXPECT_TRUE(r2.pass) << r2.message;
+}
+
+TEST(InfiniteLight, PowerMatchesQuadrature) {
+    Image map = TestMap();
+    auto l = CreateInfiniteLight(Transform(), Spectrum(1), &map);
+    Bounds3 b;
+    b.expand(Point3(-1, -1, -1));
+    b.expand(Point3(1, 1, 1));
+    l->preprocess(b);
+    // pi r^2 * integral of L over directions. The map is looked up bilinearly;
+    // power() integrates the texels, so compare with a loose tolerance plus an
+    // exact check on a constant map.
+    const int nc = 400, np = 800;
+    double sum = 0;
+    for (int i = 0; i < nc; ++i)
+        for (int j = 0; j < np; ++j) {
+            Float c = -1 + 2 * (i + 0.5) / nc, phi = 2 * Pi * (j + 0.5) / np;
+            sum += l->Le(Ray(Point3(0, 0, 0), SphericalDirection(SafeSqrt(1 - c * c), c, phi))).y();
+        }
+    double numeric = Pi * 3 * sum * 4 * Pi / (double(nc) * np);
+    EXPECT_NEAR(l->power().y(), numeric, 0.05 * numeric);
+    auto c = CreateInfiniteLight(Transform(), Spectrum(0.5), nullptr);
+    c->preprocess(b);
+    EXPECT_NEAR(c->power().y(), Pi * 3 * 4 * Pi * 0.5, 1e-9);
+}
+
+}  // namespace
+}  // namespace gradus

@@ -113,6 +113,8 @@ def main(argv=None):
     except HarnessError as e:
         print("bench/run: error: %s" % e, file=sys.stderr)
         return 2
+    except BrokenPipeError:  # output piped into head and the like
+        return 0
     except KeyboardInterrupt:
         print("bench/run: interrupted", file=sys.stderr)
         return 130
@@ -207,15 +209,17 @@ def _main(args, argv):
     if report_budget not in budgets:
         raise HarnessError("--report-time %g is not among --times" % report_budget)
 
-    total = len(seeds) * sum(budgets) * len(chosen) * len(integrators)
+    renderers = len(runs.group_labels(integrators))
+    total = len(seeds) * sum(budgets) * len(chosen) * renderers
     if not args.quiet or args.dry_run:
         print("plan: %d scene(s) x %d integrator(s) x budgets %s s x %d seed(s): about %.0f s "
-              "of rendering (+ scene loading)" % (len(chosen), len(integrators),
+              "of rendering (+ scene loading)" % (len(chosen), renderers,
                                                   ",".join("%g" % b for b in budgets),
                                                   len(seeds), total))
     if args.dry_run:
-        for job in runs.plan(chosen, integrators, budgets, seeds):
-            print("  %s %s %gs seed %d" % (job[0].name, job[1], job[2], job[3]))
+        for scene, integ, labels, budget, seed in runs.plan(chosen, integrators, budgets, seeds):
+            print("  %s %s %gs seed %d -> %s" % (scene.name, integ, budget, seed,
+                                                 ", ".join(labels)))
         return 0
 
     rows = runs.run_all(tools, chosen, integrators, budgets, seeds, args)

@@ -1,6 +1,6 @@
 #include "lights/light_sampler.h"
 
-#include <tbb/concurrent_hash_map.h>
+#include <atomic>
 
 #include "core/error.h"
 
@@ -21,11 +21,18 @@ Float RadicalInverse(int dim, uint64_t a) {
 }
 }  // namespace
 
+// Voxel distributions in a flat array of atomic pointers: lookups are one
+// load; a missing voxel is built by whichever thread needs it first and
+// published with a compare-and-swap (a losing builder discards its copy).
 struct LightSampler::Grid {
     Bounds3 bounds;
     int res[3] = {1, 1, 1};
-    tbb::concurrent_hash_map<uint64_t, std::shared_ptr<Distribution1D>> voxels;
+    std::unique_ptr<std::atomic<Distribution1D *>[]> voxels;
+    size_t count = 0;
     std::atomic<int64_t> built{0};
+    ~Grid() {
+        for (size_t i = 0; i < count; ++i) delete voxels[i].load();
+    }
 };
 
 LightSampler::LightSampler() = default;
@@ -52,6 +59,9 @@ LightSampler::LightSampler(const std::vector<std::shared_ptr<Light>> &lights, co
         Float maxExtent = MaxComponent(d);
         for (int i = 0; i < 3; ++i)
             grid_->res[i] = maxExtent > 0 ? std::max(1, int(std::round(64 * d[i] / maxExtent))) : 1;
+        grid_->count = size_t(grid_->res[0]) * grid_->res[1] * grid_->res[2];
+        grid_->voxels.reset(new std::atomic<Distribution1D *>[grid_->count]);
+        for (size_t i = 0; i < grid_->count; ++i) grid_->voxels[i].store(nullptr, std::memory_order_relaxed);
     }
 }
 
@@ -65,11 +75,8 @@ const Distribution1D &LightSampler::lookup(const Point3 &p) const {
         Float t = ext > 0 ? (p[i] - g.bounds.pMin[i]) / ext : 0;
         vi[i] = Clamp(int(t * g.res[i]), 0, g.res[i] - 1);
     }
-    uint64_t key = (uint64_t(vi[0]) << 40) | (uint64_t(vi[1]) << 20) | uint64_t(vi[2]);
-    {
-        tbb::concurrent_hash_map<uint64_t, std::shared_ptr<Distribution1D>>::const_accessor a;
-        if (g.voxels.find(a, key)) return *a->second;
-    }
+    size_t key = (size_t(vi[2]) * g.res[1] + vi[1]) * g.res[0] + vi[0];
+    if (Distribution1D *d = g.voxels[key].load(std::memory_order_acquire)) return *d;
     // Estimate each light's contribution at 128 low-discrepancy points of the voxel.
     Bounds3 vb;
     for (int i = 0; i < 3; ++i) {
@@ -94,13 +101,14 @@ const Distribution1D &LightSampler::lookup(const Point3 &p) const {
     Float avg = sum / (nSamples * Float(contrib.size()));
     Float floorC = avg > 0 ? 1e-3 * avg : 1;
     for (Float &c : contrib) c = std::max(c, floorC);
-    auto dist = std::make_shared<Distribution1D>(contrib.data(), int(contrib.size()));
-    tbb::concurrent_hash_map<uint64_t, std::shared_ptr<Distribution1D>>::accessor a;
-    if (grid_->voxels.insert(a, key)) {
-        a->second = dist;
+    auto *dist = new Distribution1D(contrib.data(), int(contrib.size()));
+    Distribution1D *expected = nullptr;
+    if (g.voxels[key].compare_exchange_strong(expected, dist, std::memory_order_acq_rel)) {
         ++grid_->built;
+        return *dist;
     }
-    return *a->second;
+    delete dist;
+    return *expected;
 }
 
 const Light *LightSampler::sample(Float u, Float *pmf) const {

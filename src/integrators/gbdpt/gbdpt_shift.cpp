@@ -216,6 +216,16 @@ void RecordWalk(const ManifoldWalkResult &r, GBDPTLocalStats *st) {
 
 }  // namespace
 
+Float ChainSolidAnglePerArea(const ManifoldChain &c) { return SolidAnglePerArea(c); }
+
+Float EyeAreaFactor(const Point3 &lens, const Vec3 &n0, const Point3 &pb, const Vec3 &ngb) {
+    Vec3 d = pb - lens;
+    Float D2 = d.lengthSquared();
+    d = d / std::sqrt(D2);
+    Float cb = AbsDot(ngb, d), ct = AbsDot(n0, d);
+    return cb > 0 ? ct * ct * ct * D2 / cb : Float(0);
+}
+
 bool IsDiffuseVertex(const GBDPTShiftContext &ctx, const PathVertex &v, const BSDF *b) {
     if (v.type != VertexType::Surface) return true;
     return b && *b && ClassifyBSDF(b, ctx.threshold) == ShiftVertexClass::Rough;
@@ -401,6 +411,9 @@ void ShiftCameraSubpath(const GBDPTShiftContext &ctx, const ShiftSubpath &x, con
                 ManifoldWalkResult res =
                     ManifoldWalk(*ctx.mscene, base, EndpointSP(y.v[i].p, y.v[i].ng, y.v[i].geomId), base.back().sp,
                                  ctx.walk);
+                // The walk may converge to another solution of the chain: only
+                // reversible walks keep the shift a bijection (JM12 Sec. 5).
+                if (res.ok()) res.status = CheckReversible(*ctx.mscene, base, res.chain, ctx.walk, 1e-4);
                 RecordWalk(res, st);
                 ok = res.ok();
                 if (!ok) st->shift.fail(ShiftFailure::Geometry);
@@ -696,6 +709,7 @@ bool ShiftLightTracingPath(const GBDPTShiftContext &ctx, const ShiftSubpath &lig
         }
         ManifoldWalkResult res =
             ManifoldWalk(*ctx.mscene, base, EndpointSP(isect.p, isect.n, isect.geomId), base.back().sp, ctx.walk);
+        if (res.ok()) res.status = CheckReversible(*ctx.mscene, base, res.chain, ctx.walk, 1e-4);
         RecordWalk(res, st);
         if (!res.ok()) {
             st->shift.fail(ShiftFailure::Geometry);
@@ -748,14 +762,7 @@ bool ShiftLightTracingPath(const GBDPTShiftContext &ctx, const ShiftSubpath &lig
     // (ShiftJacobianFactor's cos^4/G for an empty eye chain) times the light
     // path's density of b through the chain.
     Vec3 n0 = bc.camera->lensNormal();
-    auto eyeFactor = [&](const Point3 &pb, const Vec3 &ngb) {
-        Vec3 d = pb - lens.p;
-        Float D2 = d.lengthSquared();
-        d = d / std::sqrt(D2);
-        Float cb = AbsDot(ngb, d), ct = AbsDot(n0, d);
-        return cb > 0 ? ct * ct * ct * D2 / cb : Float(0);
-    };
-    Float Fx = eyeFactor(x1.p, x1.ng), Fy = eyeFactor(isect.p, isect.n);
+    Float Fx = EyeAreaFactor(lens.p, n0, x1.p, x1.ng), Fy = EyeAreaFactor(lens.p, n0, isect.p, isect.n);
     Float denR = Fx * pcX * Qx * discX;
     *rho = denR > 0 ? Fy * pcY * Qy * discY / denR : 0;
 

@@ -113,6 +113,14 @@ bool ShiftLightTracingPath(const GBDPTShiftContext &ctx, const ShiftSubpath &lig
                            Point2 pRaster, const Spectrum &fx, Point2i off, Arena &arena, Spectrum *fy, Float *wy,
                            Float *rho, GBDPTLocalStats *st);
 
+// Building blocks exposed for the finite-difference tests.
+// Solid angle at a chain's start per unit area at its end, G / |cos_0| (JM12);
+// the ratio offset/base is the Jacobian J_b of the second chain.
+Float ChainSolidAnglePerArea(const ManifoldChain &c);
+// dA_b/ds of a pinhole camera at `lens` with axis n0 (cos^4 / G of
+// ShiftJacobianFactor for an empty eye chain, up to the focal constant).
+Float EyeAreaFactor(const Point3 &lens, const Vec3 &n0, const Point3 &pb, const Vec3 &ngb);
+
 // Combined gradient/BDPT MIS (Eq. 8) and the simpler variant (Eq. 9).
 inline Float CombinedWeight(Float wx, Float wy, Float rho) {
     if (!(wx > 0)) return 0;

@@ -77,10 +77,11 @@ inline uint64_t LatticeGenerator(uint64_t K) {
 //   Lattice: frac(((rank m + c) g mod K) / K + shift)   (Cranley-Patterson rotation of a rank-1 lattice)
 //   LHS:     (c rows + perm_c(rank) + u) / K            (one point per column stratum, row's points in distinct 1/m bands)
 //   Random:  u
-// With `shift` and u uniform on [0, 1), every point's column coordinate is
-// uniform on [0, 1) whatever the ordering: each column of the matrix is
-// selected with probability 1 / (number of columns) by every point, which
-// makes the estimator unbiased (see mbdpt.cpp).
+// With `shift` and u uniform on [0, 1), the column coordinate is uniform on
+// [0, 1) whatever the ordering: for every point (lattice, random), or for the
+// mixture of a row's m points (LHS: point c is uniform on band c). So each
+// column of the matrix is selected with probability 1 / (number of columns)
+// on average over a row's points, which makes the estimator unbiased (mbdpt.cpp).
 struct ColumnSampler {
     MatrixSampling mode = MatrixSampling::Lattice;
     uint64_t rows = 0;   // eligible rows of the matrix
@@ -113,9 +114,10 @@ struct ColumnSampler {
         double y;
         switch (mode) {
         case MatrixSampling::Lattice: {
+            // Rotation by shift = (a + b) / K, a integer, b in [0, 1): stratum (k g + a) mod K, offset b.
             uint64_t k = rank * uint64_t(m) + uint64_t(c);
-            y = double((k % K) * g % K) / double(K) + shift;
-            y -= std::floor(y);
+            double sk = shift * double(K), a = std::floor(sk);
+            y = (double(((k % K) * g + uint64_t(a)) % K) + (sk - a)) / double(K);
             break;
         }
         case MatrixSampling::LHS: {

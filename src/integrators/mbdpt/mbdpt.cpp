@@ -15,8 +15,9 @@
 // c-th 2D point of row p (matrix.h), and B_p in {0, 1} whether row p takes part
 // in this matrix, Pr(B_p = 1) = rho (rho = L_s / L, "matrixrows" "matched": the
 // expected number of connections per strategy equals BDPT's; rho = 1 for "all").
-// B_p and every eps_c are uniform-marginal whatever the ordering, so
-// Pr(q_c = q) = 1 / L_s for each q in Q_s and
+// B_p and the eps_c are uniform-marginal whatever the ordering (each eps_c, or
+// for LHS their mixture over c), so (1/m) sum_c Pr(q_c = q) = 1 / L_s for each
+// q in Q_s, independently of B_p, and
 //   E[I_p^{s,t} | subpaths] = 1/L sum_{q in Q_s} M^{p,q}     (Eq. 6, row p),
 // whose expectation over the light subpaths is E_z[C_{s,t}(y^p, z)], the
 // expectation of BDPT's diagonal estimator (Eq. 7). `combinatorial` evaluates
@@ -413,6 +414,14 @@ void MBDPTIntegrator::visualizeMatrix(const Scene &scene, uint64_t seed) {
         if (cam_.eligible(i, t) && camWeight_[i] > 0) rowsU.push_back(uint32_t(i));
         if (light_.eligible(i, s)) colsU.push_back(uint32_t(i));
     }
+    // "Unordered" as in Fig. 4: a random permutation of the rows and of the columns
+    // (the index order of the rows is the pixel order, itself spatially coherent).
+    auto shuffle = [&](std::vector<uint32_t> &v, uint64_t tag) {
+        RNG rng(Hash(seed ^ kMatrixTag, tag));
+        for (size_t i = v.size(); i > 1; --i) std::swap(v[i - 1], v[size_t(rng.uniform() * i)]);
+    };
+    shuffle(rowsU, 1);
+    shuffle(colsU, 2);
     std::vector<uint32_t> rowsO;
     for (uint32_t i : rows_[t])
         if (camWeight_[i] > 0) rowsO.push_back(i);
@@ -459,7 +468,6 @@ void MBDPTIntegrator::visualizeMatrix(const Scene &scene, uint64_t seed) {
     matrixImage_ = std::move(ordered);
     if (!set_.matrixFile.empty()) WriteImage(set_.matrixFile, matrixImage_);
     (void)scene;
-    (void)seed;
 }
 
 // ---------------------------------------------------------------- the iteration loop

@@ -29,7 +29,7 @@
 //   string visualizematrix ""       "s,t": image of the matrix M_{s,t} of the first iteration (Fig. 4)
 //   integer matrixresolution 256    its maximum width/height (rows and columns subsampled evenly)
 //   string matrixfile ""            where to write it (default: <film name>_matrix_s<S>_t<T>.exr);
-//                                   main RGB = reordered matrix, layer "unordered" = index order
+//                                   main RGB = reordered matrix, layer "unordered" = random order
 #pragma once
 #include <atomic>
 #include <string>

@@ -1,0 +1,107 @@
+// Helpers of the M-BDPT tests: a small box scene written in code, in-memory
+// renders, block means and Welch z statistics of independent runs.
+#pragma once
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "image/image.h"
+#include "integrators/integrator.h"
+#include "parser/scene_desc.h"
+#include "render/scene_builder.h"
+
+namespace gradus::mbdpt_test {
+
+inline std::string Quad(const std::string &mat, const char *P) {
+    return "AttributeBegin\n" + mat + "\nShape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [" + P +
+           "]\nAttributeEnd\n";
+}
+
+// Closed box [-1,1] x [0,2] x [-1,1.2] with a small ceiling light, a diffuse
+// sphere, a glossy sphere and (optionally) a mirror sphere, camera inside the box.
+// `integratorLine` is the full Integrator directive.
+inline std::string BoxScene(const std::string &integratorLine, int res = 16, bool mirror = true) {
+    char film[256];
+    std::snprintf(film, sizeof film,
+                  "Film \"image\" \"integer xresolution\" [%d] \"integer yresolution\" [%d] \"string filename\" [\"unused.exr\"]\n",
+                  res, res);
+    std::string s = integratorLine + "\nSampler \"random\" \"integer pixelsamples\" [4]\nPixelFilter \"box\"\n" + film;
+    s += "LookAt 0 1 1.15  0 0.9 0  0 1 0\nCamera \"perspective\" \"float fov\" [70]\nWorldBegin\n";
+    s += "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [12 12 12]\nMaterial \"matte\" \"rgb Kd\" [0 0 0]\n"
+         "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-0.25 1.98 -0.25  -0.25 1.98 0.25  0.25 1.98 0.25  0.25 1.98 -0.25]\n"
+         "AttributeEnd\n";
+    const std::string grey = "Material \"matte\" \"rgb Kd\" [0.7 0.7 0.7]";
+    s += Quad(grey, "-1 0 -1  -1 0 1.2  1 0 1.2  1 0 -1");
+    s += Quad(grey, "-1 2 -1  1 2 -1  1 2 1.2  -1 2 1.2");
+    s += Quad(grey, "-1 0 -1  1 0 -1  1 2 -1  -1 2 -1");
+    s += Quad(grey, "-1 0 1.2  -1 2 1.2  1 2 1.2  1 0 1.2");
+    s += Quad("Material \"matte\" \"rgb Kd\" [0.63 0.065 0.05]", "-1 0 -1  -1 2 -1  -1 2 1.2  -1 0 1.2");
+    s += Quad("Material \"matte\" \"rgb Kd\" [0.14 0.45 0.09]", "1 0 -1  1 0 1.2  1 2 1.2  1 2 -1");
+    s += "AttributeBegin\nMaterial \"matte\" \"rgb Kd\" [0.6 0.6 0.3]\nTranslate 0.4 0.35 -0.3\nShape \"sphere\" \"float radius\" [0.35]\nAttributeEnd\n";
+    s += "AttributeBegin\nMaterial \"plastic\" \"rgb Kd\" [0.2 0.3 0.5] \"rgb Ks\" [0.5 0.5 0.5] \"float roughness\" [0.08]\n"
+         "Translate -0.45 0.3 -0.4\nShape \"sphere\" \"float radius\" [0.3]\nAttributeEnd\n";
+    if (mirror) s += "AttributeBegin\nMaterial \"mirror\"\nTranslate 0 0.2 0.2\nShape \"sphere\" \"float radius\" [0.2]\nAttributeEnd\n";
+    s += "WorldEnd\n";
+    return s;
+}
+
+struct Rendered {
+    Image image;
+    RenderStats stats;
+    std::string statistics;
+    std::unique_ptr<Integrator> integrator;
+};
+
+inline Rendered Render(const std::string &text, int spp, uint64_t seed, int nthreads = 1) {
+    SceneDesc desc = ParseString(text);
+    BuildOptions bo;
+    bo.sppOverride = spp;
+    bo.seed = seed;
+    bo.quiet = true;
+    RenderJob job = BuildRenderJob(desc, bo);
+    job.integrator->preprocess(*job.scene, *job.film);
+    RenderOptions ro;
+    ro.spp = spp;
+    ro.seed = seed;
+    ro.quiet = true;
+    ro.nthreads = nthreads;
+    Rendered r;
+    r.stats = job.integrator->render(*job.scene, *job.film, *job.sampler, ro);
+    r.image = job.film->toImage();
+    job.integrator->finish(*job.film, &r.image);
+    r.statistics = job.integrator->statistics();
+    r.integrator = std::move(job.integrator);
+    return r;
+}
+
+// Mean luminance of a layer ("" = main image) over [x0,x1) x [y0,y1).
+inline double BlockMean(const Image &img, int x0, int y0, int x1, int y1, const std::string &layer = "") {
+    Image rgb = layer.empty() ? img : img.layerRGB(layer);
+    double sum = 0;
+    for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x)
+            sum += 0.2126 * rgb.at(x, y, 0) + 0.7152 * rgb.at(x, y, 1) + 0.0722 * rgb.at(x, y, 2);
+    return sum / (double(x1 - x0) * (y1 - y0));
+}
+
+struct RunStats {
+    double mean = 0, var = 0;  // var: of one run
+    int n = 0;
+};
+inline RunStats Stats(const std::vector<double> &v) {
+    RunStats s;
+    s.n = int(v.size());
+    for (double x : v) s.mean += x;
+    s.mean /= s.n;
+    for (double x : v) s.var += (x - s.mean) * (x - s.mean);
+    s.var /= std::max(1, s.n - 1);
+    return s;
+}
+// Welch z statistic of two sets of independent runs.
+inline double ZScore(const RunStats &a, const RunStats &b) {
+    double se = std::sqrt(a.var / a.n + b.var / b.n);
+    return se > 0 ? (a.mean - b.mean) / se : (a.mean == b.mean ? 0 : 1e9);
+}
+
+}  // namespace gradus::mbdpt_test

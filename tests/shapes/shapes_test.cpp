@@ -198,8 +198,8 @@ TEST(AnalyticShapes, SampledDirectionsChiSquare) {
             chi2::Options o;
             o.xBins = 16;
             o.yBins = 32;
-            o.samples = 100000;
-            o.subdivisions = 24;
+            o.samples = 50000;
+            o.subdivisions = 32;
             o.alpha = alpha;
             auto r = test::DirectionalChi2(
                 [&](RNG &rng, Vec3 *w) {

@@ -141,14 +141,20 @@ def main():
                 secs.append(meta.get("render_seconds", "?"))
             e = sum(errs) / len(errs)
             res[integ] = e - noise
+            res[integ + "_sec"] = sum(float(x) for x in secs if x != "?") / max(1, len(secs))
             print("%-12s %-7s %6s %6s %12.5g %12.5g" % (name, integ, secs[0][:6], "/".join(spps), e, e - noise))
             sys.stdout.flush()
         ratio = res["bdpt"] / res["mbdpt"] if res["mbdpt"] > 0 else float("inf")
-        rows.append((name, res["bdpt"], res["mbdpt"], ratio))
-        print("%-12s ratio relMSE(BDPT)/relMSE(M-BDPT) = %.3g" % (name, ratio))
-    print("\n| scene | BDPT relMSE | M-BDPT relMSE | ratio |\n|---|---|---|---|")
+        # The first iteration always completes, so with short budgets the two renders may
+        # not take equal time: the efficiency ratio normalises by the render seconds
+        # (relMSE ~ 1 / time for an unbiased estimator).
+        eff = ratio * res["bdpt_sec"] / res["mbdpt_sec"] if res["mbdpt_sec"] > 0 else float("nan")
+        rows.append((name, res["bdpt"], res["bdpt_sec"], res["mbdpt"], res["mbdpt_sec"], ratio, eff))
+        print("%-12s relMSE(BDPT)/relMSE(M-BDPT) = %.3g, time-normalised %.3g" % (name, ratio, eff))
+    print("\n| scene | BDPT relMSE | s | M-BDPT relMSE | s | ratio | time-normalised ratio |")
+    print("|---|---|---|---|---|---|---|")
     for r in rows:
-        print("| %s | %.4g | %.4g | %.2f |" % r)
+        print("| %s | %.4g | %.1f | %.4g | %.1f | %.2f | %.2f |" % r)
     return 0
 
 

@@ -88,7 +88,7 @@ inline double OwenScrambledBinary(uint32_t x, uint64_t seed, int minBits = 0) {
 }
 
 // Sobol' dimension 0 (van der Corput): bits of the index reversed.
-inline uint32_t SobolDim0(uint32_t i) {
+inline uint32_t ReverseBits32(uint32_t i) {
     i = (i << 16) | (i >> 16);
     i = ((i & 0x00ff00ffU) << 8) | ((i & 0xff00ff00U) >> 8);
     i = ((i & 0x0f0f0f0fU) << 4) | ((i & 0xf0f0f0f0U) >> 4);
@@ -96,6 +96,7 @@ inline uint32_t SobolDim0(uint32_t i) {
     i = ((i & 0x55555555U) << 1) | ((i & 0xaaaaaaaaU) >> 1);
     return i;
 }
+inline uint32_t SobolDim0(uint32_t i) { return ReverseBits32(i); }
 
 // Sobol' dimension 1: generator matrix columns v_0 = 2^31, v_{k+1} = v_k ^ (v_k >> 1)
 // (Pascal's triangle mod 2). With dimension 0 it forms a (0,2)-sequence in base 2.
@@ -104,6 +105,25 @@ inline uint32_t SobolDim1(uint32_t i) {
     for (; i != 0; i >>= 1, v ^= v >> 1)
         if (i & 1) r ^= v;
     return r;
+}
+
+// Hash-based Owen scrambling of 32-bit binary fractions (Burley 2020,
+// "Practical Hash-based Owen Scrambling", JCGT 9(4)): the Laine-Karras
+// permutation applied to the bit-reversed value flips each bit depending only
+// on the bits above it, so it is a nested (Owen) scramble: elementary
+// intervals, hence (0,m,2)-nets, are preserved exactly. A few multiplies
+// instead of one hash per digit.
+inline uint32_t LaineKarrasPermutation(uint32_t x, uint32_t seed) {
+    x += seed;
+    x ^= x * 0x6c50b47cU;
+    x ^= x * 0xb82f1e52U;
+    x ^= x * 0xc7afe638U;
+    x ^= x * 0x8d22f6e6U;
+    return x;
+}
+inline uint32_t ReverseBits32(uint32_t i);
+inline uint32_t FastOwenScramble(uint32_t x, uint32_t seed) {
+    return ReverseBits32(LaineKarrasPermutation(ReverseBits32(x), seed));
 }
 
 // The i-th prime (i >= 0), for Halton bases; i < PrimeTableSize.

@@ -3,6 +3,7 @@
 // (seed, pixel, sample index, dimension), so clones, threads and call order
 // never change a render. get1D consumes one dimension, get2D two.
 #pragma once
+#include "samplers/rng.h"
 #include "samplers/sampler.h"
 
 namespace gradus {
@@ -82,14 +83,17 @@ class HaltonSampler : public AddressedSampler {
 class SobolSampler : public AddressedSampler {
   public:
     SobolSampler(int spp, uint64_t seed);  // spp must be a power of two
+    void startPixelSample(Point2i pixel, int64_t sampleIndex, int dimension = 0) override;
     Float get1D() override;
     Point2 get2D() override;
     std::unique_ptr<Sampler> clone() const override { return std::make_unique<SobolSampler>(*this); }
     std::string name() const override { return "sobol"; }
 
   private:
-    uint32_t shuffledIndex(int dim) const;
+    uint32_t shuffledIndex(int dim, uint64_t h) const;
+    uint64_t dimHash(int d) const { return MixBits(pixelHash_ ^ (uint64_t(d + 1) * 0x9e3779b97f4a7c15ULL)); }
     int log2spp_;
+    uint64_t pixelHash_ = 0;  // Hash(seed, pixel), cached per sample
 };
 
 // Smallest power of two >= n (n >= 1).

@@ -52,8 +52,9 @@ TEST(GBDPTRender, LayersFiniteAndNoEnergyGain) {
                 }
             }
             EXPECT_NE(stats.find("case (iii)"), std::string::npos);
-            if (!glossy && std::string(line) == "Integrator \"gbdpt\"")
+            if (!glossy && std::string(line) == "Integrator \"gbdpt\"") {
                 EXPECT_EQ(stats.find("manifold walks 0,"), std::string::npos) << stats;
+            }
         }
 }
 

@@ -246,7 +246,9 @@ TEST(GBDPTShift, CameraShiftIsInvertibleAndWeightsPair) {
         EXPECT_GT(pairs, 300) << line;
         EXPECT_LE(asymmetric, pairs / 100) << line;
         EXPECT_GT(weights, 300) << line;
-        if (std::string(line) == "Integrator \"gbdpt\"") EXPECT_GT(chains, 5) << "paths with specular chains";
+        if (std::string(line) == "Integrator \"gbdpt\"") {
+            EXPECT_GT(chains, 5) << "paths with specular chains";
+        }
         std::printf("%s: %d shifted pairs (%d with specular chains), %d weight pairs, %d one-sided\n", line, pairs,
                     chains, weights, asymmetric);
     }

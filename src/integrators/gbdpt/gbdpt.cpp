@@ -12,6 +12,9 @@ namespace gradus {
 std::unique_ptr<Integrator> CreateGBDPTIntegrator(const EntityDesc &d) { return std::make_unique<GBDPTIntegrator>(d); }
 
 namespace {
+Spectrum SafeRatio(const Spectrum &a, const Spectrum &b) {
+    return Spectrum(b.r != 0 ? a.r / b.r : 0, b.g != 0 ? a.g / b.g : 0, b.b != 0 ? a.b / b.b : 0);
+}
 // Layers of the light-tracing buffer (same meaning as GradientFilm's).
 enum { LPrimal, LPrimalSq, LDxF, LDxFSq, LDxB, LDxBSq, LDyF, LDyFSq, LDyB, LDyBSq, LNum };
 }  // namespace
@@ -197,6 +200,7 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                 u.uLight = sampler.get2D();
             }
             if (t == 1) u.uLens = sampler.get2D();
+            if (t == 1 && !lightTracing_) continue;  // no light-tracing paths (Table 1, "w/o LTP")
             // Sec. 3.2: no connections at vertices classified specular.
             if (s >= 1 && t >= 2 && !diffuseAt(cam, t - 1)) continue;
             if (s >= 2 && !diffuseAt(light, s - 1)) continue;
@@ -219,7 +223,21 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
             }
             if (!ok) continue;  // blocked or black base path: nothing to shift (Sec. 4)
             const Spectrum fx = r.unweighted * w;
-            const Float wx = r.weight;
+            Float wx = r.weight;
+            // Without light-tracing paths every weight leaves the t = 1 strategy
+            // out: w' = p_st / sum_{k != LT} p_k = w / (1 - w p_LT / p_st).
+            PathVertex lpv;
+            if (useLp) {
+                lpv = lp.v;
+                lpv.pdfFwd = PdfLightOrigin(bctx_, lpv, cam.v[t - 1]);
+            }
+            auto noLT = [&](Float wb, SubpathView cv) {
+                if (lightTracing_ || t < 2 || !(wb > 0)) return wb;
+                SubpathView lv = useLp ? SubpathView{&lpv, nullptr, 1} : lightView;
+                Float q = 1 - wb * LightTracingRatio(sctx_, lv, cv, s, t, useLp ? &lpv : nullptr);
+                return q > 1e-6 ? wb / q : Float(0);
+            };
+            wx = noLT(wx, camView);
 
             if (t == 1) {
                 // [8-11] light-tracing path (case (iii)): shifted one by one.
@@ -264,13 +282,33 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                 ++st.caseAttempts[cas];
                 ConnectResult ry;
                 bool oky = false;
-                if (kc <= sh.validUpTo) {
+                if (kc <= sh.validUpTo && sh.r >= 0 && kc > sh.r && !(s == 1 && !useLp)) {
+                    // Past the reconnection the offset's connection is the base's
+                    // (same vertices, same shadow ray): only the camera-side
+                    // throughput and the offset's MIS densities differ.
+                    SubpathView yv = sh.y.view();
+                    ry.unweighted = r.unweighted * SafeRatio(sh.y.v[kc].throughput(), cam.v[kc].throughput());
+                    if (useLp) {
+                        PathVertex sv = lp.v;
+                        sv.pdfFwd = PdfLightOrigin(bctx_, sv, sh.y.v[kc]);
+                        ry.weight = MISWeight(bctx_, SubpathView{&sv, nullptr, 1}, yv, 1, t, &sv);
+                    } else {
+                        ry.weight = MISWeight(bctx_, lightView, yv, s, t, nullptr);
+                    }
+                    oky = !ry.unweighted.isBlack() && ry.weight > 0;
+                } else if (kc <= sh.validUpTo) {
                     SubpathView yv = sh.y.view();
                     if (useLp)
                         oky = ConnectLightPoint(sctx_, lp, yv, t, &ry);
                     else if (!(s == 1))  // infinite-light NEE: not shifted (fallback)
                         oky = ConnectBDPT(bctx_, lightView, yv, s, t, u, &ry);
                     oky = oky && !ry.unweighted.isBlack() && ry.weight > 0;
+                }
+                if (oky && !lightTracing_) {
+                    if (useLp) lpv.pdfFwd = PdfLightOrigin(bctx_, lp.v, sh.y.v[kc]);
+                    ry.weight = noLT(ry.weight, sh.y.view());
+                    if (useLp) lpv.pdfFwd = PdfLightOrigin(bctx_, lp.v, cam.v[kc]);
+                    oky = ry.weight > 0;
                 }
                 if (oky) {
                     ++st.caseSuccesses[cas];

@@ -21,8 +21,9 @@
 //   string lightsamplestrategy "power"  uniform | power (position-free, as the MIS assumes)
 //   float shiftthreshold 0.001       roughness below which a vertex is "specular"
 //   string shift "manifold"          manifold (Sec. 3.1) | halfvector (Kettunen et al. 2015)
-//   bool lighttracing true           false: light-tracing paths are not shifted (their
-//                                    gradients use the unshifted fallback; primal unchanged)
+//   bool lighttracing true           false: no light-tracing paths (t = 1 strategies are
+//                                    neither sampled nor counted in any MIS weight, primal
+//                                    and gradients; Table 1 "w/o LTP")
 //   string mis "combined"            combined (Eq. 8) | simple (Eq. 9)
 //   string reconstruction "l1"       l1 | l2 | weighted: the image in the unprefixed R,G,B
 //   float alpha 0.2                  screened-Poisson primal weight

@@ -131,17 +131,6 @@ Float SolidAnglePerArea(const ManifoldChain &c) {
     return c0 > 0 && std::isfinite(g) ? g / c0 : 0;
 }
 
-bool ReverseChain(const ManifoldChain &c, ManifoldChain *r) {
-    ManifoldSurfacePoint pts[kMaxManifoldVertices];
-    bool refl[kMaxManifoldVertices], spec[kMaxManifoldVertices];
-    for (int i = 0; i < c.size; ++i) pts[i] = c.v[c.size - 1 - i].sp;
-    for (int i = 0; i + 2 < c.size; ++i) {
-        refl[i] = c.v[c.size - 2 - i].reflect;
-        spec[i] = c.v[c.size - 2 - i].specular;
-    }
-    return MakeChain(pts, c.size, refl, spec, r);
-}
-
 // Builds the base chain x[0..k+1] (interior: ideal specular vertices) from
 // interactions; records the index of refraction of refracting interiors.
 bool BuildChain(const GBDPTShiftContext &ctx, const ManifoldSurfacePoint &start, const SurfaceInteraction *interior,
@@ -275,7 +264,19 @@ void ShiftCameraSubpath(const GBDPTShiftContext &ctx, const ShiftSubpath &x, con
                 break;
             }
     }
-    const int traceEnd = ctx.manifold ? (b >= 0 ? b : n - 1) : (rec >= 0 ? rec - 1 : n - 1);
+    int traceEnd = ctx.manifold ? (b >= 0 ? b : n - 1) : (rec >= 0 ? rec - 1 : n - 1);
+    if (!ctx.manifold && b >= 0) {
+        // Half-vector shift: a specular vertex between b and the reconnection
+        // makes the shift of the whole path a fallback, as for its light-tracing
+        // strategy (not shifted across specular chains): a path's strategies must
+        // all use Eq. 8 or all fall back, or the weights do not sum to one.
+        for (int k = b + 1; k < (rec >= 0 ? rec : n); ++k)
+            if (!diffuse(k)) {
+                traceEnd = b;
+                rec = -1;
+                break;
+            }
+    }
 
     ++st->shift.offsetPaths;
     Ray rx, ray;
@@ -528,6 +529,35 @@ void ShiftCameraSubpath(const GBDPTShiftContext &ctx, const ShiftSubpath &x, con
     }
 }
 
+Float LightTracingRatio(const GBDPTShiftContext &ctx, SubpathView light, SubpathView cam, int s, int t,
+                        const PathVertex *sampled) {
+    const BidirContext &bc = *ctx.bidir;
+    if (t < 2 || s + t - 1 < 2) return 0;
+    auto Lv = [&](int i) -> const PathVertex & { return (s == 1 && i == 0 && sampled) ? *sampled : light.v[i]; };
+    auto Lb = [&](int i) -> const BSDF * { return light.bsdf && !(s == 1 && sampled) ? &light.bsdf[i] : nullptr; };
+    const PathVertex &x1 = cam.v[1];
+    if (x1.type != VertexType::Surface || !IsDiffuseVertex(ctx, x1, &cam.bsdf[1]) ||
+        !EdgeConnectible(bc, x1, cam.v[0]))
+        return 0;
+    auto remap = [](Float f) { return f != 0 ? f : Float(1); };
+    // Reverse densities of the camera vertices t-1 and t-2 given the light side.
+    const PathVertex &pt = cam.v[t - 1];
+    Float revT1 = 0, revT2 = 0;
+    if (s > 0) {
+        revT1 = PdfArea(bc, Lv(s - 1), Lb(s - 1), s > 1 ? &Lv(s - 2) : nullptr, pt, TransportMode::Importance);
+        revT2 = PdfArea(bc, pt, &cam.bsdf[t - 1], &Lv(s - 1), cam.v[t - 2], TransportMode::Importance);
+    } else {
+        revT1 = PdfLightOrigin(bc, pt, cam.v[t - 2]);
+        revT2 = PdfLightDirection(bc, pt, cam.v[t - 2]);
+    }
+    Float r = 1;
+    for (int i = t - 1; i >= 1; --i) {
+        Float rev = i == t - 1 ? revT1 : (i == t - 2 ? revT2 : cam.v[i].pdfRev);
+        r *= remap(rev) / remap(cam.v[i].pdfFwd);
+    }
+    return std::isfinite(r) ? r : 0;
+}
+
 bool SampleLightPoint(const GBDPTShiftContext &ctx, const PathVertex &pt, Float uSel, Point2 u, LightPoint *lp) {
     const BidirContext &bc = *ctx.bidir;
     Float pmf;
@@ -647,7 +677,7 @@ bool ShiftLightTracingPath(const GBDPTShiftContext &ctx, const ShiftSubpath &lig
     const Vec3 woX1 = Normalize(lens.p - x1.p), woY1 = isect.wo;
     const Vec3 wiX1 = Normalize(light.v[s - 2].p - x1.p);
     Vec3 wiY1, towardCamX, towardCamY;  // towardCam*: at c, towards the camera side
-    Float J = 0, Qx = 0, Qy = 0, discX = 1, discY = 1;
+    Float J = 0, discX = 1, discY = 1;
     Spectrum chainX(1), chainY(1);
     ManifoldChain offChain;
     WalkedInterior walked;
@@ -670,8 +700,6 @@ bool ShiftLightTracingPath(const GBDPTShiftContext &ctx, const ShiftSubpath &lig
         wiY1 = rc.wi;
         towardCamX = -wiX1;
         towardCamY = -wiY1;
-        Qx = AbsDot(Vec3(x1.ng), wiX1) / DistanceSquared(x1.p, xc.p);
-        Qy = AbsDot(Vec3(isect.n), wiY1) / DistanceSquared(isect.p, xc.p);
     } else {
         SurfaceInteraction xsi[kMaxManifoldVertices];
         const BSDF *xb[kMaxManifoldVertices];
@@ -715,16 +743,13 @@ bool ShiftLightTracingPath(const GBDPTShiftContext &ctx, const ShiftSubpath &lig
             st->shift.fail(ShiftFailure::Geometry);
             return false;
         }
-        ManifoldChain rb, ry;
         Float ax = SolidAnglePerArea(base), ay = SolidAnglePerArea(res.chain);
-        if (!(ax > 0) || !(ay > 0) || !ReverseChain(base, &rb) || !ReverseChain(res.chain, &ry) ||
+        if (!(ax > 0) || !(ay > 0) ||
             !EvaluateWalked(scene, res.chain, tr, gids, arena, TransportMode::Radiance, &walked)) {
             st->shift.fail(ShiftFailure::Geometry);
             return false;
         }
         J = ay / ax;
-        Qx = SolidAnglePerArea(rb);
-        Qy = SolidAnglePerArea(ry);
         chainY = walked.factor;
         discY = walked.prob;
         wiY1 = Normalize(res.chain.v[1].sp.p - isect.p);
@@ -762,9 +787,30 @@ bool ShiftLightTracingPath(const GBDPTShiftContext &ctx, const ShiftSubpath &lig
     // (ShiftJacobianFactor's cos^4/G for an empty eye chain) times the light
     // path's density of b through the chain.
     Vec3 n0 = bc.camera->lensNormal();
+    // The MIS densities of common/ (area measure, Dirac factors remapped to 1)
+    // and the camera-side rho of the same path's other strategies imply the
+    // effective |T'| = (F_y/F_x) J_b (disc_y/disc_x) (G1_x/G1_y), G1 = |cos|/d^2
+    // of the first edge after b; the light-tracing strategy's density ratio is
+    // that of the vertex after c, p_omega,c G1c. (For an empty chain this is
+    // F p_omega,c Q, the exact |T'| p(y)/p(x).)
     Float Fx = EyeAreaFactor(lens.p, n0, x1.p, x1.ng), Fy = EyeAreaFactor(lens.p, n0, isect.p, isect.n);
-    Float denR = Fx * pcX * Qx * discX;
-    *rho = denR > 0 ? Fy * pcY * Qy * discY / denR : 0;
+    const PathVertex &xn = light.v[s - 2];  // the vertex after b towards c (base)
+    Point3 ynP = k > 0 ? offChain.v[1].sp.p : xc.p;
+    Vec3 ynN = k > 0 ? Vec3(walked.si[0].n) : Vec3(xc.ng);
+    auto g1 = [](const Point3 &a, const Point3 &b2, const Vec3 &nb, bool surf) {
+        Vec3 d = b2 - a;
+        Float d2 = d.lengthSquared();
+        return (surf ? AbsDot(nb, d / std::sqrt(d2)) : Float(1)) / d2;
+    };
+    Float G1x = g1(x1.p, xn.p, Vec3(xn.ng), xn.onSurface()), G1y = g1(isect.p, ynP, ynN, xn.onSurface());
+    // Vertex after c towards b: base light.v[c + 1], offset the last walked vertex or y1.
+    const PathVertex &xa = light.v[c + 1];
+    Point3 yaP = k > 0 ? offChain.v[k].sp.p : isect.p;
+    Vec3 yaN = k > 0 ? Vec3(walked.si[k - 1].n) : Vec3(isect.n);
+    Float Gcx = g1(xc.p, xa.p, Vec3(xa.ng), true), Gcy = g1(xc.p, yaP, yaN, true);
+    Float denR = Fx * discX * G1y * pcX * Gcx;
+    *rho = denR > 0 ? Fy * J * discY * G1x * pcY * Gcy / denR : 0;
+
 
     // Offset light subpath (its own area densities) for its BDPT weight.
     PathVertex *yv = ArenaArray<PathVertex>(arena, s);

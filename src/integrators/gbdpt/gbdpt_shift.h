@@ -33,7 +33,19 @@
 // the shifted sampled directions of J_i p_y,i / p_x,i (discrete lobe
 // probabilities at ideal specular vertices), so the weight of Eq. 8 is
 //   w_ij,st(x) = 1 / (1 / w_st(x) + rho / w_st(y))
-// with w_st the balance-heuristic BDPT weights of base and offset.
+// with w_st the balance-heuristic BDPT weights of base and offset. The
+// weights of all strategies of one path sum to one only if every strategy uses
+// the same |T'| in the measure of the MIS densities of common/ (area measure,
+// Dirac factors remapped to 1): light-tracing paths take the camera side's
+// effective |T'| (ShiftLightTracingPath), and a path either uses Eq. 8 for all
+// its strategies or falls back for all (failures depend on the path only).
+//
+// Limitations: second chains must consist of ideal specular vertices (a glossy
+// vertex below the threshold there makes the path fall back); glossy
+// refraction is not half-vector copied; the half-vector shift falls back for
+// paths with a specular vertex between b and its reconnection vertex (their
+// light-tracing strategy is not shifted across specular chains); infinite
+// lights are not shifted (fallback).
 #pragma once
 #include <cstdint>
 
@@ -120,6 +132,15 @@ Float ChainSolidAnglePerArea(const ManifoldChain &c);
 // dA_b/ds of a pinhole camera at `lens` with axis n0 (cos^4 / G of
 // ShiftJacobianFactor for an empty eye chain, up to the focal constant).
 Float EyeAreaFactor(const Point3 &lens, const Vec3 &n0, const Point3 &pb, const Vec3 &ngb);
+
+// p_{s+t-1,1}(x) / p_{s,t}(x): the light-tracing strategy's density relative
+// to strategy (s, t) of the same full path, in the MIS densities of common/
+// (the product of MISWeight's ratios down to one camera vertex); 0 when the
+// path has no light-tracing strategy (x_1 specular or not connectible).
+// `sampled` is the light vertex of s = 1. Lets "lighttracing false" leave the
+// t = 1 strategies out of all weights: w' = w / (1 - ratio w).
+Float LightTracingRatio(const GBDPTShiftContext &ctx, SubpathView light, SubpathView cam, int s, int t,
+                        const PathVertex *sampled);
 
 // Combined gradient/BDPT MIS (Eq. 8) and the simpler variant (Eq. 9).
 inline Float CombinedWeight(Float wx, Float wy, Float rho) {

@@ -19,7 +19,7 @@ GPTIntegrator::GPTIntegrator(const EntityDesc &desc) : loc_(desc.loc) {
     std::string mode = ps.getString("shift", "halfvector");
     std::string rec = ps.getString("reconstruction", "l1");
     alpha_ = ps.getFloat("alpha", 0.2);
-    std::string pf = ps.getString("pixelfilter", "box");
+    std::string pf = ps.getString("pixelfilter", "film");
     if (pf != "box" && pf != "film")
         throw Error(ps.locOf("pixelfilter", desc.loc), "unknown \"pixelfilter\" \"" + pf + "\" (box, film)");
     filmFilter_ = pf == "film";

@@ -1,6 +1,7 @@
 // Small sampling and trigonometry helpers used by the BxDFs (local frame, z = normal).
 #pragma once
 #include "core/geometry.h"
+#include "samplers/sampling.h"
 
 namespace gradus {
 namespace bxdfutil {
@@ -19,27 +20,8 @@ inline Float SinPhi(const Vec3 &w) {
     return s == 0 ? 0 : Clamp<Float>(w.y / s, -1, 1);
 }
 
-// Concentric disk mapping (Shirley & Chiu 1997).
-inline Point2 ConcentricDisk(Point2 u) {
-    Float ox = 2 * u.x - 1, oy = 2 * u.y - 1;
-    if (ox == 0 && oy == 0) return {0, 0};
-    Float r, theta;
-    if (std::abs(ox) > std::abs(oy)) {
-        r = ox;
-        theta = (Pi / 4) * (oy / ox);
-    } else {
-        r = oy;
-        theta = Pi / 2 - (Pi / 4) * (ox / oy);
-    }
-    return {r * std::cos(theta), r * std::sin(theta)};
-}
-
-// Cosine-weighted hemisphere (Malley's method); pdf = cos / pi.
-inline Vec3 CosineHemisphere(Point2 u) {
-    Point2 d = ConcentricDisk(u);
-    Float z = SafeSqrt(1 - d.x * d.x - d.y * d.y);
-    return {d.x, d.y, z};
-}
+// Cosine-weighted hemisphere sampling comes from samplers/sampling.h.
+inline Vec3 CosineHemisphere(Point2 u) { return SampleCosineHemisphere(u); }
 
 inline Vec3 Reflect(const Vec3 &wo, const Vec3 &n) { return -wo + n * (2 * Dot(wo, n)); }
 

@@ -13,9 +13,8 @@ struct RenderResult {
     RenderStats stats;
 };
 
-inline RenderResult RenderSceneText(const std::string &text, int spp, uint64_t seed = 0, int nthreads = 0,
-                                    const std::string &integrator = "", const std::string &dir = ".") {
-    SceneDesc desc = ParseString(text, "test.pbrt", dir);
+inline RenderResult RenderDesc(const SceneDesc &desc, int spp, uint64_t seed, int nthreads,
+                               const std::string &integrator) {
     BuildOptions bo;
     bo.sppOverride = spp;
     bo.seed = seed;
@@ -35,25 +34,14 @@ inline RenderResult RenderSceneText(const std::string &text, int spp, uint64_t s
     return r;
 }
 
+inline RenderResult RenderSceneText(const std::string &text, int spp, uint64_t seed = 0, int nthreads = 0,
+                                    const std::string &integrator = "", const std::string &dir = ".") {
+    return RenderDesc(ParseString(text, "test.pbrt", dir), spp, seed, nthreads, integrator);
+}
+
 inline RenderResult RenderSceneFile(const std::string &path, int spp, uint64_t seed = 0,
                                     const std::string &integrator = "") {
-    SceneDesc desc = ParseFile(path);
-    BuildOptions bo;
-    bo.sppOverride = spp;
-    bo.seed = seed;
-    bo.integratorOverride = integrator;
-    bo.quiet = true;
-    RenderJob job = BuildRenderJob(desc, bo);
-    RenderOptions ro;
-    ro.spp = spp;
-    ro.seed = seed;
-    ro.quiet = true;
-    job.integrator->preprocess(*job.scene, *job.film);
-    RenderResult r;
-    r.stats = job.integrator->render(*job.scene, *job.film, *job.sampler, ro);
-    r.image = job.film->toImage();
-    job.integrator->finish(*job.film, &r.image);
-    return r;
+    return RenderDesc(ParseFile(path), spp, seed, 0, integrator);
 }
 
 // Mean and standard error of the mean of channel c over all pixels.

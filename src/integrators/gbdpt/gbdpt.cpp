@@ -85,6 +85,9 @@ void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     sctx_.manifold = manifold_;
     // No specular or near-specular surface: no chain can be non-empty, no walk is attempted.
     sctx_.trySpecular = scene.features.specularSurfaces || scene.features.nearSpecularSurfaces;
+    // Triangle hits come from Embree in single precision: positions are good to
+    // ~1e-7 relative, so the double-precision walk tolerance (1e-7) is loosened.
+    sctx_.walk.relativeTolerance = 1e-5;
     gfilm_.init(film);
     filmBounds_ = film.pixelBounds();
     Point2i full = film.fullResolution();

@@ -59,4 +59,27 @@ inline void PixelMeanAndStdErr(const Image &img, int c, double *mean, double *st
     *stderrOut = std::sqrt(var / n);
 }
 
+// Largest |z| over blocks x channels of the paired difference of two
+// independent renders of the same scene: per block, the mean of the per-pixel
+// differences over its standard error (image structure cancels in the pairs).
+// Blocks whose differences are all zero are skipped.
+inline double MaxPairedBlockZ(const Image &a, const Image &b, int block) {
+    double worst = 0;
+    for (int by = 0; by + block <= a.height(); by += block)
+        for (int bx = 0; bx + block <= a.width(); bx += block)
+            for (int c = 0; c < 3; ++c) {
+                double s = 0, s2 = 0;
+                int n = 0;
+                for (int y = by; y < by + block; ++y)
+                    for (int x = bx; x < bx + block; ++x, ++n) {
+                        double d = double(a.at(x, y, c)) - b.at(x, y, c);
+                        s += d;
+                        s2 += d * d;
+                    }
+                double m = s / n, se = std::sqrt(std::max(0.0, s2 / n - m * m) / (n - 1));
+                if (se > 0) worst = std::max(worst, std::abs(m / se));
+            }
+    return worst;
+}
+
 }  // namespace gradus::test

@@ -11,6 +11,7 @@ std::unique_ptr<Integrator> CreateBDPTIntegrator(const EntityDesc &d) { return s
 BDPTIntegrator::BDPTIntegrator(const EntityDesc &desc) : loc_(desc.loc) {
     const ParamSet &ps = desc.params;
     maxDepth_ = ps.getInt("maxdepth", 5);
+    rrDepth_ = ps.getInt("rrdepth", 3);
     strategy_ = ps.getString("lightsamplestrategy", "power");
     visStrategies_ = ps.getBool("visualizestrategies", false);
     visWeights_ = ps.getBool("visualizeweights", false);
@@ -38,6 +39,7 @@ int BDPTIntegrator::strategyLayer(int s, int t) const {
 void BDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     lightSampler_ = LightSampler(scene.lights, strategy_, loc_);
     ctx_.init(scene, lightSampler_, heuristic_);
+    ctx_.rrDepth = rrDepth_;
     // One light subpath per camera sample over the sampled pixels; the film
     // normalises splats by the samples per pixel, so light tracing estimates
     // the full image times (sampled pixels / full-image pixels).

@@ -8,6 +8,8 @@
 //   bool visualizeweights false           layers "bdpt_s<S>_t<T>": MIS-weighted contribution of each strategy
 //   string misheuristic "balance"         balance (pbrt-v3) | power (exponent 2)
 //   integer pixelbounds [x0 x1 y0 y1]     accepted (use --cropwindow instead)
+//   integer rrdepth 3                     Russian roulette on subpaths after this many bounces
+//                                         (-1: off, as pbrt-v3; see BidirContext::rrDepth)
 // Strategy layers exist for t >= 2 only: light-tracing (t = 1) contributions
 // are splats and the film has no per-layer splat path; they go to the main image.
 // With both visualize flags set, visualizeweights wins.
@@ -34,6 +36,7 @@ class BDPTIntegrator : public SampleIntegrator {
 
   private:
     int maxDepth_;
+    int rrDepth_ = 3;
     std::string strategy_;
     bool visStrategies_, visWeights_;
     MISHeuristic heuristic_;

@@ -67,6 +67,7 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
     GRADUS_STAT_COUNTER("BDPT/Subpath vertices", nVerts);
     const Scene &scene = *ctx.scene;
     Float pdfFwd = pdfDir;
+    const Float beta0 = beta.maxComponent();
     while (n < maxVertices) {
         SurfaceInteraction isect;
         bool hit = scene.intersect(ray, &isect);
@@ -133,6 +134,16 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
         if (mode == TransportMode::Importance) beta *= ShadingCorrection(v, wo, bs.wi);
         prev.pdfRev = ConvertDensity(pdfRev, v, prev);
         if (beta.isBlack() || !beta.isFinite()) break;
+        // Russian roulette on the throughput relative to the subpath's start.
+        if (ctx.rrDepth >= 0 && n > ctx.rrDepth + 1 && n < maxVertices) {
+            Float uRR = sampler.get1D();
+            Float rel = beta0 > 0 ? beta.maxComponent() / beta0 : 1;
+            if (rel < 1) {
+                Float q = std::max<Float>(0.05, 1 - rel);
+                if (uRR < q) break;
+                beta = beta / (1 - q);
+            }
+        }
         ray = isect.spawnRay(bs.wi);
     }
     return n;

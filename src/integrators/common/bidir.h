@@ -44,6 +44,12 @@ struct BidirContext {
     const LightSampler *lightSampler = nullptr;
     MISHeuristic heuristic = MISHeuristic::Balance;
     Float minConnectDist = 0;  // connections over shorter edges are rejected (set by Init)
+    // Russian roulette in subpath generation after this many bounces (-1: off,
+    // pbrt-v3's BDPT has none). A subpath continues with probability
+    // min(1, max(0.05, |beta| / |beta_0|)) and its throughput is divided by it.
+    // The MIS weights (which ignore it) still sum to one, so every strategy stays
+    // unbiased: the continuation is an unbiased random weighting of the suffix.
+    int rrDepth = -1;
     // Sets scene/camera/light sampler and the near-coincidence threshold
     // (1e-5 of the scene's bounding-sphere diameter).
     void init(const Scene &s, const LightSampler &ls, MISHeuristic h);

@@ -64,6 +64,7 @@ struct ThreadScratch {
 MBDPTIntegrator::MBDPTIntegrator(const EntityDesc &desc) : loc_(desc.loc) {
     const ParamSet &ps = desc.params;
     set_.maxDepth = ps.getInt("maxdepth", 5);
+    set_.rrDepth = ps.getInt("rrdepth", 3);
     set_.lightStrategy = ps.getString("lightsamplestrategy", "power");
     set_.visStrategies = ps.getBool("visualizestrategies", false);
     set_.visWeights = ps.getBool("visualizeweights", false);
@@ -131,6 +132,7 @@ int MBDPTIntegrator::strategyLayer(int s, int t) const {
 void MBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     lightSampler_ = LightSampler(scene.lights, set_.lightStrategy, loc_);
     ctx_.init(scene, lightSampler_, set_.heuristic);
+    ctx_.rrDepth = set_.rrDepth;
     Point2i full = film.fullResolution();
     int64_t sampled = film.sampleBounds().area();
     // One light subpath per sampled pixel: light tracing estimates the full image (see bdpt.cpp).

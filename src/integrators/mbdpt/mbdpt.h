@@ -19,7 +19,7 @@
 // result does not depend on the thread count.
 //
 // Parameters (besides bdpt's maxdepth, lightsamplestrategy, misheuristic,
-// visualizestrategies -> layers "mbdpt_s<S>_t<T>", visualizeweights, pixelbounds):
+// visualizestrategies -> layers "mbdpt_s<S>_t<T>", visualizeweights, pixelbounds, rrdepth 3):
 //   string reorder "distance"       distance (Sec. 4.2) | morton (end vertex) | none
 //   integer connections 1           m: light subpaths per camera subpath and strategy
 //   string matrixrows "matched"     matched: a camera subpath takes part in M_{s,t} with probability
@@ -45,6 +45,7 @@ namespace gradus {
 
 struct MBDPTSettings {
     int maxDepth = 5;
+    int rrDepth = 3;  // Russian roulette in subpath generation (BidirContext::rrDepth)
     std::string lightStrategy = "power";
     MISHeuristic heuristic = MISHeuristic::Balance;
     mbdpt::Reorder reorder = mbdpt::Reorder::Distance;

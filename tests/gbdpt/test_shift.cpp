@@ -171,6 +171,113 @@ TEST(GBDPTShift, EyeAreaFactorMatchesFiniteDifferences) {
     }
 }
 
+// The light subpath that makes strategy (s, n - s) of a camera path x[0..n-1]
+// ending on an emitter: the reversed tail x[n-1] .. x[n-s], densities swapped.
+ShiftSubpath ReversedTail(const BidirContext &bc, const ShiftSubpath &x, int s, Arena &arena) {
+    ShiftSubpath L;
+    L.n = s;
+    L.v = new (arena.alloc(sizeof(PathVertex) * s, alignof(PathVertex))) PathVertex[s];
+    L.b = new (arena.alloc(sizeof(BSDF) * s, alignof(BSDF))) BSDF[s];
+    L.deltaSample = static_cast<uint8_t *>(arena.alloc(s));
+    const int n = x.n;
+    for (int j = 0; j < s; ++j) {
+        const PathVertex &c = x.v[n - 1 - j];
+        PathVertex &v = L.v[j];
+        v = c;
+        v.pdfFwd = c.pdfRev;
+        v.pdfRev = c.pdfFwd;
+        v.wo = Normalize(x.v[n - j].p - c.p);  // towards the previous light-subpath vertex
+        if (j == 0) v.wo = Normalize(x.v[n - 2].p - c.p);
+        L.b[j] = x.b[n - 1 - j];
+        L.deltaSample[j] = x.deltaSample[n - 1 - j];
+    }
+    // The emitter as a light vertex, as light subpaths start.
+    L.v[0].type = VertexType::Light;
+    L.v[0].light = EmitterOf(bc, x.v[n - 1]);
+    L.v[0].flags = 0;
+    L.v[0].pdfFwd = PdfLightOrigin(bc, x.v[n - 1], x.v[n - 2]);
+    if (s >= 2) L.v[1].pdfFwd = PdfLightDirection(bc, x.v[n - 1], x.v[n - 2]);
+    return L;
+}
+
+// Eq. 8 normalisation over a whole path: for a camera path ending on the light,
+// every strategy (s, t) of the same full path (t >= 2 from the shifted camera
+// subpath, t = 1 by the light-tracing shift) gives w_ij,st(x) (1 + rho_st) =
+// (p_st(x) + |T'| p_st(y)) / D; their sum over st must be 1, i.e.
+// sum_st [w_ij,st(x) + w_ji,st(T_ij x)] = 1.
+TEST(GBDPTShift, CombinedWeightsOfAllStrategiesSumToOne) {
+    Fixture f;
+    const GBDPTShiftContext &sc = f.g->shiftContext();
+    const BidirContext &bc = f.g->bidirContext();
+    std::unique_ptr<Sampler> sampler = f.job.sampler->clone();
+    Arena arena;
+    int paths = 0, withLT = 0, withChain = 0;
+    for (int trial = 0; trial < 20000 && paths < 200; ++trial) {
+        Point2i px{1 + trial % 21, 1 + (trial / 21) % 15};
+        sampler->startPixelSample(px, trial, 0);
+        CameraSample cs{Point2(px.x + sampler->get1D(), px.y + sampler->get1D()), sampler->get2D()};
+        Ray ray;
+        bc.camera->generateRay(cs, &ray);
+        const int maxV = 6;
+        ShiftSubpath x;
+        x.v = new (arena.alloc(sizeof(PathVertex) * maxV, alignof(PathVertex))) PathVertex[maxV];
+        x.b = new (arena.alloc(sizeof(BSDF) * maxV, alignof(BSDF))) BSDF[maxV];
+        x.deltaSample = static_cast<uint8_t *>(arena.alloc(maxV));
+        x.n = GenerateCameraSubpath(bc, ray, *sampler, arena, maxV, x.v, x.b);
+        const int n = x.n;
+        if (n < 3 || !EmitterOf(bc, x.v[n - 1]) || x.v[n - 1].type != VertexType::Surface) continue;
+        if (EmittedRadiance(bc, x.v[n - 1], x.v[n - 2]).isBlack()) continue;
+        bool corner = false;
+        for (int k = 1; k + 1 < n; ++k) corner |= Distance(x.v[k].p, x.v[k + 1].p) < 1e-2;
+        if (corner) continue;
+        PrepareSubpath(sc, &x);
+        CameraShift sh;
+        GBDPTLocalStats st;
+        ShiftCameraSubpath(sc, x, cs, {1, 0}, arena, &sh, &st);
+        if (sh.validUpTo != n - 1) continue;  // a failed path falls back as a whole
+        double sum = 0, sumx = 0;
+        bool ok = true;
+        for (int t = n; t >= 1 && ok; --t) {
+            int s = n - t;
+            if (t >= 2 && s >= 1 && !IsDiffuseVertex(sc, x.v[t - 1], &x.b[t - 1])) continue;
+            if (s >= 1 && !IsDiffuseVertex(sc, x.v[t], &x.b[t])) continue;
+            ShiftSubpath L, Ly;  // s = 0: no light vertices
+            if (s >= 1) {
+                L = ReversedTail(bc, x, s, arena);
+                Ly = ReversedTail(bc, sh.y, s, arena);
+            }
+            if (t >= 2) {
+                if (s >= 1 && !EdgeConnectible(bc, x.v[t - 1], x.v[t])) continue;
+                Float wx = MISWeight(bc, L.view(), SubpathView{x.v, x.b, t}, s, t, nullptr);
+                Float wy = MISWeight(bc, Ly.view(), SubpathView{sh.y.v, sh.y.b, t}, s, t, nullptr);
+                Float rho = sh.rho[t - 1];
+                sum += CombinedWeight(wx, wy, rho) * (1 + rho);
+                sumx += wx;
+            } else {
+                PathVertex lens = x.v[0];
+                Float wx = MISWeight(bc, L.view(), SubpathView{&lens, nullptr, 1}, s, 1, &lens);
+                Spectrum fy;
+                Float wy = 0, rho = 0;
+                // The lens raster position of x_1 is the camera sample's.
+                ok = ShiftLightTracingPath(sc, L, s, lens, cs.pFilm, Spectrum(1), {1, 0}, arena, &fy, &wy, &rho, &st);
+                if (!ok) break;
+                sum += CombinedWeight(wx, wy, rho) * (1 + rho);
+                sumx += wx;
+                ++withLT;
+            }
+        }
+        if (!ok) continue;
+        bool chain = false;
+        for (int k = 1; k < n; ++k) chain |= x.deltaSample[k] != 0;
+        withChain += chain;
+        EXPECT_NEAR(sumx, 1.0, 1e-4) << "BDPT weights of the enumerated strategies";
+        EXPECT_NEAR(sum, 1.0, 2e-3) << "path of " << n << " vertices, chain " << chain;
+        ++paths;
+    }
+    EXPECT_GE(paths, 100);
+    std::printf("%d paths (%d light-tracing strategies, %d with specular chains)\n", paths, withLT, withChain);
+}
+
 // Camera-subpath shift: T_ji(T_ij(x)) = x on the shifted vertices, rho_ij(x)
 // rho_ji(y) = 1, and the Eq. 8 weights satisfy w_ji,st(y) = rho w_ij,st(x)
 // (so w_ij,st(x) + w_ji,st(y) = (p_st(x) + |T'| p_st(y)) / sum_k [...], which

@@ -812,13 +812,19 @@ bool ShiftLightTracingPath(const GBDPTShiftContext &ctx, const ShiftSubpath &lig
     *rho = denR > 0 ? Fy * J * discY * G1x * pcY * Gcy / denR : 0;
 
 
-    // Offset light subpath (its own area densities) for its BDPT weight.
-    PathVertex *yv = ArenaArray<PathVertex>(arena, s);
-    BSDF *yb = ArenaArray<BSDF>(arena, s);
-    for (int j = 0; j < s; ++j) {
-        yv[j] = light.v[j];
-        yb[j] = light.b[j];
+    // Offset light subpath (its own area densities) for its BDPT weight: only
+    // vertices c-1 .. s-1 differ, so they are swapped in place and restored
+    // (copying whole subpaths per light-tracing strategy made long paths O(n^2)).
+    const int lo = std::max(c - 1, 0), m = s - lo;
+    PathVertex saveV[kMaxManifoldVertices + 3];
+    BSDF saveB[kMaxManifoldVertices + 3];
+    if (m > kMaxManifoldVertices + 3) return false;
+    for (int j = 0; j < m; ++j) {
+        saveV[j] = light.v[lo + j];
+        saveB[j] = light.b[lo + j];
     }
+    PathVertex *yv = light.v;
+    BSDF *yb = light.b;
     for (int j = 0; j < k; ++j) {
         PathVertex &v = yv[s - 2 - j];
         const SurfaceInteraction &si = walked.si[j];
@@ -844,13 +850,17 @@ bool ShiftLightTracingPath(const GBDPTShiftContext &ctx, const ShiftSubpath &lig
         v.pdfRev = 0;
         v.pdfFwd = 0;
     }
-    yv[c + 1].pdfFwd = PdfArea(bc, xc, c > 0 ? &light.b[c] : nullptr, c > 0 ? &light.v[c - 1] : nullptr, yv[c + 1],
+    yv[c + 1].pdfFwd = PdfArea(bc, xc, c > 0 ? &yb[c] : nullptr, c > 0 ? &yv[c - 1] : nullptr, yv[c + 1],
                                TransportMode::Importance);
     if (k > 0) yv[c].pdfRev = 0;
     if (c >= 1 && xc.type == VertexType::Surface)
-        yv[c - 1].pdfRev = PdfArea(bc, xc, &light.b[c], &yv[c + 1], light.v[c - 1], TransportMode::Radiance);
+        yv[c - 1].pdfRev = PdfArea(bc, xc, &yb[c], &yv[c + 1], yv[c - 1], TransportMode::Radiance);
     PathVertex lensY = lens;
     *wy = MISWeight(bc, SubpathView{yv, yb, s}, SubpathView{&lensY, nullptr, 1}, s, 1, &lensY);
+    for (int j = 0; j < m; ++j) {
+        light.v[lo + j] = saveV[j];
+        light.b[lo + j] = saveB[j];
+    }
     return *wy > 0;
 }
 

@@ -31,8 +31,8 @@ void SampleRecorder::addRadiance(const Spectrum &L) {
 void SampleRecorder::addLayer(int layer, const Spectrum &v, Point2i off) {
     if (guard(v)) tile_.addLayer(layer, Point2i{pixel_.x + off.x, pixel_.y + off.y}, v);
 }
-void SampleRecorder::splat(Point2 p, const Spectrum &v) {
-    if (guard(v)) tile_.addSplat(p, v);
+void SampleRecorder::splat(Point2 p, const Spectrum &v, int layer) {
+    if (guard(v)) tile_.addSplat(p, v, layer);
 }
 
 Progress::Progress(std::string title, int64_t total, bool quiet)

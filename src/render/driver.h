@@ -39,8 +39,9 @@ class SampleRecorder {
     void addRadiance(const Spectrum &L);
     // Value added to a per-pixel layer at this pixel + offset.
     void addLayer(int layer, const Spectrum &v, Point2i offset = {0, 0});
-    // Light-tracing contribution at a raster position (normalised by total spp).
-    void splat(Point2 pFilm, const Spectrum &v);
+    // Light-tracing contribution at a raster position (normalised by total spp),
+    // to the main image or (layer >= 0) to a film layer.
+    void splat(Point2 pFilm, const Spectrum &v, int layer = -1);
     Point2i pixel() const { return pixel_; }
     Point2 pFilm() const { return pFilm_; }
     uint64_t nonFinite = 0;

@@ -33,6 +33,7 @@ int Film::addLayer(const std::string &name) {
         if (layerNames_[i] == name) return i;
     layerNames_.push_back(name);
     layers_.emplace_back(size_t(bounds_.area()), Spectrum(0));
+    layerSplats_.emplace_back(size_t(bounds_.area()), Spectrum(0));
     return numLayers() - 1;
 }
 
@@ -93,7 +94,11 @@ void Film::mergeTile(const FilmTile &t) {
         }
     for (const auto &s : t.splats_) {
         Point2i p{int(std::floor(s.p.x)), int(std::floor(s.p.y))};
-        if (bounds_.inside(p)) splat_[index(p)] += s.v;
+        if (!bounds_.inside(p)) continue;
+        if (s.layer < 0)
+            splat_[index(p)] += s.v;
+        else
+            layerSplats_[s.layer][index(p)] += s.v;
     }
 }
 
@@ -117,6 +122,7 @@ Image Film::layerImage(int layer) const {
         for (int x = 0; x < bounds_.width(); ++x) {
             size_t i = size_t(y) * bounds_.width() + x;
             Spectrum v = count_[i] > 0 ? layers_[layer][i] / count_[i] : Spectrum(0);
+            if (splatSpp_ > 0) v += layerSplats_[layer][i] / splatSpp_;
             v *= scale_;
             for (int c = 0; c < 3; ++c) img.at(x, y, c) = float(v[c]);
         }

@@ -35,7 +35,8 @@ class Film {
     const std::string &filename() const { return filename_; }
     Float scale() const { return scale_; }
 
-    // Extra per-pixel layer (value = sum of contributions / samples of that pixel).
+    // Extra per-pixel layer: value = sum of contributions / samples of that pixel,
+    // plus the layer's splats / total samples per pixel (like the main image).
     int addLayer(const std::string &name);
     int numLayers() const { return int(layerNames_.size()); }
     const std::string &layerName(int i) const { return layerNames_[i]; }
@@ -68,6 +69,7 @@ class Film {
     std::vector<double> count_;
     std::vector<std::string> layerNames_;
     std::vector<std::vector<Spectrum>> layers_;
+    std::vector<std::vector<Spectrum>> layerSplats_;
     double splatSpp_ = 0;
 };
 
@@ -78,7 +80,9 @@ class FilmTile {
     void addSample(Point2 pFilm, const Spectrum &L, Float weight = 1);
     void addLayer(int layer, Point2i pixel, const Spectrum &v);
     void addCount(Point2i pixel, double n);
-    void addSplat(Point2 pFilm, const Spectrum &v) { splats_.push_back({pFilm, v}); }
+    // Light-tracing contribution at a raster position, to the main image
+    // (layer -1) or to a layer; normalised by the total samples per pixel.
+    void addSplat(Point2 pFilm, const Spectrum &v, int layer = -1) { splats_.push_back({pFilm, v, layer}); }
 
   private:
     friend class Film;
@@ -91,7 +95,7 @@ class FilmTile {
     std::vector<Spectrum> sum_;
     std::vector<double> weight_, count_;
     std::vector<std::vector<Spectrum>> layers_;
-    struct Splat { Point2 p; Spectrum v; };
+    struct Splat { Point2 p; Spectrum v; int layer; };
     std::vector<Splat> splats_;
 };
 

@@ -50,7 +50,7 @@ void BDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     if (visStrategies_ || visWeights_) {
         layers_.assign(size_t(maxDepth_ + 3) * (maxDepth_ + 3), -1);
         for (int depth = 0; depth <= maxDepth_; ++depth)
-            for (int t = 2; t <= depth + 2; ++t) {
+            for (int t = 1; t <= depth + 2; ++t) {
                 int s = depth + 2 - t;
                 layers_[size_t(s) * (maxDepth_ + 3) + t] = film.addLayer(LayerName(s, t));
             }
@@ -94,6 +94,8 @@ void BDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &a
             if (!ok) continue;
             if (r.splat) {
                 rec.splat(r.pRaster, r.L * splatScale_);
+                int layer = strategyLayer(s, t);
+                if (layer >= 0) rec.splat(r.pRaster, (visWeights_ ? r.L : r.unweighted) * splatScale_, layer);
             } else {
                 L += r.L;
                 int layer = strategyLayer(s, t);

@@ -10,8 +10,7 @@
 //   integer pixelbounds [x0 x1 y0 y1]     accepted (use --cropwindow instead)
 //   integer rrdepth 3                     Russian roulette on subpaths after this many bounces
 //                                         (-1: off, as pbrt-v3; see BidirContext::rrDepth)
-// Strategy layers exist for t >= 2 only: light-tracing (t = 1) contributions
-// are splats and the film has no per-layer splat path; they go to the main image.
+// Light-tracing (t = 1) strategy layers are filled through per-layer film splats.
 // With both visualize flags set, visualizeweights wins.
 #pragma once
 #include <vector>

@@ -20,7 +20,6 @@ enum { LPrimal, LPrimalSq, LDxF, LDxFSq, LDxB, LDxBSq, LDyF, LDyFSq, LDyB, LDyBS
 }  // namespace
 
 struct GBDPTIntegrator::ThreadState {
-    std::vector<double> lt;  // LNum x 3 per film pixel
     GBDPTLocalStats stats;
     uint64_t cases[3] = {};  // base connections by case
 };
@@ -32,9 +31,7 @@ struct GBDPTIntegrator::Store {
 GBDPTIntegrator::~GBDPTIntegrator() = default;
 
 GBDPTIntegrator::ThreadState &GBDPTIntegrator::local() const {
-    ThreadState &t = store_->threads.local();
-    if (t.lt.size() != store_->pixels * LNum * 3) t.lt.assign(store_->pixels * LNum * 3, 0.0);
-    return t;
+    return store_->threads.local();
 }
 
 GBDPTIntegrator::GBDPTIntegrator(const EntityDesc &desc) : loc_(desc.loc), store_(new Store) {
@@ -95,6 +92,11 @@ void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     splatScale_ = sampled > 0 ? Float(int64_t(full.x) * full.y) / Float(sampled) : 1;
     store_->threads.clear();
     store_->pixels = size_t(filmBounds_.area());
+    // Light-tracing (case iii) primal and gradients are film splats on hidden
+    // layers: merged in tile order, so images do not depend on the thread count.
+    static const char *names[LNum] = {"primal", "primal_sq", "dxf", "dxf_sq", "dxb",
+                                      "dxb_sq", "dyf", "dyf_sq", "dyb", "dyb_sq"};
+    for (int l = 0; l < LNum; ++l) ltLayer_[l] = film.addLayer(std::string("gbdpt_lighttracing_") + names[l]);
     walkStart_ = GetManifoldStats();
 }
 
@@ -116,14 +118,9 @@ void GBDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &
     GradientSample s = sample(cs, sampler, arena, inside, &splats);
     gfilm_.record(rec, s);
     if (splats.empty()) return;
-    ThreadState &t = local();
-    const int W = filmBounds_.width();
     auto add = [&](Point2i px, int layer, const Spectrum &v) {
-        if (!filmBounds_.inside(px) || !v.isFinite()) return;
-        size_t i = (size_t(px.y - filmBounds_.pMin.y) * W + size_t(px.x - filmBounds_.pMin.x)) * LNum * 3 + layer * 3;
-        t.lt[i] += v.r;
-        t.lt[i + 1] += v.g;
-        t.lt[i + 2] += v.b;
+        if (!filmBounds_.inside(px)) return;
+        rec.splat(Point2(px.x + 0.5, px.y + 0.5), v, ltLayer_[layer]);
     };
     const int lay[kNumNeighbours][2] = {{LDxF, LDxFSq}, {LDxB, LDxBSq}, {LDyF, LDyFSq}, {LDyB, LDyBSq}};
     for (const Splat &sp : splats) {
@@ -330,26 +327,24 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
 
 void GBDPTIntegrator::finish(const Film &film, Image *out) {
     GradientImages g = gfilm_.images(film, spp_);
-    // Light-tracing splats: normalised by the number of bidirectional samples
-    // (spp per pixel, the splat scale is already applied), line 16.
-    std::vector<double> lt(store_->pixels * LNum * 3, 0.0);
-    for (const ThreadState &t : store_->threads)
-        if (t.lt.size() == lt.size())
-            for (size_t i = 0; i < lt.size(); ++i) lt[i] += t.lt[i];
+    // Light-tracing splats: the film normalises them by the number of
+    // bidirectional samples (spp per pixel; the splat scale is already applied), line 16.
+    Image lt[LNum];
+    for (int l = 0; l < LNum; ++l) lt[l] = film.layerImage(ltLayer_[l]);
     double invN = spp_ > 0 ? 1 / spp_ : 0;
-    for (size_t px = 0; px < store_->pixels; ++px)
-        for (int ch = 0; ch < 3; ++ch) {
-            const double *L = &lt[px * LNum * 3 + ch];
-            auto at = [&](int layer) { return L[layer * 3]; };
-            size_t i = px * 3 + ch;
-            g.primal[i] += float(at(LPrimal) * invN);
-            g.dx[i] += float((at(LDxF) + at(LDxB)) * invN);
-            g.dy[i] += float((at(LDyF) + at(LDyB)) * invN);
-            // Variance of the splatted part approximated by its second moment / N.
-            g.primalVar[i] += float(at(LPrimalSq) * invN * invN);
-            g.dxVar[i] += float((at(LDxFSq) + at(LDxBSq)) * invN * invN);
-            g.dyVar[i] += float((at(LDyFSq) + at(LDyBSq)) * invN * invN);
-        }
+    for (int y = 0; y < g.height; ++y)
+        for (int x = 0; x < g.width; ++x)
+            for (int ch = 0; ch < 3; ++ch) {
+                auto at = [&](int layer) { return double(lt[layer].at(x, y, ch)); };
+                size_t i = (size_t(y) * g.width + x) * 3 + ch;
+                g.primal[i] += float(at(LPrimal));
+                g.dx[i] += float(at(LDxF) + at(LDxB));
+                g.dy[i] += float(at(LDyF) + at(LDyB));
+                // Variance of the splatted part approximated by its second moment / N.
+                g.primalVar[i] += float(at(LPrimalSq) * invN);
+                g.dxVar[i] += float((at(LDxFSq) + at(LDxBSq)) * invN);
+                g.dyVar[i] += float((at(LDyFSq) + at(LDyBSq)) * invN);
+            }
     auto toImage = [&](const std::vector<float> &v) {
         Image im = Image::RGB(g.width, g.height);
         im.data() = v;

@@ -85,6 +85,7 @@ class GBDPTIntegrator : public SampleIntegrator {
     GBDPTShiftContext sctx_;
     GradientFilm gfilm_;
     Bounds2i filmBounds_;
+    int ltLayer_[10] = {};  // hidden film layers of the light-tracing splats (gbdpt.cpp)
     Float splatScale_ = 1;
     double spp_ = 0;
     std::string reconReport_;

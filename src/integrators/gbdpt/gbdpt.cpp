@@ -345,42 +345,7 @@ void GBDPTIntegrator::finish(const Film &film, Image *out) {
                 g.dxVar[i] += float((at(LDxFSq) + at(LDxBSq)) * invN);
                 g.dyVar[i] += float((at(LDyFSq) + at(LDyBSq)) * invN);
             }
-    auto toImage = [&](const std::vector<float> &v) {
-        Image im = Image::RGB(g.width, g.height);
-        im.data() = v;
-        return im;
-    };
-    Image img = Image::RGB(g.width, g.height);
-    img.metadata = out->metadata;
-    img.setLayerRGB("primal", toImage(g.primal));
-    img.setLayerRGB("dx", toImage(g.dx));
-    img.setLayerRGB("dy", toImage(g.dy));
-    img.setLayerRGB("primal_var", toImage(g.primalVar));
-    img.setLayerRGB("dx_var", toImage(g.dxVar));
-    img.setLayerRGB("dy_var", toImage(g.dyVar));
-    ReconstructionOptions o1 = ReconstructionOptions::L1Default();
-    o1.alpha = alpha_;
-    ReconstructionResult r1 = Reconstruct(g, o1);
-    ReconstructionResult r2 = Reconstruct(g, ReconstructionOptions::L2Exact(alpha_));
-    Image i1 = ResultToImage(r1), i2 = ResultToImage(r2);
-    img.setLayerRGB("reconstructed_l1", i1);
-    img.setLayerRGB("reconstructed_l2", i2);
-    const Image *chosen = norm_ == ReconstructionNorm::L2 ? &i2 : &i1;
-    Image iw;
-    if (norm_ == ReconstructionNorm::Weighted) {
-        ReconstructionResult rw = Reconstruct(g, ReconstructionOptions::Weighted());
-        iw = ResultToImage(rw);
-        img.setLayerRGB("reconstructed_weighted", iw);
-        chosen = &iw;
-    }
-    img.setLayerRGB("", *chosen);
-    img.metadata["reconstruction"] = ReconstructionNormName(norm_);
-    img.metadata["reconstruction_alpha"] = std::to_string(alpha_);
-    char buf[200];
-    std::snprintf(buf, sizeof buf, "Reconstruction: L1 %.3fs, L2 %.3fs (output: %s, alpha %g)\n", r1.stats.seconds,
-                  r2.stats.seconds, ReconstructionNormName(norm_), double(alpha_));
-    reconReport_ = buf;
-    *out = std::move(img);
+    WriteGradientOutput(g, norm_, alpha_, out, &reconReport_);
 }
 
 std::string GBDPTIntegrator::statistics() const {

@@ -98,7 +98,11 @@ GradientImages GradientFilm::images(const Film &film, double spp) const {
 
 void GradientFilm::finish(const Film &film, double spp, ReconstructionNorm norm, double alpha, Image *out,
                           std::string *report) const {
-    GradientImages g = images(film, spp);
+    WriteGradientOutput(images(film, spp), norm, alpha, out, report);
+}
+
+void WriteGradientOutput(const GradientImages &g, ReconstructionNorm norm, double alpha, Image *out,
+                         std::string *report) {
     auto toImage = [&](const std::vector<float> &v) {
         Image im = Image::RGB(g.width, g.height);
         im.data() = v;

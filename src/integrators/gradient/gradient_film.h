@@ -60,4 +60,11 @@ class GradientFilm {
     Float footprint_ = 1;             // K: pixels reached by one sample
 };
 
+// Output image of a gradient integrator from its gradient images: layers
+// primal, dx, dy, their variances, reconstructed_l1, reconstructed_l2 (and
+// reconstructed_weighted), the chosen one in the unprefixed R, G, B; keeps
+// out->metadata and adds the reconstruction's. `report` gets the timings.
+void WriteGradientOutput(const GradientImages &g, ReconstructionNorm norm, double alpha, Image *out,
+                         std::string *report = nullptr);
+
 }  // namespace gradus

@@ -5,33 +5,20 @@
 
 #include "image/image.h"
 #include "parser/scene_desc.h"
+#include "common/render_test_util.h"
 #include "render/scene_builder.h"
 
 namespace gradus::gbdpttest {
 
 inline RenderJob MakeJob(const std::string &text, int spp, uint64_t seed, const std::string &integrator = "") {
-    SceneDesc desc = ParseString(text, "gbdpt_test.pbrt", ".");
-    BuildOptions bo;
-    bo.sppOverride = spp;
-    bo.seed = seed;
-    bo.integratorOverride = integrator;
-    bo.quiet = true;
-    return BuildRenderJob(desc, bo);
+    return test::MakeTestJob(ParseString(text, "gbdpt_test.pbrt", "."), spp, seed, integrator);
 }
 
 inline Image Render(const std::string &text, int spp, uint64_t seed, const std::string &integrator = "",
                     std::string *statistics = nullptr) {
-    RenderJob job = MakeJob(text, spp, seed, integrator);
-    RenderOptions ro;
-    ro.spp = spp;
-    ro.seed = seed;
-    ro.quiet = true;
-    job.integrator->preprocess(*job.scene, *job.film);
-    job.integrator->render(*job.scene, *job.film, *job.sampler, ro);
-    Image img = job.film->toImage();
-    job.integrator->finish(*job.film, &img);
-    if (statistics) *statistics = job.integrator->statistics();
-    return img;
+    test::TestRender r = test::RenderTestJob(MakeJob(text, spp, seed, integrator), spp, seed);
+    if (statistics) *statistics = r.statistics;
+    return std::move(r.image);
 }
 
 // Box scene (open towards the camera): matte walls, a small area light under

@@ -4,29 +4,16 @@
 
 #include "image/image.h"
 #include "parser/scene_desc.h"
+#include "common/render_test_util.h"
 #include "render/scene_builder.h"
 
 namespace gradus::gpttest {
 
 inline Image Render(const std::string &text, int spp, uint64_t seed, const std::string &integrator = "",
                     std::string *statistics = nullptr) {
-    SceneDesc desc = ParseString(text, "gpt_test.pbrt", ".");
-    BuildOptions bo;
-    bo.sppOverride = spp;
-    bo.seed = seed;
-    bo.integratorOverride = integrator;
-    bo.quiet = true;
-    RenderJob job = BuildRenderJob(desc, bo);
-    RenderOptions ro;
-    ro.spp = spp;
-    ro.seed = seed;
-    ro.quiet = true;
-    job.integrator->preprocess(*job.scene, *job.film);
-    job.integrator->render(*job.scene, *job.film, *job.sampler, ro);
-    Image img = job.film->toImage();
-    job.integrator->finish(*job.film, &img);
-    if (statistics) *statistics = job.integrator->statistics();
-    return img;
+    test::TestRender r = test::RenderTestDesc(ParseString(text, "gpt_test.pbrt", "."), spp, seed, 0, integrator);
+    if (statistics) *statistics = r.statistics;
+    return std::move(r.image);
 }
 
 // Small scene exercising every shift: diffuse walls (reconnection), an

@@ -9,6 +9,7 @@
 #include "image/image.h"
 #include "integrators/integrator.h"
 #include "parser/scene_desc.h"
+#include "common/render_test_util.h"
 #include "render/scene_builder.h"
 
 namespace gradus::mbdpt_test {
@@ -46,58 +47,15 @@ inline std::string BoxScene(const std::string &integratorLine, int res = 16, boo
     return s;
 }
 
-struct Rendered {
-    Image image;
-    RenderStats stats;
-    std::string statistics;
-    std::unique_ptr<Integrator> integrator;
-};
+using Rendered = test::TestRender;
 
 inline Rendered Render(const std::string &text, int spp, uint64_t seed, int nthreads = 1) {
-    SceneDesc desc = ParseString(text);
-    BuildOptions bo;
-    bo.sppOverride = spp;
-    bo.seed = seed;
-    bo.quiet = true;
-    RenderJob job = BuildRenderJob(desc, bo);
-    job.integrator->preprocess(*job.scene, *job.film);
-    RenderOptions ro;
-    ro.spp = spp;
-    ro.seed = seed;
-    ro.quiet = true;
-    ro.nthreads = nthreads;
-    Rendered r;
-    r.stats = job.integrator->render(*job.scene, *job.film, *job.sampler, ro);
-    r.image = job.film->toImage();
-    job.integrator->finish(*job.film, &r.image);
-    r.statistics = job.integrator->statistics();
-    r.integrator = std::move(job.integrator);
-    return r;
+    return test::RenderTestDesc(ParseString(text), spp, seed, nthreads);
 }
 
-// Mean luminance of a layer ("" = main image) over [x0,x1) x [y0,y1).
-inline double BlockMean(const Image &img, int x0, int y0, int x1, int y1, const std::string &layer = "") {
-    Image rgb = layer.empty() ? img : img.layerRGB(layer);
-    double sum = 0;
-    for (int y = y0; y < y1; ++y)
-        for (int x = x0; x < x1; ++x)
-            sum += 0.2126 * rgb.at(x, y, 0) + 0.7152 * rgb.at(x, y, 1) + 0.0722 * rgb.at(x, y, 2);
-    return sum / (double(x1 - x0) * (y1 - y0));
-}
-
-struct RunStats {
-    double mean = 0, var = 0;  // var: of one run
-    int n = 0;
-};
-inline RunStats Stats(const std::vector<double> &v) {
-    RunStats s;
-    s.n = int(v.size());
-    for (double x : v) s.mean += x;
-    s.mean /= s.n;
-    for (double x : v) s.var += (x - s.mean) * (x - s.mean);
-    s.var /= std::max(1, s.n - 1);
-    return s;
-}
+using test::BlockMean;
+using test::RunStats;
+using test::Stats;
 // Welch z statistic of two sets of independent runs.
 inline double ZScore(const RunStats &a, const RunStats &b) {
     double se = std::sqrt(a.var / a.n + b.var / b.n);

@@ -4,6 +4,7 @@
 
 #include "image/image.h"
 #include "parser/scene_desc.h"
+#include "common/render_test_util.h"
 #include "render/scene_builder.h"
 
 namespace gradus::test {
@@ -15,23 +16,8 @@ struct RenderResult {
 
 inline RenderResult RenderDesc(const SceneDesc &desc, int spp, uint64_t seed, int nthreads,
                                const std::string &integrator) {
-    BuildOptions bo;
-    bo.sppOverride = spp;
-    bo.seed = seed;
-    bo.integratorOverride = integrator;
-    bo.quiet = true;
-    RenderJob job = BuildRenderJob(desc, bo);
-    RenderOptions ro;
-    ro.spp = spp;
-    ro.seed = seed;
-    ro.nthreads = nthreads;
-    ro.quiet = true;
-    job.integrator->preprocess(*job.scene, *job.film);
-    RenderResult r;
-    r.stats = job.integrator->render(*job.scene, *job.film, *job.sampler, ro);
-    r.image = job.film->toImage();
-    job.integrator->finish(*job.film, &r.image);
-    return r;
+    TestRender t = RenderTestDesc(desc, spp, seed, nthreads, integrator);
+    return {std::move(t.image), t.stats};
 }
 
 inline RenderResult RenderSceneText(const std::string &text, int spp, uint64_t seed = 0, int nthreads = 0,

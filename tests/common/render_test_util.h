@@ -1,0 +1,79 @@
+// Helpers shared by the renderer test suites: in-memory renders of scene
+// descriptions and small statistics on images.
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "image/image.h"
+#include "parser/scene_desc.h"
+#include "render/scene_builder.h"
+
+namespace gradus::test {
+
+struct TestRender {
+    Image image;                 // film image with all layers, after Integrator::finish
+    RenderStats stats;
+    std::string statistics;      // Integrator::statistics()
+    std::unique_ptr<Integrator> integrator;
+};
+
+inline RenderJob MakeTestJob(const SceneDesc &desc, int spp, uint64_t seed, const std::string &integrator = "") {
+    BuildOptions bo;
+    bo.sppOverride = spp;
+    bo.seed = seed;
+    bo.integratorOverride = integrator;
+    bo.quiet = true;
+    return BuildRenderJob(desc, bo);
+}
+
+// Renders a prepared job (nthreads 0 = all cores).
+inline TestRender RenderTestJob(RenderJob job, int spp, uint64_t seed, int nthreads = 0) {
+    RenderOptions ro;
+    ro.spp = spp;
+    ro.seed = seed;
+    ro.nthreads = nthreads;
+    ro.quiet = true;
+    job.integrator->preprocess(*job.scene, *job.film);
+    TestRender r;
+    r.stats = job.integrator->render(*job.scene, *job.film, *job.sampler, ro);
+    r.image = job.film->toImage();
+    job.integrator->finish(*job.film, &r.image);
+    r.statistics = job.integrator->statistics();
+    r.integrator = std::move(job.integrator);
+    return r;
+}
+
+inline TestRender RenderTestDesc(const SceneDesc &desc, int spp, uint64_t seed, int nthreads = 0,
+                                 const std::string &integrator = "") {
+    return RenderTestJob(MakeTestJob(desc, spp, seed, integrator), spp, seed, nthreads);
+}
+
+// Mean luminance of a layer ("" = main image) over [x0,x1) x [y0,y1).
+inline double BlockMean(const Image &img, int x0, int y0, int x1, int y1, const std::string &layer = "") {
+    Image rgb = layer.empty() ? img : img.layerRGB(layer);
+    double sum = 0;
+    for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x)
+            sum += 0.2126 * rgb.at(x, y, 0) + 0.7152 * rgb.at(x, y, 1) + 0.0722 * rgb.at(x, y, 2);
+    return sum / (double(x1 - x0) * (y1 - y0));
+}
+
+// Mean and (unbiased) variance of one run, over repeated runs.
+struct RunStats {
+    double mean = 0, var = 0;
+    int n = 0;
+};
+inline RunStats Stats(const std::vector<double> &v) {
+    RunStats s;
+    s.n = int(v.size());
+    for (double x : v) s.mean += x;
+    s.mean /= std::max(1, s.n);
+    for (double x : v) s.var += (x - s.mean) * (x - s.mean);
+    s.var /= std::max(1, s.n - 1);
+    return s;
+}
+
+}  // namespace gradus::test

@@ -24,7 +24,9 @@ bool Scene::intersect(const Ray &r, SurfaceInteraction *si) const {
     Float dlen = r.d.length();
     Vec3 wo = -r.d / dlen;
     if (g.mesh) {
-        g.mesh->interaction(h.primId, h.b1, h.b2, wo, si);
+        Float b1 = h.b1, b2 = h.b2;
+        g.mesh->refineBarycentrics(h.primId, r, &b1, &b2);
+        g.mesh->interaction(h.primId, b1, b2, wo, si);
     } else {
         // Refine the analytic hit in double precision along the original ray.
         Float t;

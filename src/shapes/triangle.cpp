@@ -54,6 +54,28 @@ std::shared_ptr<TriangleMesh> TriangleMesh::Create(const Transform &xf, bool rev
     return m;
 }
 
+void TriangleMesh::refineBarycentrics(int tri, const Ray &r, Float *b1, Float *b2) const {
+    const Point3 &p0 = p[indices[3 * tri]], &p1 = p[indices[3 * tri + 1]], &p2 = p[indices[3 * tri + 2]];
+    Vec3 e1 = p1 - p0, e2 = p2 - p0;
+    Vec3 pv = Cross(r.d, e2);
+    Float det = Dot(e1, pv);
+    if (!(std::abs(det) > 1e-300)) return;
+    Float inv = 1 / det;
+    Vec3 tv = r.o - p0;
+    Float u = Dot(tv, pv) * inv;
+    Float v = Dot(r.d, Cross(tv, e1)) * inv;
+    if (!std::isfinite(u) || !std::isfinite(v)) return;
+    u = std::max<Float>(0, u);
+    v = std::max<Float>(0, v);
+    if (u + v > 1) {
+        Float s = 1 / (u + v);
+        u *= s;
+        v *= s;
+    }
+    *b1 = u;
+    *b2 = v;
+}
+
 void TriangleMesh::interaction(int tri, Float b1, Float b2, const Vec3 &wo, SurfaceInteraction *si) const {
     const int i0 = indices[3 * tri], i1 = indices[3 * tri + 1], i2 = indices[3 * tri + 2];
     const Point3 &p0 = p[i0], &p1 = p[i1], &p2 = p[i2];

@@ -27,6 +27,10 @@ struct TriangleMesh {
                                                 std::vector<Point3> P, std::vector<int> indices,
                                                 std::vector<Normal3> N, std::vector<Vec3> S,
                                                 std::vector<Point2> uv, const FileLoc &loc);
+    // Recomputes the barycentrics of ray r's hit on triangle `tri` in double
+    // precision (Embree's are single precision); keeps the given ones when the
+    // ray is parallel to the triangle. Clamped onto the triangle.
+    void refineBarycentrics(int tri, const Ray &r, Float *b1, Float *b2) const;
     // Fills the surface interaction for a hit with barycentrics (b1, b2) on triangle `tri`.
     void interaction(int tri, Float b1, Float b2, const Vec3 &wo, SurfaceInteraction *si) const;
 };

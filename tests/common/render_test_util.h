@@ -76,4 +76,34 @@ inline RunStats Stats(const std::vector<double> &v) {
     return s;
 }
 
+// Per-pixel mean of independent renders and the variance of that mean
+// (RGB images), for z-tests against a converged reference.
+struct MeanOfRuns {
+    Image mean, varMean;
+};
+template <typename RenderFn>  // RenderFn(int run) -> RGB Image
+MeanOfRuns AverageRuns(int runs, RenderFn render) {
+    MeanOfRuns r;
+    Image sum, sum2;
+    for (int k = 0; k < runs; ++k) {
+        Image img = render(k);
+        if (k == 0) {
+            sum = Image::RGB(img.width(), img.height());
+            sum2 = Image::RGB(img.width(), img.height());
+        }
+        for (size_t i = 0; i < img.data().size(); ++i) {
+            sum.data()[i] += img.data()[i];
+            sum2.data()[i] += double(img.data()[i]) * img.data()[i];
+        }
+    }
+    r.mean = Image::RGB(sum.width(), sum.height());
+    r.varMean = r.mean;
+    for (size_t i = 0; i < sum.data().size(); ++i) {
+        double m = sum.data()[i] / runs, m2 = sum2.data()[i] / runs;
+        r.mean.data()[i] = float(m);
+        r.varMean.data()[i] = float(std::max(0.0, (m2 - m * m) * runs / std::max(1, runs - 1)) / runs);
+    }
+    return r;
+}
+
 }  // namespace gradus::test

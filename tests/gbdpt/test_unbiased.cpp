@@ -23,32 +23,10 @@ using namespace gradus::gbdpttest;
 
 namespace {
 
-struct Reference {
-    Image mean, varMean;
-};
+using Reference = test::MeanOfRuns;
 
 Reference BDPTReference(const std::string &scene, int runs, int spp) {
-    Reference r;
-    Image sum, sum2;
-    for (int k = 0; k < runs; ++k) {
-        Image img = Render(scene, spp, 5000 + k, "bdpt").layerRGB("");
-        if (k == 0) {
-            sum = Image::RGB(img.width(), img.height());
-            sum2 = Image::RGB(img.width(), img.height());
-        }
-        for (size_t i = 0; i < img.data().size(); ++i) {
-            sum.data()[i] += img.data()[i];
-            sum2.data()[i] += double(img.data()[i]) * img.data()[i];
-        }
-    }
-    r.mean = Image::RGB(sum.width(), sum.height());
-    r.varMean = r.mean;
-    for (size_t i = 0; i < sum.data().size(); ++i) {
-        double m = sum.data()[i] / runs, m2 = sum2.data()[i] / runs;
-        r.mean.data()[i] = float(m);
-        r.varMean.data()[i] = float(std::max(0.0, (m2 - m * m) * runs / (runs - 1)) / runs);
-    }
-    return r;
+    return test::AverageRuns(runs, [&](int k) { return Render(scene, spp, 5000 + k, "bdpt").layerRGB(""); });
 }
 
 void Check(const std::string &line, const Reference &ref, int spp, bool zTestGradients = true) {

@@ -24,32 +24,10 @@ using namespace gradus::gpttest;
 
 namespace {
 
-struct Reference {
-    Image mean, varMean;  // RGB
-};
+using Reference = test::MeanOfRuns;
 
 Reference PathReference(const std::string &scene, int runs, int spp) {
-    Reference r;
-    Image sum, sum2;
-    for (int k = 0; k < runs; ++k) {
-        Image img = Render(scene, spp, 1000 + k, "path").layerRGB("");
-        if (k == 0) {
-            sum = Image::RGB(img.width(), img.height());
-            sum2 = Image::RGB(img.width(), img.height());
-        }
-        for (size_t i = 0; i < img.data().size(); ++i) {
-            sum.data()[i] += img.data()[i];
-            sum2.data()[i] += double(img.data()[i]) * img.data()[i];
-        }
-    }
-    r.mean = Image::RGB(sum.width(), sum.height());
-    r.varMean = r.mean;
-    for (size_t i = 0; i < sum.data().size(); ++i) {
-        double m = sum.data()[i] / runs, m2 = sum2.data()[i] / runs;
-        r.mean.data()[i] = float(m);
-        r.varMean.data()[i] = float(std::max(0.0, (m2 - m * m) * runs / (runs - 1)) / runs);
-    }
-    return r;
+    return test::AverageRuns(runs, [&](int k) { return Render(scene, spp, 1000 + k, "path").layerRGB(""); });
 }
 
 void CheckGradients(const std::string &gptLine, const Reference &ref, int spp) {

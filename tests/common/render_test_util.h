@@ -106,4 +106,44 @@ MeanOfRuns AverageRuns(int runs, RenderFn render) {
     return r;
 }
 
+// z-scores of a gradient render's dx/dy (with their variance layers) against
+// differences of neighbouring pixels of a reference mean, on disjoint pixel
+// pairs (even x for dx, even y for dy) so the terms are independent.
+struct GradientZ {
+    int n = 0;          // terms tested
+    double meanZ2 = 0;  // ~1 when unbiased with correct variances
+    double Z = 0;       // sum of z / sqrt(n), ~N(0,1) when unbiased
+};
+inline GradientZ GradientZStats(const Image &g, const MeanOfRuns &ref) {
+    Image dx = g.layerRGB("dx"), dy = g.layerRGB("dy"), vx = g.layerRGB("dx_var"), vy = g.layerRGB("dy_var");
+    const Image &P = ref.mean, &V = ref.varMean;
+    double s2 = 0, s = 0;
+    int n = 0;
+    auto term = [&](double est, double varEst, double diff, double varDiff) {
+        double v = varEst + varDiff;
+        if (!(v > 1e-12)) return;  // both exactly zero: nothing to test
+        double z = (est - diff) / std::sqrt(v);
+        s2 += z * z;
+        s += z;
+        ++n;
+    };
+    for (int y = 0; y < g.height(); ++y)
+        for (int x = 0; x < g.width(); ++x)
+            for (int c = 0; c < 3; ++c) {
+                if (x % 2 == 0 && x + 1 < g.width())
+                    term(dx.at(x, y, c), vx.at(x, y, c), P.at(x + 1, y, c) - P.at(x, y, c),
+                         V.at(x + 1, y, c) + V.at(x, y, c));
+                if (y % 2 == 0 && y + 1 < g.height())
+                    term(dy.at(x, y, c), vy.at(x, y, c), P.at(x, y + 1, c) - P.at(x, y, c),
+                         V.at(x, y + 1, c) + V.at(x, y, c));
+            }
+    GradientZ r;
+    r.n = n;
+    if (n > 0) {
+        r.meanZ2 = s2 / n;
+        r.Z = s / std::sqrt(double(n));
+    }
+    return r;
+}
+
 }  // namespace gradus::test

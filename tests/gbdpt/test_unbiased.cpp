@@ -31,30 +31,11 @@ Reference BDPTReference(const std::string &scene, int runs, int spp) {
 
 void Check(const std::string &line, const Reference &ref, int spp, bool zTestGradients = true) {
     Image g = Render(BoxScene(line), spp, 91);
-    Image dx = g.layerRGB("dx"), dy = g.layerRGB("dy"), vx = g.layerRGB("dx_var"), vy = g.layerRGB("dy_var");
     const Image &P = ref.mean, &V = ref.varMean;
-    double s2 = 0, s = 0;
-    int n = 0;
-    auto term = [&](double est, double varEst, double diff, double varDiff) {
-        double v = varEst + varDiff;
-        if (!(v > 1e-12)) return;
-        double z = (est - diff) / std::sqrt(v);
-        s2 += z * z;
-        s += z;
-        ++n;
-    };
-    for (int y = 0; y < g.height(); ++y)
-        for (int x = 0; x < g.width(); ++x)
-            for (int c = 0; c < 3; ++c) {
-                if (x % 2 == 0 && x + 1 < g.width())
-                    term(dx.at(x, y, c), vx.at(x, y, c), P.at(x + 1, y, c) - P.at(x, y, c),
-                         V.at(x + 1, y, c) + V.at(x, y, c));
-                if (y % 2 == 0 && y + 1 < g.height())
-                    term(dy.at(x, y, c), vy.at(x, y, c), P.at(x, y + 1, c) - P.at(x, y, c),
-                         V.at(x, y + 1, c) + V.at(x, y, c));
-            }
+    test::GradientZ gz = test::GradientZStats(g, ref);
+    const int n = gz.n;
     ASSERT_GT(n, 500);
-    double S = s2 / n, Z = s / std::sqrt(n);
+    double S = gz.meanZ2, Z = gz.Z;
     if (zTestGradients) {
         EXPECT_LT(S, 1.8) << line << ": mean z^2 over " << n << " gradient terms";
         EXPECT_LT(std::abs(Z), 4.5) << line << ": summed z over " << n << " gradient terms";

@@ -1,5 +1,5 @@
 // BDPT throughput: camera samples/s and rays/s (closest-hit + shadow) on an
-// in-code Cornell-like box and on /work/shared/scenes/veach-bidir (via the
+// in-code Cornell-like box and on ../shared/scenes/veach-bidir (via the
 // reference variant, if present), and raw Embree incoherent rays/s on the
 // same scenes (random origins in the bounds, uniform directions) for the
 // ratio "rays/s inside BDPT / raw rays/s". Single thread.
@@ -19,7 +19,7 @@ using namespace gradus::bdpt_test;
 
 namespace {
 
-const char *kVeach = "/work/shared/references/veach-bidir/ref.pbrt";
+const char *kVeach = GRADUS_SOURCE_DIR "/../shared/references/veach-bidir/ref.pbrt";
 
 std::string CornellText() {
     return BoxScene("bdpt", CeilingLight(0.3, 12), Sphere("Material \"matte\" \"rgb Kd\" [0.6 0.6 0.3]", 0.35, 0.45, 0.1, 0.45), 64);

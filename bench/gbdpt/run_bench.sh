@@ -8,7 +8,7 @@
 #
 # usage: bench/gbdpt/run_bench.sh [--gradus BIN] [--imgtool BIN] [--time S] [--spp N]
 #                                 [--threads N] [--seed S] [--out DIR] [scene ...]
-# scenes: names under /work/shared/references (default: veach-ajar veach-bidir cornell-box).
+# scenes: names under ../shared/references (beside the repository) (default: veach-ajar veach-bidir cornell-box).
 # Both integrators render the same scene file with the same light-selection
 # strategy ("power": position-free, which G-BDPT's MIS requires). veach-bidir's
 # relMSE ignores the 0.01% highest pixel errors, as the G-BDPT paper does.
@@ -16,14 +16,14 @@
 # machine is shared, so CPU seconds (user+sys of the process) are printed too.
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
-GRADUS=$ROOT/build-gbdpt/bin/gradus
+GRADUS=$ROOT/build/bin/gradus
 IMGTOOL=""
 TIME=30
 SPP=8
 THREADS=2
 SEED=1
 OUT=${TMPDIR:-/tmp}/gbdpt-bench
-REFS=/work/shared/references
+REFS=$(cd "$ROOT/.." && pwd)/shared/references
 SCENES=()
 while [[ $# -gt 0 ]]; do
   case $1 in

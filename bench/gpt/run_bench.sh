@@ -5,20 +5,20 @@
 #
 # usage: bench/gpt/run_bench.sh [--gradus BIN] [--imgtool BIN] [--time S] [--spp N]
 #                               [--threads N] [--out DIR] [scene ...]
-# scenes: names under /work/shared/references (default: cornell-box veach-mis).
+# scenes: names under ../shared/references (beside the repository) (default: cornell-box veach-mis).
 # G-PT runs twice: "box" (gradients with box-filter semantics, the default)
 # and "film" (primal and gradients splatted with the scene's pixel filter,
 # which the pbrt-v3 references use). relMSE is imgtool's (the papers' metric,
 # epsilon 0.001); the reference's own noise (ref.noise) is printed beside it.
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
-GRADUS=$ROOT/build-gpt/bin/gradus
+GRADUS=$ROOT/build/bin/gradus
 IMGTOOL=""
 TIME=15
 SPP=16
 THREADS=2
 OUT=${TMPDIR:-/tmp}/gpt-bench
-REFS=/work/shared/references
+REFS=$(cd "$ROOT/.." && pwd)/shared/references
 SCENES=()
 while [[ $# -gt 0 ]]; do
   case $1 in

@@ -101,8 +101,8 @@ def relmse(args, image, ref):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--gradus", default=os.path.join(ROOT, "build-mbdpt/bin/gradus"))
-    ap.add_argument("--imgtool", default=os.path.join(ROOT, "build-mbdpt/bin/imgtool"))
+    ap.add_argument("--gradus", default=os.path.join(ROOT, "build/bin/gradus"))
+    ap.add_argument("--imgtool", default=os.path.join(ROOT, "build/bin/imgtool"))
     ap.add_argument("--shared", default=os.path.join(os.path.dirname(ROOT), "shared"))
     ap.add_argument("--door-ref", default="/tmp/gradus-door-ref.exr")
     ap.add_argument("--make-door-ref", type=float, default=0, metavar="SECONDS",

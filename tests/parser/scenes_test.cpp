@@ -16,7 +16,8 @@ namespace {
 
 std::vector<std::string> SceneFiles() {
     std::vector<std::string> files;
-    const fs::path scenes = "/work/shared/scenes", refs = "/work/shared/references";
+    const fs::path scenes = std::string(GRADUS_SOURCE_DIR) + "/../shared/scenes",
+                   refs = std::string(GRADUS_SOURCE_DIR) + "/../shared/references";
     std::error_code ec;
     if (fs::is_directory(scenes, ec))
         for (const auto &e : fs::recursive_directory_iterator(scenes, ec))
@@ -31,7 +32,7 @@ std::vector<std::string> SceneFiles() {
 
 TEST(SharedScenes, AllParse) {
     std::vector<std::string> files = SceneFiles();
-    if (files.empty()) GTEST_SKIP() << "/work/shared/scenes and /work/shared/references are absent";
+    if (files.empty()) GTEST_SKIP() << "../shared/scenes and ../shared/references are absent";
     for (const std::string &f : files) {
         SCOPED_TRACE(f);
         SceneDesc s;
@@ -54,7 +55,7 @@ TEST(SharedScenes, AllParse) {
 }
 
 TEST(SharedScenes, CornellBoxContents) {
-    const std::string f = "/work/shared/scenes/cornell-box/scene.pbrt";
+    const std::string f = std::string(GRADUS_SOURCE_DIR) + "/../shared/scenes/cornell-box/scene.pbrt";
     if (!fs::exists(f)) GTEST_SKIP() << f << " is absent";
     SceneDesc s = ParseFile(f);
     EXPECT_EQ(s.camera.type, "perspective");

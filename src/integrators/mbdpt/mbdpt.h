@@ -1,5 +1,5 @@
 // Matrix bidirectional path tracing (Chaitanya, Belcour, Hachisuka, Premoze,
-// Pantaleoni, Nowrouzezahrai 2018; /work/shared/papers/matrix-bdpt.md),
+// Pantaleoni, Nowrouzezahrai 2018; matrix-bdpt.md),
 // built on the shared bidirectional core in integrators/common/.
 //
 // One iteration (Algorithm 1) = one sample per pixel:

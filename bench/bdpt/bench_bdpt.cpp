@@ -54,7 +54,7 @@ void RunBDPT(benchmark::State &state, const std::string &text, const std::string
     int64_t samples = 0;
     uint64_t rays0 = RayCount();
     for (auto _ : state) {
-        RenderStats st = job.integrator->render(*job.scene, *job.film, *job.sampler, ro);
+        RenderStats st = RunRender(*job.integrator, *job.scene, *job.film, *job.sampler, ro);
         samples += st.cameraSamples;
     }
     uint64_t rays = RayCount() - rays0;

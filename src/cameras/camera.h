@@ -6,7 +6,7 @@
 
 #include "core/transform.h"
 #include "parser/scene_desc.h"
-#include "render/interaction.h"
+#include "core/interaction.h"
 
 namespace gradus {
 

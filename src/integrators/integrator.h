@@ -1,5 +1,6 @@
 // Integrator base class and the registry of integrator names.
 #pragma once
+#include <algorithm>
 #include <functional>
 #include <memory>
 #include <string>
@@ -7,33 +8,38 @@
 
 #include "image/image.h"
 #include "parser/scene_desc.h"
-#include "render/driver.h"
+#include "render/render_loop.h"
 #include "render/film.h"
 #include "render/scene.h"
 
 namespace gradus {
 
+// An integrator runs passes inside the one render loop (render/render_loop.h):
+// beginPass / runPass / endPass, with all parallel work through the
+// PassContext. finish() receives the render statistics.
 class Integrator {
   public:
     virtual ~Integrator() = default;
     virtual std::string name() const = 0;
     // Called once after the scene is built: build light distributions, add film layers.
     virtual void preprocess(const Scene &scene, Film &film) {}
-    virtual RenderStats render(const Scene &scene, Film &film, const Sampler &sampler,
-                               const RenderOptions &opts) = 0;
+    // Pixel samples one pass represents (splat normalisation, spp, budget checks).
+    virtual int samplesPerPass(const RenderOptions &opts) const { return std::max(1, opts.sppPerPass); }
+    virtual void beginPass(PassContext &ctx) {}
+    virtual void runPass(PassContext &ctx) = 0;
+    virtual void endPass(PassContext &ctx) {}
     // Adds integrator-specific results (e.g. reconstructed layers) to the output image.
-    virtual void finish(const Film &film, Image *out) {}
+    virtual void finish(const Film &film, const RenderStats &stats, Image *out) {}
     // Integrator-specific statistics for the end-of-render report.
     virtual std::string statistics() const { return ""; }
 };
 
-// An integrator that estimates independent camera samples through the shared driver.
-class SampleIntegrator : public Integrator, public SampleEstimator {
+// An integrator that estimates independent camera samples: each pass is
+// per-pixel-sample work over the whole image.
+class PixelSampleIntegrator : public Integrator, public SampleEstimator {
   public:
-    RenderStats render(const Scene &scene, Film &film, const Sampler &sampler, const RenderOptions &opts) override {
-        scene_ = &scene;
-        return RenderImage(film, sampler, *this, opts);
-    }
+    void beginPass(PassContext &ctx) override { scene_ = &ctx.scene(); }
+    void runPass(PassContext &ctx) override { ctx.forEachPixelSample(*this); }
 
   protected:
     const Scene *scene_ = nullptr;

@@ -7,7 +7,7 @@
 
 #include "core/transform.h"
 #include "parser/scene_desc.h"
-#include "render/interaction.h"
+#include "core/interaction.h"
 #include "shapes/shape.h"
 
 namespace gradus {

@@ -8,7 +8,7 @@
 
 #include "core/geometry.h"
 #include "core/spectrum.h"
-#include "render/interaction.h"
+#include "core/interaction.h"
 
 namespace gradus {
 

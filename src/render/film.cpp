@@ -41,10 +41,14 @@ std::unique_ptr<FilmTile> Film::makeTile(const Bounds2i &samplePixels) const {
     return std::make_unique<FilmTile>(*this, samplePixels);
 }
 
-FilmTile::FilmTile(const Film &film, const Bounds2i &sp) : film_(film) {
+std::unique_ptr<FilmTile> Film::makeSplatTile() const { return std::make_unique<FilmTile>(*this, Bounds2i{}, true); }
+
+FilmTile::FilmTile(const Film &film, const Bounds2i &sp, bool splatsOnly) : film_(film) {
     int rx = int(std::ceil(film.filter_->radius.x)) + 1, ry = int(std::ceil(film.filter_->radius.y)) + 1;
-    bounds_.pMin = {sp.pMin.x - rx, sp.pMin.y - ry};
-    bounds_.pMax = {sp.pMax.x + rx, sp.pMax.y + ry};
+    if (!splatsOnly) {
+        bounds_.pMin = {sp.pMin.x - rx, sp.pMin.y - ry};
+        bounds_.pMax = {sp.pMax.x + rx, sp.pMax.y + ry};
+    }
     size_t n = size_t(bounds_.area());
     sum_.assign(n, Spectrum(0));
     weight_.assign(n, 0);

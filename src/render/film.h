@@ -42,6 +42,8 @@ class Film {
     const std::string &layerName(int i) const { return layerNames_[i]; }
 
     std::unique_ptr<FilmTile> makeTile(const Bounds2i &samplePixels) const;
+    // A tile that holds only light-tracing splats (work items without a pixel).
+    std::unique_ptr<FilmTile> makeSplatTile() const;
     void mergeTile(const FilmTile &tile);
     // Number of camera samples per pixel taken so far (for splat normalisation).
     void setSplatSamples(double sppTotal) { splatSpp_ = sppTotal; }
@@ -75,7 +77,8 @@ class Film {
 
 class FilmTile {
   public:
-    FilmTile(const Film &film, const Bounds2i &samplePixels);
+    // splatsOnly: no pixel storage (addSample/addLayer/addCount drop their values).
+    FilmTile(const Film &film, const Bounds2i &samplePixels, bool splatsOnly = false);
     // Filtered main-image sample at continuous raster position pFilm.
     void addSample(Point2 pFilm, const Spectrum &L, Float weight = 1);
     void addLayer(int layer, Point2i pixel, const Spectrum &v);

@@ -350,4 +350,18 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
     return job;
 }
 
+RenderResult RenderJobImage(RenderJob &job, const RenderOptions &opts) {
+    job.integrator->preprocess(*job.scene, *job.film);
+    RenderResult r;
+    r.stats = RunRender(*job.integrator, *job.scene, *job.film, *job.sampler, opts);
+    r.image = job.film->toImage();
+    job.integrator->finish(*job.film, r.stats, &r.image);
+    r.image.metadata["integrator"] = job.integrator->name();
+    r.image.metadata["spp"] = std::to_string(r.stats.spp);
+    r.image.metadata["seed"] = std::to_string(r.stats.seed);
+    r.image.metadata["render_seconds"] = std::to_string(r.stats.seconds);
+    r.image.metadata["nonfinite_discarded"] = std::to_string(r.stats.nonFinite);
+    return r;
+}
+
 }  // namespace gradus

@@ -4,6 +4,7 @@
 #include <memory>
 #include <string>
 
+#include "image/image.h"
 #include "integrators/integrator.h"
 #include "parser/scene_desc.h"
 #include "render/film.h"
@@ -32,6 +33,16 @@ struct RenderJob {
 };
 
 RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts);
+
+// A finished render: the film image with all layers after Integrator::finish,
+// with metadata (integrator, spp, seed, render_seconds, nonfinite_discarded).
+struct RenderResult {
+    Image image;
+    RenderStats stats;
+};
+// Preprocess, the render loop, the film image and the integrator's finish:
+// the one route from a built job to an image (gradus, tests, benchmarks).
+RenderResult RenderJobImage(RenderJob &job, const RenderOptions &opts);
 
 // Builds only the scene (geometry, materials, lights, camera) for the given film resolution.
 std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution);

@@ -15,6 +15,7 @@ class Sampler {
   public:
     virtual ~Sampler() = default;
     int samplesPerPixel() const { return spp_; }
+    uint64_t seed() const { return seed_; }  // the render seed (RenderStats::seed, PassContext::seed)
     // Positions the sampler on sample `sampleIndex` of `pixel`, starting at
     // dimension `dimension`. Subsequent get1D/get2D calls advance the dimension.
     virtual void startPixelSample(Point2i pixel, int64_t sampleIndex, int dimension = 0) = 0;

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "core/transform.h"
-#include "render/interaction.h"
+#include "core/interaction.h"
 
 namespace gradus {
 

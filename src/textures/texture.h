@@ -5,7 +5,7 @@
 #include <string>
 
 #include "core/spectrum.h"
-#include "render/interaction.h"
+#include "core/interaction.h"
 
 namespace gradus {
 

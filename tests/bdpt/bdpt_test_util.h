@@ -7,7 +7,7 @@
 
 #include "image/image.h"
 #include "parser/scene_desc.h"
-#include "render/driver.h"
+#include "render/render_loop.h"
 #include "common/render_test_util.h"
 #include "render/scene_builder.h"
 

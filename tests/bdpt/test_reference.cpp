@@ -41,14 +41,11 @@ void CheckReference(const std::string &name, int spp, int maxdepth) {
         // Limit the depth of the cornell box (65 in the file) to what a test can afford
         // only when the caller asks (maxdepth < 0: keep the file's).
         RenderJob job = BuildRenderJob(desc, bo);
-        job.integrator->preprocess(*job.scene, *job.film);
         RenderOptions ro;
         ro.spp = n;
-        ro.seed = 7;
         ro.quiet = true;
         ro.nthreads = 2;
-        job.integrator->render(*job.scene, *job.film, *job.sampler, ro);
-        return job.film->mainImage();
+        return RenderJobImage(job, ro).image.layerRGB("");
     };
     (void)maxdepth;
     Image lo = render(spp), hi = render(4 * spp);

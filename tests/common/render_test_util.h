@@ -33,14 +33,13 @@ inline RenderJob MakeTestJob(const SceneDesc &desc, int spp, uint64_t seed, cons
 inline TestRender RenderTestJob(RenderJob job, int spp, uint64_t seed, int nthreads = 0) {
     RenderOptions ro;
     ro.spp = spp;
-    ro.seed = seed;
     ro.nthreads = nthreads;
     ro.quiet = true;
-    job.integrator->preprocess(*job.scene, *job.film);
+    (void)seed;  // the job's sampler carries the seed (MakeTestJob)
     TestRender r;
-    r.stats = job.integrator->render(*job.scene, *job.film, *job.sampler, ro);
-    r.image = job.film->toImage();
-    job.integrator->finish(*job.film, &r.image);
+    RenderResult res = RenderJobImage(job, ro);
+    r.stats = res.stats;
+    r.image = std::move(res.image);
     r.statistics = job.integrator->statistics();
     r.integrator = std::move(job.integrator);
     return r;

@@ -9,11 +9,7 @@
 
 namespace gradus::test {
 
-struct RenderResult {
-    Image image;
-    RenderStats stats;
-};
-
+// RenderResult (render/scene_builder.h): image and render statistics.
 inline RenderResult RenderDesc(const SceneDesc &desc, int spp, uint64_t seed, int nthreads,
                                const std::string &integrator) {
     TestRender t = RenderTestDesc(desc, spp, seed, nthreads, integrator);

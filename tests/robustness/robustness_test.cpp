@@ -31,7 +31,7 @@ Shape "trianglemesh" "point P" [-4 -4 0 4 -4 0 4 4 0 -4 4 0] "integer indices" [
 )";
 
 void ExpectFiniteRender(const std::string &world, const std::string &integrator = "path", int spp = 4) {
-    test::RenderResult r = test::RenderSceneText(std::string(kHeader) + world + "\nWorldEnd\n", spp, 1, 2, integrator);
+    RenderResult r = test::RenderSceneText(std::string(kHeader) + world + "\nWorldEnd\n", spp, 1, 2, integrator);
     EXPECT_EQ(r.stats.nonFinite, 0u) << "non-finite samples discarded";
     int bad = 0;
     for (float v : r.image.data())
@@ -67,7 +67,7 @@ TEST(Robustness, EmptyAndDegenerateMeshes) {
     std::string scene = std::string(kHeader) + "Shape \"plymesh\" \"string filename\" \"empty.ply\"\n" +
                         "Shape \"loopsubdiv\" \"point P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 0 1]\n" +
                         "WorldEnd\n";
-    test::RenderResult r = test::RenderSceneText(scene, 2, 1, 2, "path", dir.string());
+    RenderResult r = test::RenderSceneText(scene, 2, 1, 2, "path", dir.string());
     EXPECT_EQ(r.stats.nonFinite, 0u);
     fs::remove_all(dir);
 }

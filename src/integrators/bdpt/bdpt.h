@@ -21,7 +21,7 @@
 
 namespace gradus {
 
-class BDPTIntegrator : public SampleIntegrator {
+class BDPTIntegrator : public PixelSampleIntegrator {
   public:
     explicit BDPTIntegrator(const EntityDesc &desc);
     std::string name() const override { return "bdpt"; }

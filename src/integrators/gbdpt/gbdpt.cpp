@@ -97,15 +97,6 @@ void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     static const char *names[LNum] = {"primal", "primal_sq", "dxf", "dxf_sq", "dxb",
                                       "dxb_sq", "dyf", "dyf_sq", "dyb", "dyb_sq"};
     for (int l = 0; l < LNum; ++l) ltLayer_[l] = film.addLayer(std::string("gbdpt_lighttracing_") + names[l]);
-    walkStart_ = GetManifoldStats();
-}
-
-RenderStats GBDPTIntegrator::render(const Scene &scene, Film &film, const Sampler &sampler,
-                                    const RenderOptions &opts) {
-    walkStart_ = GetManifoldStats();
-    RenderStats rs = SampleIntegrator::render(scene, film, sampler, opts);
-    spp_ = rs.passes;
-    return rs;
 }
 
 void GBDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const {
@@ -325,13 +316,14 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
     return out;
 }
 
-void GBDPTIntegrator::finish(const Film &film, Image *out) {
-    GradientImages g = gfilm_.images(film, spp_);
+void GBDPTIntegrator::finish(const Film &film, const RenderStats &stats, Image *out) {
+    const double spp = stats.spp;
+    GradientImages g = gfilm_.images(film, spp);
     // Light-tracing splats: the film normalises them by the number of
     // bidirectional samples (spp per pixel; the splat scale is already applied), line 16.
     Image lt[LNum];
     for (int l = 0; l < LNum; ++l) lt[l] = film.layerImage(ltLayer_[l]);
-    double invN = spp_ > 0 ? 1 / spp_ : 0;
+    double invN = spp > 0 ? 1 / spp : 0;
     for (int y = 0; y < g.height; ++y)
         for (int x = 0; x < g.width; ++x)
             for (int ch = 0; ch < 3; ++ch) {

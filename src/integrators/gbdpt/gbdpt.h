@@ -42,16 +42,15 @@
 
 namespace gradus {
 
-class GBDPTIntegrator : public SampleIntegrator {
+class GBDPTIntegrator : public PixelSampleIntegrator {
   public:
     enum class MIS { Combined, Simple };
     explicit GBDPTIntegrator(const EntityDesc &desc);
     ~GBDPTIntegrator() override;
     std::string name() const override { return "gbdpt"; }
     void preprocess(const Scene &scene, Film &film) override;
-    RenderStats render(const Scene &scene, Film &film, const Sampler &sampler, const RenderOptions &opts) override;
     void estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const override;
-    void finish(const Film &film, Image *out) override;
+    void finish(const Film &film, const RenderStats &stats, Image *out) override;
     std::string statistics() const override;
 
     // Light-tracing contributions of one sample (raster pixel, primal, four differences).
@@ -87,14 +86,12 @@ class GBDPTIntegrator : public SampleIntegrator {
     Bounds2i filmBounds_;
     int ltLayer_[10] = {};  // hidden film layers of the light-tracing splats (gbdpt.cpp)
     Float splatScale_ = 1;
-    double spp_ = 0;
     std::string reconReport_;
     // Per-thread light-tracing accumulation and statistics (merged at the end).
     struct ThreadState;
     struct Store;
     std::unique_ptr<Store> store_;
     ThreadState &local() const;
-    ManifoldStatsSnapshot walkStart_;
 };
 
 }  // namespace gradus

@@ -11,7 +11,7 @@
 #include <unordered_map>
 
 #include "integrators/manifold/manifold.h"
-#include "render/interaction.h"
+#include "core/interaction.h"
 #include "render/scene.h"
 
 namespace gradus {

@@ -49,12 +49,6 @@ void GPTIntegrator::preprocess(const Scene &scene, Film &film) {
     stats_.reset();
 }
 
-RenderStats GPTIntegrator::render(const Scene &scene, Film &film, const Sampler &sampler, const RenderOptions &opts) {
-    RenderStats rs = SampleIntegrator::render(scene, film, sampler, opts);
-    spp_ = rs.passes;
-    return rs;
-}
-
 void GPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const {
     bool inside[kNumNeighbours];
     Point2i p = rec.pixel();
@@ -67,8 +61,8 @@ void GPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
     gfilm_.record(rec, s);
 }
 
-void GPTIntegrator::finish(const Film &film, Image *out) {
-    gfilm_.finish(film, spp_, norm_, alpha_, out, &reconReport_);
+void GPTIntegrator::finish(const Film &film, const RenderStats &stats, Image *out) {
+    gfilm_.finish(film, stats.spp, norm_, alpha_, out, &reconReport_);
 }
 
 std::string GPTIntegrator::statistics() const {

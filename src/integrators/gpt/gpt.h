@@ -33,15 +33,14 @@
 
 namespace gradus {
 
-class GPTIntegrator : public SampleIntegrator {
+class GPTIntegrator : public PixelSampleIntegrator {
   public:
     enum class ShiftMode { HalfVector, Hybrid };
     explicit GPTIntegrator(const EntityDesc &desc);
     std::string name() const override { return "gpt"; }
     void preprocess(const Scene &scene, Film &film) override;
-    RenderStats render(const Scene &scene, Film &film, const Sampler &sampler, const RenderOptions &opts) override;
     void estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const override;
-    void finish(const Film &film, Image *out) override;
+    void finish(const Film &film, const RenderStats &stats, Image *out) override;
     std::string statistics() const override;
 
     // One camera sample without a film (for tests): primal and the four neighbour
@@ -63,7 +62,6 @@ class GPTIntegrator : public SampleIntegrator {
     LightSampler lightSampler_;
     GradientFilm gfilm_;
     Bounds2i filmBounds_;
-    double spp_ = 0;
     std::string reconReport_;
     mutable ShiftStats stats_;
 };

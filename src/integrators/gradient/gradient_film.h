@@ -21,7 +21,7 @@
 #include "core/spectrum.h"
 #include "image/image.h"
 #include "reconstruction/reconstruction.h"
-#include "render/driver.h"
+#include "render/render_loop.h"
 #include "render/film.h"
 
 namespace gradus {

@@ -25,11 +25,6 @@
 // s = 0, s = 1 and t = 1 always use the diagonal (Sec. 5.1).
 #include "integrators/mbdpt/mbdpt.h"
 
-#include <tbb/enumerable_thread_specific.h>
-#include <tbb/global_control.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
-
 #include <chrono>
 #include <cstdio>
 #include <sstream>
@@ -37,6 +32,7 @@
 #include "core/error.h"
 #include "core/stats.h"
 #include "integrators/factories.h"
+#include "render/parallel.h"
 
 namespace gradus {
 
@@ -49,15 +45,10 @@ namespace {
 constexpr uint64_t kConnectTag = 0x6d62647074000001ULL;
 constexpr uint64_t kMatrixTag = 0x6d62647074000002ULL;
 constexpr uint64_t kRowTag = 0x6d62647074000003ULL;
-constexpr int kTileSize = 16;
 
-// Per-thread scratch of generation and connection.
-struct ThreadScratch {
-    std::unique_ptr<Sampler> sampler;
-    Arena arena;
-    std::vector<PathVertex> camV, lightV;
-    std::vector<BSDF> camB, lightB, colB;
-};
+double Seconds() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
 
 }  // namespace
 
@@ -152,143 +143,50 @@ void MBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
         if (dot != std::string::npos && (slash == std::string::npos || dot > slash)) f = f.substr(0, dot);
         set_.matrixFile = f + "_matrix_s" + std::to_string(set_.visS) + "_t" + std::to_string(set_.visT) + ".exr";
     }
-    // Tiles of sampled pixels; subpaths are numbered tile by tile.
-    Bounds2i sb = film.sampleBounds();
-    tileMin_.clear();
-    tileMax_.clear();
-    tileStart_.assign(1, 0);
-    for (int y = sb.pMin.y; y < sb.pMax.y; y += kTileSize)
-        for (int x = sb.pMin.x; x < sb.pMax.x; x += kTileSize) {
-            Point2i a{x, y}, b{std::min(x + kTileSize, sb.pMax.x), std::min(y + kTileSize, sb.pMax.y)};
-            tileMin_.push_back(a);
-            tileMax_.push_back(b);
-            tileStart_.push_back(tileStart_.back() + uint32_t((b.x - a.x) * (b.y - a.y)));
-        }
-}
-
-// ---------------------------------------------------------------- stage 1: generation
-void MBDPTIntegrator::generate(const Scene &scene, const Film &film, const Sampler &proto, int iteration) {
-    const int ntiles = int(tileMin_.size());
-    const size_t N = tileStart_.back();
-    const int maxCam = set_.maxDepth + 2, maxLight = set_.maxDepth + 1;
-    struct TileOut {
-        std::vector<PathVertex> cv, lv;
-        std::vector<uint8_t> cc, lc;
-        std::vector<uint32_t> nc, nl;
-    };
-    std::vector<TileOut> out(ntiles);
-    pFilm_.resize(N);
-    camWeight_.resize(N);
-    tbb::enumerable_thread_specific<ThreadScratch> scratch;
-    tbb::parallel_for(0, ntiles, [&](int ti) {
-        ThreadScratch &st = scratch.local();
-        if (!st.sampler) {
-            st.sampler = proto.clone();
-            st.camV.resize(maxCam);
-            st.lightV.resize(maxLight);
-            st.camB.resize(maxCam);
-            st.lightB.resize(maxLight);
-        }
-        TileOut &o = out[ti];
-        uint32_t p = tileStart_[ti];
-        for (int y = tileMin_[ti].y; y < tileMax_[ti].y; ++y)
-            for (int x = tileMin_[ti].x; x < tileMax_[ti].x; ++x, ++p) {
-                Point2i pixel{x, y};
-                Sampler &smp = *st.sampler;
-                smp.startPixelSample(pixel, iteration);
-                CameraSample cs;
-                Point2 u = smp.get2D();
-                cs.pFilm = Point2(x + u.x, y + u.y);
-                cs.pLens = smp.get2D();
-                Ray ray;
-                Float w = scene.camera->generateRay(cs, &ray);
-                int nC = 0, nL = 0;
-                for (auto &b : st.camB) b = BSDF();
-                for (auto &b : st.lightB) b = BSDF();
-                if (w > 0) nC = GenerateCameraSubpath(ctx_, ray, smp, st.arena, maxCam, st.camV.data(), st.camB.data());
-                if (!scene.lights.empty())
-                    nL = GenerateLightSubpath(ctx_, smp, st.arena, maxLight, st.lightV.data(), st.lightB.data());
-                pFilm_[p] = cs.pFilm;
-                camWeight_[p] = float(w);
-                for (int i = 0; i < nC; ++i) {
-                    o.cv.push_back(st.camV[i]);
-                    o.cc.push_back(st.camV[i].type == VertexType::Surface && IsConnectible(st.camV[i], &st.camB[i]));
-                }
-                for (int i = 0; i < nL; ++i) {
-                    o.lv.push_back(st.lightV[i]);
-                    o.lc.push_back(st.lightV[i].type == VertexType::Surface && IsConnectible(st.lightV[i], &st.lightB[i]));
-                }
-                o.nc.push_back(uint32_t(nC));
-                o.nl.push_back(uint32_t(nL));
-                st.arena.reset();
-            }
-    });
-    // Deterministic concatenation in tile order.
-    auto concat = [&](SubpathStore &store, bool camera) {
-        std::vector<size_t> vstart(ntiles + 1, 0);
-        for (int ti = 0; ti < ntiles; ++ti) vstart[ti + 1] = vstart[ti] + (camera ? out[ti].cv.size() : out[ti].lv.size());
-        store.v.resize(vstart[ntiles]);
-        store.connectible.resize(vstart[ntiles]);
-        store.offset.resize(N + 1);
-        store.offset[N] = uint32_t(vstart[ntiles]);
-        tbb::parallel_for(0, ntiles, [&](int ti) {
-            const TileOut &o = out[ti];
-            const auto &vs = camera ? o.cv : o.lv;
-            const auto &cs = camera ? o.cc : o.lc;
-            const auto &ns = camera ? o.nc : o.nl;
-            std::copy(vs.begin(), vs.end(), store.v.begin() + vstart[ti]);
-            std::copy(cs.begin(), cs.end(), store.connectible.begin() + vstart[ti]);
-            uint32_t off = uint32_t(vstart[ti]);
-            for (size_t j = 0; j < ns.size(); ++j) {
-                store.offset[tileStart_[ti] + j] = off;
-                off += ns[j];
-            }
-        });
-    };
-    concat(cam_, true);
-    concat(light_, false);
-    nCamVerts_ += cam_.v.size();
-    nLightVerts_ += light_.v.size();
 }
 
 // ---------------------------------------------------------------- stage 2: reordering
-void MBDPTIntegrator::reorder(const Scene &scene) {
-    const size_t N = tileStart_.back();
+void MBDPTIntegrator::reorder(PassContext &ctx) {
+    const size_t N = paths_.size();
     // Matrix strategies have s >= 2, t >= 2 and s + t - 2 <= maxDepth.
     const int maxLen = set_.maxDepth;
     rows_.resize(maxLen + 1);
     rank_.resize(maxLen + 1);
     cols_.resize(maxLen + 1);
-    const Bounds3 &b = scene.bounds;
+    const Bounds3 &b = ctx.scene().bounds;
     auto build = [&](const SubpathStore &store, int len, std::vector<uint32_t> &sorted) {
         sorted.clear();
         for (size_t i = 0; i < N; ++i)
             if (store.eligible(i, len)) sorted.push_back(uint32_t(i));
         if (set_.reorder == Reorder::None || sorted.size() < 2) return;
         std::vector<std::pair<uint64_t, uint32_t>> keys(sorted.size());
-        tbb::parallel_for(size_t(0), sorted.size(), [&](size_t k) {
-            const PathVertex *v = store.path(sorted[k]);
-            uint64_t key = set_.reorder == Reorder::Distance ? DistanceKey(DistanceMetric(v, len))
-                                                              : MortonKey(v[len - 1].p, b);
-            keys[k] = {key, sorted[k]};
+        ctx.parallelFor(int64_t(sorted.size()), 1024, [&](int64_t k0, int64_t k1, Worker &) {
+            for (int64_t k = k0; k < k1; ++k) {
+                const PathVertex *v = store.path(sorted[k]);
+                uint64_t key = set_.reorder == Reorder::Distance ? DistanceKey(DistanceMetric(v, len))
+                                                                  : MortonKey(v[len - 1].p, b);
+                keys[k] = {key, sorted[k]};
+            }
         });
         // Ties broken by index: a total order, so the result is thread-count independent.
-        tbb::parallel_sort(keys.begin(), keys.end());
+        ParallelSort(keys.begin(), keys.end());
         for (size_t k = 0; k < keys.size(); ++k) sorted[k] = keys[k].second;
     };
     for (int len = 2; len <= maxLen; ++len) {
-        build(cam_, len, rows_[len]);
-        build(light_, len, cols_[len]);
+        build(paths_.camera, len, rows_[len]);
+        build(paths_.light, len, cols_[len]);
         rank_[len].assign(N, -1);
         const auto &r = rows_[len];
-        tbb::parallel_for(size_t(0), r.size(), [&](size_t k) { rank_[len][r[k]] = int32_t(k); });
+        for (size_t k = 0; k < r.size(); ++k) rank_[len][r[k]] = int32_t(k);
     }
 }
 
 // ---------------------------------------------------------------- stage 3: connection
-void MBDPTIntegrator::connect(const Scene &scene, Film &film, int iteration, uint64_t seed) {
-    const int ntiles = int(tileMin_.size());
-    const size_t N = tileStart_.back();
+void MBDPTIntegrator::connect(PassContext &ctx) {
+    const Scene &scene = ctx.scene();
+    const int iteration = ctx.firstSample();
+    const uint64_t seed = ctx.seed();
+    const size_t N = paths_.size();
     const int maxDepth = set_.maxDepth, m = set_.connections;
     const int maxCam = maxDepth + 2, maxLight = maxDepth + 1;
     const bool diagonal = set_.sampling == MatrixSampling::Diagonal && !set_.combinatorial;
@@ -301,30 +199,21 @@ void MBDPTIntegrator::connect(const Scene &scene, Film &film, int iteration, uin
                                                                      BitsToUniform(MixBits(h)), h,
                                                                      BitsToUniform(MixBits(h ^ kRowTag)));
         }
-    std::vector<std::unique_ptr<FilmTile>> tiles(ntiles);
-    tbb::enumerable_thread_specific<ThreadScratch> scratch;
-    std::atomic<uint64_t> nConn{0}, nShadow{0};
-    tbb::parallel_for(0, ntiles, [&](int ti) {
-        if (InterruptRequested()) return;
-        ThreadScratch &st = scratch.local();
-        if (st.camB.empty()) {
-            st.camB.resize(maxCam);
-            st.lightB.resize(maxLight);
-            st.colB.resize(maxLight);
-        }
-        Bounds2i tb{tileMin_[ti], tileMax_[ti]};
-        auto tile = film.makeTile(tb);
-        uint64_t conn = 0, shadow = 0;
-        for (uint32_t p = tileStart_[ti]; p < tileStart_[ti + 1]; ++p) {
-            Point2i pixel{int(std::floor(pFilm_[p].x)), int(std::floor(pFilm_[p].y))};
-            SampleRecorder rec(*tile, pixel, pFilm_[p]);
+    const SubpathStore &cam = paths_.camera, &light = paths_.light;
+    const std::vector<Point2> &pFilm = paths_.pFilm;
+    ctx.forEachTile([&](int ti, const Bounds2i &, FilmTile &tile, Worker &wk) {
+        std::vector<BSDF> camB(maxCam), lightB(maxLight), colB(maxLight);
+        uint64_t conn = 0, shadow = 0, bad = 0;
+        for (uint32_t p = paths_.tileBegin(ti); p < paths_.tileEnd(ti); ++p) {
+            Point2i pixel{int(std::floor(pFilm[p].x)), int(std::floor(pFilm[p].y))};
+            SampleRecorder rec(tile, pixel, pFilm[p]);
             RNG rng(Hash(seed ^ kConnectTag, uint64_t(pixel.x) << 32 | uint32_t(pixel.y), uint64_t(iteration)));
-            const int nC = cam_.count(p), nL = light_.count(p);
-            const PathVertex *cv = cam_.path(p), *lv = light_.path(p);
-            for (int i = 0; i < nC; ++i) st.camB[i] = RebuildBSDF(ctx_, cv[i], TransportMode::Radiance, st.arena);
-            for (int i = 0; i < nL; ++i) st.lightB[i] = RebuildBSDF(ctx_, lv[i], TransportMode::Importance, st.arena);
-            SubpathView camView{cv, st.camB.data(), nC}, ownLight{lv, st.lightB.data(), nL};
-            const Float w = camWeight_[p];
+            const int nC = cam.count(p), nL = light.count(p);
+            const PathVertex *cv = cam.path(p), *lv = light.path(p);
+            for (int i = 0; i < nC; ++i) camB[i] = RebuildBSDF(ctx_, cv[i], TransportMode::Radiance, wk.arena);
+            for (int i = 0; i < nL; ++i) lightB[i] = RebuildBSDF(ctx_, lv[i], TransportMode::Importance, wk.arena);
+            SubpathView camView{cv, camB.data(), nC}, ownLight{lv, lightB.data(), nL};
+            const Float w = paths_.camWeight[p];
             Spectrum L(0);
             auto record = [&](int s, int t, const ConnectResult &r, Float scale) {
                 if (r.splat) {
@@ -366,19 +255,19 @@ void MBDPTIntegrator::connect(const Scene &scene, Film &film, int iteration, uin
                         const uint64_t Ls = cols.size();
                         if (Ls == 0) continue;
                         auto connectTo = [&](uint32_t q, Float scale) {
-                            const PathVertex *zv = light_.path(q);
+                            const PathVertex *zv = light.path(q);
                             SubpathView lview = ownLight;
                             if (q != p) {
-                                st.colB[s - 1] = RebuildBSDF(ctx_, zv[s - 1], TransportMode::Importance, st.arena);
-                                lview = SubpathView{zv, st.colB.data(), light_.count(q)};
+                                colB[s - 1] = RebuildBSDF(ctx_, zv[s - 1], TransportMode::Importance, wk.arena);
+                                lview = SubpathView{zv, colB.data(), light.count(q)};
                             }
                             run(lview, s, t, scale);
-                            st.colB[s - 1] = BSDF();
+                            colB[s - 1] = BSDF();
                         };
                         if (set_.combinatorial) {
                             for (uint32_t q : cols) connectTo(q, Float(1) / Float(N));  // Eq. 6
                         } else if (diagonal) {
-                            if (light_.eligible(p, s)) connectTo(p, 1);  // Eq. 7
+                            if (light.eligible(p, s)) connectTo(p, 1);  // Eq. 7
                         } else {
                             const ColumnSampler &cs = samplers[size_t(s) * (maxDepth + 1) + t];
                             // Rows take part with probability rho (BDPT's rate L_s / L by
@@ -394,27 +283,27 @@ void MBDPTIntegrator::connect(const Scene &scene, Film &film, int iteration, uin
                     }
                 }
             rec.addRadiance(L * w);
-            tile->addCount(pixel, 1);
-            st.arena.reset();
+            tile.addCount(pixel, 1);
+            bad += rec.nonFinite;
+            wk.arena.reset();
         }
-        nConn += conn;
-        nShadow += shadow;
-        tiles[ti] = std::move(tile);
+        nConnect_ += conn;
+        nShadow_ += shadow;
+        ctx.addNonFinite(bad);
     });
-    for (auto &t : tiles)
-        if (t) film.mergeTile(*t);
-    nConnect_ += nConn;
-    nShadow_ += nShadow;
 }
 
 // ---------------------------------------------------------------- Fig. 4: matrix image
-void MBDPTIntegrator::visualizeMatrix(const Scene &scene, uint64_t seed) {
+void MBDPTIntegrator::visualizeMatrix(PassContext &ctx) {
     const int s = set_.visS, t = set_.visT;
-    const size_t N = tileStart_.back();
+    const uint64_t seed = ctx.seed();
+    const size_t N = paths_.size();
+    const SubpathStore &cam = paths_.camera, &light = paths_.light;
+    const std::vector<float> &camWeight = paths_.camWeight;
     std::vector<uint32_t> rowsU, colsU;
     for (size_t i = 0; i < N; ++i) {
-        if (cam_.eligible(i, t) && camWeight_[i] > 0) rowsU.push_back(uint32_t(i));
-        if (light_.eligible(i, s)) colsU.push_back(uint32_t(i));
+        if (cam.eligible(i, t) && camWeight[i] > 0) rowsU.push_back(uint32_t(i));
+        if (light.eligible(i, s)) colsU.push_back(uint32_t(i));
     }
     // "Unordered" as in Fig. 4: a random permutation of the rows and of the columns
     // (the index order of the rows is the pixel order, itself spatially coherent).
@@ -426,7 +315,7 @@ void MBDPTIntegrator::visualizeMatrix(const Scene &scene, uint64_t seed) {
     shuffle(colsU, 2);
     std::vector<uint32_t> rowsO;
     for (uint32_t i : rows_[t])
-        if (camWeight_[i] > 0) rowsO.push_back(i);
+        if (camWeight[i] > 0) rowsO.push_back(i);
     const std::vector<uint32_t> &colsO = cols_[s];
     int R = int(std::min<size_t>(rowsU.size(), set_.matrixResolution));
     int C = int(std::min<size_t>(colsU.size(), set_.matrixResolution));
@@ -436,29 +325,26 @@ void MBDPTIntegrator::visualizeMatrix(const Scene &scene, uint64_t seed) {
     }
     Image ordered = Image::RGB(C, R), unordered = Image::RGB(C, R);
     const int maxCam = set_.maxDepth + 2, maxLight = set_.maxDepth + 1;
-    tbb::enumerable_thread_specific<ThreadScratch> scratch;
     auto fill = [&](const std::vector<uint32_t> &rows, const std::vector<uint32_t> &cols, Image &img) {
-        tbb::parallel_for(0, R, [&](int i) {
-            ThreadScratch &st = scratch.local();
-            if (st.camB.empty()) {
-                st.camB.resize(maxCam);
-                st.colB.resize(maxLight);
+        ctx.parallelFor(R, 1, [&](int64_t i0, int64_t i1, Worker &wk) {
+            std::vector<BSDF> camB(maxCam), colB(maxLight);
+            for (int64_t i = i0; i < i1; ++i) {
+                uint32_t p = rows[size_t((i + 0.5) * rows.size() / R)];
+                const PathVertex *cv = cam.path(p);
+                for (int k = 0; k < t; ++k) camB[k] = RebuildBSDF(ctx_, cv[k], TransportMode::Radiance, wk.arena);
+                SubpathView camView{cv, camB.data(), t};
+                for (int j = 0; j < C; ++j) {
+                    uint32_t q = cols[size_t((j + 0.5) * cols.size() / C)];
+                    const PathVertex *zv = light.path(q);
+                    colB[s - 1] = RebuildBSDF(ctx_, zv[s - 1], TransportMode::Importance, wk.arena);
+                    ConnectResult r;
+                    Spectrum v(0);
+                    if (ConnectBDPT(ctx_, SubpathView{zv, colB.data(), s}, camView, s, t, ConnectSamples(), &r))
+                        v = r.L * camWeight[p];
+                    for (int c = 0; c < 3; ++c) img.at(int(j), int(i), c) = float(v[c]);
+                }
+                wk.arena.reset();
             }
-            uint32_t p = rows[size_t((i + 0.5) * rows.size() / R)];
-            const PathVertex *cv = cam_.path(p);
-            for (int k = 0; k < t; ++k) st.camB[k] = RebuildBSDF(ctx_, cv[k], TransportMode::Radiance, st.arena);
-            SubpathView camView{cv, st.camB.data(), t};
-            for (int j = 0; j < C; ++j) {
-                uint32_t q = cols[size_t((j + 0.5) * cols.size() / C)];
-                const PathVertex *zv = light_.path(q);
-                st.colB[s - 1] = RebuildBSDF(ctx_, zv[s - 1], TransportMode::Importance, st.arena);
-                ConnectResult r;
-                Spectrum v(0);
-                if (ConnectBDPT(ctx_, SubpathView{zv, st.colB.data(), s}, camView, s, t, ConnectSamples(), &r))
-                    v = r.L * camWeight_[p];
-                for (int c = 0; c < 3; ++c) img.at(j, i, c) = float(v[c]);
-            }
-            st.arena.reset();
         });
     };
     fill(rowsO, colsO, ordered);
@@ -469,72 +355,39 @@ void MBDPTIntegrator::visualizeMatrix(const Scene &scene, uint64_t seed) {
     ordered.metadata["mbdpt_columns"] = std::to_string(colsU.size());
     matrixImage_ = std::move(ordered);
     if (!set_.matrixFile.empty()) WriteImage(set_.matrixFile, matrixImage_);
-    (void)scene;
 }
 
-// ---------------------------------------------------------------- the iteration loop
-RenderStats MBDPTIntegrator::render(const Scene &scene, Film &film, const Sampler &sampler, const RenderOptions &opts) {
-    using Clock = std::chrono::steady_clock;
-    auto t0 = Clock::now();
-    auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
-    std::unique_ptr<tbb::global_control> gc;
-    if (opts.nthreads > 0)
-        gc = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, opts.nthreads);
-    const int spp = opts.spp > 0 ? opts.spp : sampler.samplesPerPixel();
-    const bool unlimited = opts.timeLimit > 0 && opts.spp <= 0;
-    RenderStats stats;
-    Progress progress("Rendering", unlimited ? 0 : spp, opts.quiet);
-    double lastIter = 0;
-    int done = 0;
-    while (unlimited || done < spp) {
-        if (InterruptRequested()) {
-            stats.interrupted = true;
-            break;
-        }
-        if (opts.timeLimit > 0 && done > 0 && elapsed() + lastIter > opts.timeLimit) {
-            stats.timeLimited = true;
-            break;
-        }
-        double start = elapsed();
-        generate(scene, film, sampler, done);
-        double a = elapsed();
-        reorder(scene);
-        double b = elapsed();
-        if (done == 0 && set_.visS >= 0) visualizeMatrix(scene, opts.seed);
-        double c = elapsed();
-        connect(scene, film, done, opts.seed);
-        double d = elapsed();
-        if (InterruptRequested()) {  // as the driver: the partial iteration's merged tiles stay
-            stats.interrupted = true;
-            ++done;
-            break;
-        }
-        secGen_ += a - start;
-        secSort_ += b - a;
-        secConnect_ += d - c;
-        ++done;
-        film.setSplatSamples(done);
-        // Stored subpaths and reordering tables of this iteration, per sampled pixel.
-        size_t bytes = cam_.bytes() + light_.bytes() + pFilm_.capacity() * sizeof(Point2) +
-                       camWeight_.capacity() * sizeof(float);
-        for (size_t k = 0; k < rows_.size(); ++k)
-            bytes += rows_[k].capacity() * 4 + rank_[k].capacity() * 4 + cols_[k].capacity() * 4;
-        bytesPerPixel_ = std::max(bytesPerPixel_, double(bytes) / std::max<size_t>(1, tileStart_.back()));
-        lastIter = elapsed() - start;
-        progress.update(done, elapsed(), opts.timeLimit);
-    }
-    progress.done(elapsed());
-    film.setSplatSamples(done);
-    iterations_ = done;
-    stats.passes = done;
-    stats.cameraSamples = int64_t(done) * int64_t(tileStart_.back());
-    stats.seconds = elapsed();
-    return stats;
+// ---------------------------------------------------------------- one iteration = one pass
+void MBDPTIntegrator::runPass(PassContext &ctx) {
+    if (ctx.pass() == 0) paths_.init(ctx.tiles());
+    double start = Seconds();
+    paths_.generate(ctx, ctx_, set_.maxDepth);
+    nCamVerts_ += paths_.camera.v.size();
+    nLightVerts_ += paths_.light.v.size();
+    double a = Seconds();
+    reorder(ctx);
+    double b = Seconds();
+    if (ctx.pass() == 0 && set_.visS >= 0) visualizeMatrix(ctx);
+    double c = Seconds();
+    connect(ctx);
+    double d = Seconds();
+    secGen_ += a - start;
+    secSort_ += b - a;
+    secConnect_ += d - c;
+}
+
+void MBDPTIntegrator::endPass(PassContext &ctx) {
+    ++iterations_;
+    // Stored subpaths and reordering tables of this iteration, per sampled pixel.
+    size_t bytes = paths_.bytes();
+    for (size_t k = 0; k < rows_.size(); ++k)
+        bytes += rows_[k].capacity() * 4 + rank_[k].capacity() * 4 + cols_[k].capacity() * 4;
+    bytesPerPixel_ = std::max(bytesPerPixel_, double(bytes) / std::max<size_t>(1, paths_.size()));
 }
 
 std::string MBDPTIntegrator::statistics() const {
     std::ostringstream o;
-    const double N = double(tileStart_.empty() ? 0 : tileStart_.back());
+    const double N = double(paths_.size());
     const double it = std::max(1, iterations_);
     o << "M-BDPT:\n";
     o << "  iterations: " << iterations_ << ", subpaths per iteration: " << N << " camera + " << N << " light\n";

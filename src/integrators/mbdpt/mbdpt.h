@@ -37,6 +37,7 @@
 
 #include "image/image.h"
 #include "integrators/common/bidir.h"
+#include "integrators/common/subpath_store.h"
 #include "integrators/integrator.h"
 #include "integrators/mbdpt/matrix.h"
 #include "lights/light_sampler.h"
@@ -59,25 +60,14 @@ struct MBDPTSettings {
     std::string matrixFile;
 };
 
-// Subpaths of one iteration, indexed in generation order (tile by tile).
-struct SubpathStore {
-    std::vector<PathVertex> v;
-    std::vector<uint8_t> connectible;  // per vertex: a connection may end here (surface, non-specular)
-    std::vector<uint32_t> offset;      // subpath i: v[offset[i], offset[i+1])
-    int count(size_t i) const { return int(offset[i + 1] - offset[i]); }
-    const PathVertex *path(size_t i) const { return v.data() + offset[i]; }
-    bool eligible(size_t i, int len) const { return count(i) >= len && connectible[offset[i] + len - 1]; }
-    size_t bytes() const {
-        return v.capacity() * sizeof(PathVertex) + connectible.capacity() + offset.capacity() * sizeof(uint32_t);
-    }
-};
-
 class MBDPTIntegrator : public Integrator {
   public:
     explicit MBDPTIntegrator(const EntityDesc &desc);
     std::string name() const override { return "mbdpt"; }
     void preprocess(const Scene &scene, Film &film) override;
-    RenderStats render(const Scene &scene, Film &film, const Sampler &sampler, const RenderOptions &opts) override;
+    int samplesPerPass(const RenderOptions &) const override { return 1; }  // one iteration = 1 spp
+    void runPass(PassContext &ctx) override;
+    void endPass(PassContext &ctx) override;
     std::string statistics() const override;
 
     const MBDPTSettings &settings() const { return set_; }
@@ -88,10 +78,9 @@ class MBDPTIntegrator : public Integrator {
     double bytesPerPixel() const { return bytesPerPixel_; }
 
   private:
-    void generate(const Scene &scene, const Film &film, const Sampler &proto, int iteration);
-    void reorder(const Scene &scene);
-    void connect(const Scene &scene, Film &film, int iteration, uint64_t seed);
-    void visualizeMatrix(const Scene &scene, uint64_t seed);
+    void reorder(PassContext &ctx);
+    void connect(PassContext &ctx);
+    void visualizeMatrix(PassContext &ctx);
     int strategyLayer(int s, int t) const;
 
     MBDPTSettings set_;
@@ -102,11 +91,7 @@ class MBDPTIntegrator : public Integrator {
     Float splatScale_ = 1;
 
     // Per-iteration data (reused across iterations).
-    std::vector<Point2i> tileMin_, tileMax_;   // tiles of sampled pixels
-    std::vector<uint32_t> tileStart_;          // first subpath of each tile
-    SubpathStore cam_, light_;
-    std::vector<Point2> pFilm_;                // per camera subpath
-    std::vector<float> camWeight_;             // camera ray weight
+    ImageSubpaths paths_;                      // one camera and one light subpath per sampled pixel
     std::vector<std::vector<uint32_t>> rows_;  // [t]: eligible camera subpaths in reordered order
     std::vector<std::vector<int32_t>> rank_;   // [t][p]: rank of camera subpath p in rows_[t], or -1
     std::vector<std::vector<uint32_t>> cols_;  // [s]: eligible light subpaths in reordered order

@@ -12,7 +12,7 @@
 
 namespace gradus {
 
-class PathIntegrator : public SampleIntegrator {
+class PathIntegrator : public PixelSampleIntegrator {
   public:
     explicit PathIntegrator(const EntityDesc &desc);
     std::string name() const override { return "path"; }

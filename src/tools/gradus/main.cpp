@@ -25,6 +25,9 @@ const char *kUsage =
     "  --time S             wall-clock budget in seconds (with --spp: whichever ends first)\n"
     "  --cropwindow x0 x1 y0 y1   render a sub-rectangle (fractions of the image)\n"
     "  --integrator NAME    override the scene's integrator (see --list-integrators)\n"
+    "  --debugpixel x,y[,s] re-run the samples (or sample s) of one pixel single-threaded with the\n"
+    "                       random numbers of the full render; prints vertices and contributions\n"
+    "                       on stdout and writes no image\n"
     "  --quick              1/4 resolution and 1/8 of the samples\n"
     "  --stats              print the scene features after loading\n"
     "  --quiet              no progress bar or statistics\n"
@@ -78,7 +81,19 @@ int main(int argc, char **argv) {
             if (bo.sppOverride <= 0) Usage("--spp must be positive");
             ro.spp = bo.sppOverride;
         } else if (a == "--seed") {
-            bo.seed = ro.seed = uint64_t(ParseInt(a, next()));
+            bo.seed = uint64_t(ParseInt(a, next()));
+        } else if (a == "--debugpixel") {
+            const char *v = next();
+            int x, y, s = -1, n = 0;
+            char extra;
+            int got = std::sscanf(v, "%d,%d%n", &x, &y, &n);
+            if (got == 2 && v[n] == ',') got = std::sscanf(v, "%d,%d,%d %c", &x, &y, &s, &extra) == 3 ? 3 : -1;
+            else if (got == 2 && v[n] != 0) got = -1;
+            if (got < 2 || x < 0 || y < 0 || (got == 3 && s < 0))
+                Usage("--debugpixel expects x,y or x,y,s (non-negative integers), got \"" + std::string(v) + "\"");
+            ro.debug = true;
+            ro.debugPixel = {x, y};
+            ro.debugSample = s;
         } else if (a == "--time") {
             ro.timeLimit = ParseDouble(a, next());
             if (!(ro.timeLimit > 0)) Usage("--time must be positive");
@@ -114,24 +129,25 @@ int main(int argc, char **argv) {
         if (printStats) std::fprintf(stderr, "%s", job.scene->features.describe().c_str());
         if (ro.spp <= 0) ro.spp = job.sampler->samplesPerPixel();
         if (ro.timeLimit > 0 && bo.sppOverride <= 0) ro.spp = 0;  // time budget alone
-        job.integrator->preprocess(*job.scene, *job.film);
+        if (ro.debug && !job.film->sampleBounds().inside(ro.debugPixel))
+            throw Error("--debugpixel (" + std::to_string(ro.debugPixel.x) + ", " + std::to_string(ro.debugPixel.y) +
+                        ") lies outside the sampled pixels");
         InstallInterruptHandler();
         StatRegistry::get().reset();
-        RenderStats rs = job.integrator->render(*job.scene, *job.film, *job.sampler, ro);
-        Image img = job.film->toImage();
-        job.integrator->finish(*job.film, &img);
-        img.metadata["integrator"] = job.integrator->name();
-        img.metadata["spp"] = std::to_string(rs.passes);
-        img.metadata["seed"] = std::to_string(ro.seed);
-        img.metadata["render_seconds"] = std::to_string(rs.seconds);
+        RenderResult res = RenderJobImage(job, ro);
+        const RenderStats &rs = res.stats;
+        Image &img = res.image;
         img.metadata["scene"] = sceneFile;
-        img.metadata["nonfinite_discarded"] = std::to_string(rs.nonFinite);
+        if (ro.debug) {
+            std::fprintf(stderr, "--debugpixel: no image written\n");
+            return 0;
+        }
         WriteImage(job.film->filename(), img);
         if (!ro.quiet) {
             std::fprintf(stderr,
                          "Scene loaded in %.2fs; rendered %d spp in %.2fs (%.3g camera samples/s)%s\n"
                          "Non-finite contributions discarded: %llu\n",
-                         loadSec, rs.passes, rs.seconds, rs.cameraSamples / std::max(1e-9, rs.seconds),
+                         loadSec, rs.spp, rs.seconds, rs.cameraSamples / std::max(1e-9, rs.seconds),
                          rs.interrupted ? " [interrupted]" : (rs.timeLimited ? " [time budget]" : ""),
                          (unsigned long long)rs.nonFinite);
             std::fprintf(stderr, "Statistics:\n%s%s", FormatStats(StatRegistry::get().snapshot()).c_str(),

@@ -1,0 +1,270 @@
+#include "render/render_loop.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdarg>
+#include <cstdio>
+
+#include "integrators/integrator.h"
+
+namespace gradus {
+
+namespace {
+std::atomic<int> gInterrupts{0};
+void OnSignal(int) {
+    if (gInterrupts.fetch_add(1) >= 1) std::_Exit(130);
+}
+
+// --debugpixel state: set by RunRender, read by the recorders and DebugTrace.
+std::atomic<bool> gDebugMode{false};
+Point2i gDebugPixel;
+thread_local bool tDebugTracing = false;
+
+bool IsDebugPixel(Point2i p) { return gDebugMode.load(std::memory_order_relaxed) && p == gDebugPixel; }
+
+void PrintContribution(const char *what, Point2i p, const Spectrum &v, int layer) {
+    std::printf("  %s pixel (%d, %d)%s%s: %.6g %.6g %.6g\n", what, p.x, p.y, layer >= 0 ? " layer " : "",
+                layer >= 0 ? std::to_string(layer).c_str() : "", v.r, v.g, v.b);
+}
+
+constexpr int64_t kItemChunk = 256;  // items per splat buffer (fixed: merge order is thread-count independent)
+}  // namespace
+
+void InstallInterruptHandler() {
+    std::signal(SIGINT, OnSignal);
+    std::signal(SIGTERM, OnSignal);
+}
+bool InterruptRequested() { return gInterrupts.load() > 0; }
+void ResetInterrupt() { gInterrupts = 0; }
+
+bool DebugTracing() { return tDebugTracing; }
+void DebugTrace(const char *fmt, ...) {
+    if (!tDebugTracing) return;
+    va_list ap;
+    va_start(ap, fmt);
+    std::printf("    ");
+    std::vprintf(fmt, ap);
+    std::printf("\n");
+    va_end(ap);
+}
+
+void SampleRecorder::addRadiance(const Spectrum &L) {
+    if (!guard(L)) return;
+    if (IsDebugPixel(pixel_)) PrintContribution("radiance", pixel_, L, -1);
+    tile_.addSample(pFilm_, L);
+}
+void SampleRecorder::addLayer(int layer, const Spectrum &v, Point2i off) {
+    if (!guard(v)) return;
+    Point2i p{pixel_.x + off.x, pixel_.y + off.y};
+    if (IsDebugPixel(p)) PrintContribution("layer value", p, v, layer);
+    tile_.addLayer(layer, p, v);
+}
+void SampleRecorder::splat(Point2 p, const Spectrum &v, int layer) {
+    if (!guard(v)) return;
+    if (gDebugMode.load(std::memory_order_relaxed)) {
+        Point2i q{int(std::floor(p.x)), int(std::floor(p.y))};
+        if (IsDebugPixel(q)) PrintContribution("splat", q, v, layer);
+    }
+    tile_.addSplat(p, v, layer);
+}
+
+Progress::Progress(std::string title, int64_t total, bool quiet)
+    : title_(std::move(title)), total_(total), quiet_(quiet) {}
+
+void Progress::update(int64_t done, double elapsed, double timeLimit) {
+    if (quiet_ || elapsed - lastPrint_ < 0.5) return;
+    lastPrint_ = elapsed;
+    double frac = total_ > 0 ? double(done) / total_ : 0;
+    if (timeLimit > 0) frac = std::max(frac, std::min(1.0, elapsed / timeLimit));
+    int bars = int(frac * 30);
+    std::string bar(bars, '=');
+    bar.resize(30, ' ');
+    double eta = frac > 0 ? elapsed / frac - elapsed : 0;
+    std::fprintf(stderr, "\r%s [%s] %3d%% %.1fs ETA %.1fs ", title_.c_str(), bar.c_str(), int(frac * 100), elapsed,
+                 eta);
+    std::fflush(stderr);
+}
+
+void Progress::done(double elapsed) {
+    if (quiet_) return;
+    std::fprintf(stderr, "\r%s [%s] 100%% %.1fs            \n", title_.c_str(), std::string(30, '=').c_str(),
+                 elapsed);
+}
+
+TileGrid::TileGrid(const Bounds2i &b, int ts) : bounds(b), size(std::max(1, ts)) {
+    nx = (b.width() + size - 1) / size;
+    ny = (b.height() + size - 1) / size;
+}
+
+Bounds2i TileGrid::tile(int i) const {
+    Bounds2i t;
+    t.pMin = {bounds.pMin.x + (i % nx) * size, bounds.pMin.y + (i / nx) * size};
+    t.pMax = {std::min(t.pMin.x + size, bounds.pMax.x), std::min(t.pMin.y + size, bounds.pMax.y)};
+    return t;
+}
+
+struct PassContext::Shared {
+    const Sampler *prototype = nullptr;
+    tbb::enumerable_thread_specific<Worker> workers;
+    std::atomic<uint64_t> nonFinite{0};
+};
+
+Worker &PassContext::worker() const {
+    Worker &w = shared_.workers.local();
+    if (!w.sampler) w.sampler = shared_.prototype->clone();
+    return w;
+}
+
+bool PassContext::interrupted() const { return InterruptRequested(); }
+
+void PassContext::addNonFinite(uint64_t n) { shared_.nonFinite += n; }
+
+void PassContext::forEachTile(const TileFn &fn) {
+    const int n = tiles_.count();
+    std::vector<std::unique_ptr<FilmTile>> out(n);
+    tbb::parallel_for(0, n, [&](int t) {
+        if (InterruptRequested()) return;
+        Bounds2i tb = tiles_.tile(t);
+        auto tile = film_.makeTile(tb);
+        fn(t, tb, *tile, worker());
+        out[t] = std::move(tile);
+    });
+    for (auto &t : out)
+        if (t) film_.mergeTile(*t);
+}
+
+void PassContext::forEachPixelSample(const SampleEstimator &est) {
+    const int first = firstSample_, count = sampleCount_;
+    auto run = [&](Point2i pixel, int s, FilmTile &tile, Worker &w) {
+        Sampler &sampler = *w.sampler;
+        sampler.startPixelSample(pixel, s);
+        CameraSample cs;
+        Point2 u = sampler.get2D();
+        cs.pFilm = Point2(pixel.x + u.x, pixel.y + u.y);
+        cs.pLens = sampler.get2D();
+        SampleRecorder rec(tile, pixel, cs.pFilm);
+        est.estimate(cs, sampler, w.arena, rec);
+        tile.addCount(pixel, 1);
+        w.arena.reset();
+        return rec.nonFinite;
+    };
+    if (opts_.debug) {  // the debug pixel's samples only, on this thread
+        Point2i p = opts_.debugPixel;
+        Bounds2i one{p, {p.x + 1, p.y + 1}};
+        auto tile = film_.makeTile(one);
+        Worker &w = worker();
+        for (int s = first; s < first + count; ++s) {
+            if (opts_.debugSample >= 0 && s != opts_.debugSample) continue;
+            std::printf("sample %d of pixel (%d, %d):\n", s, p.x, p.y);
+            tDebugTracing = true;
+            addNonFinite(run(p, s, *tile, w));
+            tDebugTracing = false;
+        }
+        film_.mergeTile(*tile);
+        return;
+    }
+    forEachTile([&](int, const Bounds2i &tb, FilmTile &tile, Worker &w) {
+        uint64_t bad = 0;
+        for (int y = tb.pMin.y; y < tb.pMax.y; ++y)
+            for (int x = tb.pMin.x; x < tb.pMax.x; ++x)
+                for (int s = first; s < first + count; ++s) bad += run({x, y}, s, tile, w);
+        addNonFinite(bad);
+    });
+}
+
+void PassContext::forEachItem(int64_t n, uint64_t tag, const ItemFn &fn) {
+    const int64_t chunks = (n + kItemChunk - 1) / kItemChunk;
+    std::vector<std::unique_ptr<FilmTile>> out(size_t(std::max<int64_t>(0, chunks)));
+    const uint64_t key = seed() ^ tag;
+    tbb::parallel_for(int64_t(0), chunks, [&](int64_t c) {
+        if (InterruptRequested()) return;
+        auto tile = film_.makeSplatTile();
+        Worker &w = worker();
+        uint64_t bad = 0;
+        for (int64_t i = c * kItemChunk; i < std::min(n, (c + 1) * kItemChunk); ++i) {
+            RNG rng(Hash(key, uint64_t(pass_), uint64_t(i)));
+            SampleRecorder rec(*tile, Point2i{-1, -1}, Point2(-1, -1));
+            fn(i, rng, rec, w);
+            bad += rec.nonFinite;
+            w.arena.reset();
+        }
+        addNonFinite(bad);
+        out[size_t(c)] = std::move(tile);
+    });
+    for (auto &t : out)
+        if (t) film_.mergeTile(*t);
+}
+
+void PassContext::parallelFor(int64_t n, int64_t grain, const RangeFn &fn) {
+    grain = std::max<int64_t>(1, grain);
+    const int64_t ranges = (n + grain - 1) / grain;
+    tbb::parallel_for(int64_t(0), ranges, [&](int64_t r) {
+        fn(r * grain, std::min(n, (r + 1) * grain), worker());
+    });
+}
+
+RenderStats RunRender(Integrator &integ, const Scene &scene, Film &film, const Sampler &sampler,
+                      const RenderOptions &opts) {
+    using Clock = std::chrono::steady_clock;
+    auto t0 = Clock::now();
+    auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - t0).count(); };
+    const int threads = opts.debug ? 1 : opts.nthreads;
+    std::unique_ptr<tbb::global_control> gc;
+    if (threads > 0)
+        gc = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
+    gDebugMode = opts.debug;
+    gDebugPixel = opts.debugPixel;
+
+    TileGrid grid(film.sampleBounds(), opts.tileSize);
+    PassContext::Shared shared;
+    shared.prototype = &sampler;
+    PassContext ctx(scene, film, sampler, opts, grid, shared);
+
+    const int spp = opts.spp > 0 ? opts.spp : sampler.samplesPerPixel();
+    const bool unlimited = opts.timeLimit > 0 && opts.spp <= 0;  // time budget alone: run until it is spent
+    const int perPass = std::max(1, integ.samplesPerPass(opts));
+    RenderStats stats;
+    stats.seed = sampler.seed();
+    Progress progress("Rendering", unlimited ? 0 : spp, opts.quiet || opts.debug);
+    double lastPassTime = 0;
+    int done = 0;
+    while (unlimited || done < spp) {
+        if (InterruptRequested()) {
+            stats.interrupted = true;
+            break;
+        }
+        // Stop before a pass that would end past the budget (estimated by the last pass).
+        if (opts.timeLimit > 0 && done > 0 && elapsed() + lastPassTime > opts.timeLimit) {
+            stats.timeLimited = true;
+            break;
+        }
+        double passStart = elapsed();
+        ctx.pass_ = stats.passes;
+        ctx.firstSample_ = done;
+        ctx.sampleCount_ = unlimited ? perPass : std::min(perPass, spp - done);
+        integ.beginPass(ctx);
+        integ.runPass(ctx);
+        integ.endPass(ctx);
+        // A pass cut short by an interrupt keeps what it merged and counts.
+        done += ctx.sampleCount_;
+        ++stats.passes;
+        film.setSplatSamples(done);
+        lastPassTime = elapsed() - passStart;
+        progress.update(done, elapsed(), opts.timeLimit);
+    }
+    progress.done(elapsed());
+    gDebugMode = false;
+    stats.spp = done;
+    stats.cameraSamples = int64_t(done) * grid.bounds.area();
+    stats.seconds = elapsed();
+    stats.nonFinite = shared.nonFinite;
+    return stats;
+}
+
+}  // namespace gradus

@@ -29,7 +29,7 @@ thread_local bool tDebugTracing = false;
 bool IsDebugPixel(Point2i p) { return gDebugMode.load(std::memory_order_relaxed) && p == gDebugPixel; }
 
 void PrintContribution(const char *what, Point2i p, const Spectrum &v, int layer) {
-    std::printf("  %s pixel (%d, %d)%s%s: %.6g %.6g %.6g\n", what, p.x, p.y, layer >= 0 ? " layer " : "",
+    std::printf("  %s pixel (%d, %d)%s%s: %.9g %.9g %.9g\n", what, p.x, p.y, layer >= 0 ? " layer " : "",
                 layer >= 0 ? std::to_string(layer).c_str() : "", v.r, v.g, v.b);
 }
 

@@ -138,3 +138,65 @@ TEST_F(CliTest, InterruptWritesPartialImage) {
     EXPECT_GT(std::stoi(img.metadata["spp"]), 0);
     EXPECT_GT(img.at(8, 8, 0), 0.0f);
 }
+
+TEST_F(CliTest, TerminateWritesPartialImage) {
+    write("tiny.pbrt", kTiny);
+    std::string cmd = "cd '" + dir_.string() + "' && ( '" + GRADUS_BIN +
+                      "' tiny.pbrt --spp 100000000 --quiet --nthreads 1 2> /dev/null & pid=$!; sleep 1.5; "
+                      "kill -TERM $pid; wait $pid; exit $? )";
+    int st = std::system(cmd.c_str());
+    ASSERT_TRUE(WIFEXITED(st));
+    EXPECT_EQ(WEXITSTATUS(st), 130);
+    ASSERT_TRUE(fs::exists(dir_ / "tiny.exr"));
+    EXPECT_GT(std::stoi(gradus::ReadImage((dir_ / "tiny.exr").string()).metadata["spp"]), 0);
+}
+
+// --debugpixel re-runs one pixel's samples with the random numbers of the full
+// render: with the box filter (radius 0.5) a pixel is the mean of its own
+// samples' radiance, so the mean of the printed contributions must equal the
+// pixel of the full multi-threaded render (up to the printed precision).
+TEST_F(CliTest, DebugPixelReproducesThePixelOfTheFullRender) {
+    write("tiny.pbrt", kTiny);
+    ASSERT_EQ(run("tiny.pbrt --spp 8 --seed 4 --quiet --nthreads 2").status, 0);
+    gradus::Image full = gradus::ReadImage((dir_ / "tiny.exr").string());
+    fs::remove(dir_ / "tiny.exr");
+    for (const char *integrator : {"path", "bdpt"}) {
+        std::string out = (dir_ / "debug.txt").string();
+        std::string cmd = "cd '" + dir_.string() + "' && '" + GRADUS_BIN + "' tiny.pbrt --spp 8 --seed 4 --integrator " +
+                          integrator + " --debugpixel 9,6 > '" + out + "' 2> /dev/null";
+        ASSERT_EQ(std::system(cmd.c_str()), 0) << integrator;
+        EXPECT_FALSE(fs::exists(dir_ / "tiny.exr")) << "--debugpixel writes no image";
+        std::ifstream in(out);
+        std::string line;
+        double sum[3] = {0, 0, 0};
+        int samples = 0, radiance = 0, vertices = 0;
+        while (std::getline(in, line)) {
+            if (line.rfind("sample ", 0) == 0) ++samples;
+            if (line.find("vertex") != std::string::npos || line.find("bounce") != std::string::npos) ++vertices;
+            const std::string key = "radiance pixel (9, 6): ";
+            size_t at = line.find(key);
+            if (at == std::string::npos) continue;
+            std::istringstream v(line.substr(at + key.size()));
+            double r, g, b;
+            v >> r >> g >> b;
+            sum[0] += r, sum[1] += g, sum[2] += b;
+            ++radiance;
+        }
+        EXPECT_EQ(samples, 8) << integrator;
+        EXPECT_EQ(radiance, 8) << integrator;
+        EXPECT_GT(vertices, 0) << integrator;
+        if (std::string(integrator) == "path")
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum[c] / 8, full.at(9, 6, c), 1e-6 * (1 + full.at(9, 6, c))) << c;
+    }
+    // A single sample; a pixel outside the image and malformed values are errors.
+    std::string cmd = "cd '" + dir_.string() + "' && '" + GRADUS_BIN +
+                      "' tiny.pbrt --spp 8 --debugpixel 9,6,3 2> /dev/null | grep -c '^sample '";
+    FILE *p = popen(cmd.c_str(), "r");
+    char buf[16] = {0};
+    ASSERT_TRUE(fgets(buf, sizeof buf, p));
+    pclose(p);
+    EXPECT_EQ(std::atoi(buf), 1);
+    EXPECT_EQ(run("tiny.pbrt --debugpixel 100,3").status, 1);
+    EXPECT_EQ(run("tiny.pbrt --debugpixel 3").status, 1);
+    EXPECT_EQ(run("tiny.pbrt --debugpixel 3,4,x").status, 1);
+}

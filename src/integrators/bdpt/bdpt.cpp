@@ -92,6 +92,9 @@ void BDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &a
             bool ok = ConnectBDPT(ctx_, light, cam, s, t, u, &r);
             if (r.shadowRayTraced) ++nShadow;
             if (!ok) continue;
+            if (DebugTracing())
+                DebugTrace("strategy s=%d t=%d: weight %.4g, weighted (%.4g, %.4g, %.4g)%s", s, t, r.weight, r.L.r,
+                           r.L.g, r.L.b, r.splat ? " (light tracing splat)" : "");
             if (r.splat) {
                 rec.splat(r.pRaster, r.L * splatScale_);
                 int layer = strategyLayer(s, t);

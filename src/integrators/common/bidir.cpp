@@ -1,6 +1,7 @@
 #include "integrators/common/bidir.h"
 
 #include "core/stats.h"
+#include "render/render_loop.h"
 #include "shapes/sphere.h"
 #include "shapes/triangle.h"
 
@@ -93,6 +94,8 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
                 v.pdfFwd = pdfFwd;
                 bsdfs[n] = BSDF();
                 ++n;
+                DebugTrace("camera vertex %d: escaped towards (%.4f, %.4f, %.4f) (infinite lights)", n - 1, d.x, d.y,
+                           d.z);
             }
             break;
         }
@@ -115,6 +118,11 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
         v.ns = bsdf ? bsdf.ns() : isect.shading.n;
         if (bsdf) v.setRoughnessClass(bsdf.roughnessClass(0.001));
         ++n;
+        if (DebugTracing())
+            DebugTrace("%s vertex %d: p (%.6g, %.6g, %.6g) ng (%.3f, %.3f, %.3f) beta (%.4g, %.4g, %.4g) pdfFwd %.4g%s",
+                       mode == TransportMode::Radiance ? "camera" : "light", n - 1, v.p.x, v.p.y, v.p.z,
+                       double(v.ng.x), double(v.ng.y), double(v.ng.z), double(v.beta[0]), double(v.beta[1]),
+                       double(v.beta[2]), v.pdfFwd, bsdf ? "" : " (no BSDF)");
         if (n >= maxVertices || !bsdf) break;
 
         Vec3 wo = isect.wo;

@@ -65,8 +65,14 @@ Spectrum PathIntegrator::Li(const Ray &cameraRay, Sampler &sampler, Arena &arena
                     L += beta * Le * PowerHeuristic(1, prevBsdfPdf, 1, lightPdf);
                 }
             }
+            DebugTrace("bounce %d: escaped; L (%.4g, %.4g, %.4g)", bounces, L.r, L.g, L.b);
             break;
         }
+        if (DebugTracing())
+            DebugTrace("bounce %d: hit (%.6g, %.6g, %.6g) n (%.3f, %.3f, %.3f) beta (%.4g, %.4g, %.4g) L so far "
+                       "(%.4g, %.4g, %.4g)",
+                       bounces, isect.p.x, isect.p.y, isect.p.z, isect.n.x, isect.n.y, isect.n.z, beta.r, beta.g,
+                       beta.b, L.r, L.g, L.b);
         if (bounces >= maxDepth_) break;
         ++nVertices;
 

@@ -342,6 +342,7 @@ class Parser {
                 fail(t, "malformed number " + Show(t));
             fail(t, std::string(directive) + " expects " + std::to_string(count) + " numbers, got " + Show(t));
         }
+        if (!std::isfinite(v)) fail(t, "non-finite number " + Show(t) + " (NaN and infinity are not valid values)");
         return v;
     }
 
@@ -435,6 +436,9 @@ class Parser {
                 }
                 double v;
                 if (!ParseNumber(t.text, &v)) fail(t, "malformed number " + Show(t));
+                if (!std::isfinite(v))
+                    fail(t, "non-finite number " + Show(t) + " in parameter \"" + p.type + " " + p.name +
+                                "\" (NaN and infinity are not valid values)");
                 if (kind == ValueKind::Integers && (v != std::floor(v) || std::abs(v) > 2147483647.0))
                     fail(t, "parameter \"integer " + p.name + "\" expects integers, got " + Show(t));
                 p.numbers.push_back(v);

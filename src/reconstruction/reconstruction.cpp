@@ -2,6 +2,8 @@
 
 #include <atomic>
 #include <chrono>
+#include <limits>
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -178,6 +180,18 @@ ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionO
     ToPlanar(in, in.primal, "primal", 0, 0, false, P.p);
     ToPlanar(in, in.dx, "dx", 1, 0, false, P.gx);
     ToPlanar(in, in.dy, "dy", 0, 1, false, P.gy);
+    // Range safety: inputs near the float limit (up to FLT_MAX after the film's
+    // output clamp) would overflow squares and dot products in the float
+    // solvers. Such inputs are scaled by a power of two (exact, so the
+    // solution scales back exactly for L2) to a maximum in [0.5, 1); inputs
+    // below 2^50 are untouched.
+    float maxAbs = 0;
+    for (const std::vector<float> *v : {&P.p, &P.gx, &P.gy})
+        for (float f : *v) maxAbs = std::max(maxAbs, std::abs(f));
+    const int rangeShift = maxAbs > 0x1p50f ? std::ilogb(maxAbs) + 1 : 0;
+    if (rangeShift)
+        for (std::vector<float> *v : {&P.p, &P.gx, &P.gy})
+            for (float &f : *v) f = std::ldexp(f, -rangeShift);
     const bool weighted = opt.norm == ReconstructionNorm::Weighted;
     if (weighted && !in.hasVariance())
         throw Error("reconstruction: the weighted norm needs variance layers primal_var, dx_var "
@@ -222,6 +236,8 @@ ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionO
         st.irlsIterations = 1;
         recon::CGWorkspace ws;
         for (int k = 1; k < opt.irlsIterations; ++k) {
+            // With a range shift the regularisation applies in the normalised
+            // range (in the input's units it would underflow the float weights).
             double reg = opt.irlsRegInit * std::pow(opt.irlsRegFactor, k - 1);
             recon::IrlsWeights(P, x.data(), float(alpha), float(reg));
             recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, pc, &ws);
@@ -235,6 +251,9 @@ ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionO
         ToPlanar(in, in.primalVar, "primal_var", 0, 0, true, vp);
         ToPlanar(in, in.dxVar, "dx_var", 1, 0, true, vx);
         ToPlanar(in, in.dyVar, "dy_var", 0, 1, true, vy);
+        if (rangeShift)  // variances scale with the square
+            for (std::vector<float> *v : {&vp, &vx, &vy})
+                for (float &f : *v) f = std::ldexp(f, -2 * rangeShift);
         double mp, mx, my;
         InverseVarianceWeights(P, vp, false, false, P.wp, &mp);
         InverseVarianceWeights(P, vx, true, false, P.wx, &mx);
@@ -278,6 +297,13 @@ ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionO
     res.height = P.H;
     res.channels = P.C;
     res.image = ToInterleaved(x, P.C, P.N);
+    if (rangeShift) {
+        const float big = std::numeric_limits<float>::max();
+        for (float &f : res.image) f = std::clamp(float(std::ldexp(double(f), rangeShift)), -big, big);
+        const double s = std::ldexp(1.0, rangeShift);
+        st.primalL2 *= s * s, st.gradientL2 *= s * s, st.primalL1 *= s, st.gradientL1 *= s;
+        st.objective *= opt.norm == ReconstructionNorm::L1 ? s : s * s;
+    }
     st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     res.stats = st;
     return res;

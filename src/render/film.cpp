@@ -1,6 +1,7 @@
 #include "render/film.h"
 
 #include <cmath>
+#include <limits>
 
 #include "core/error.h"
 
@@ -106,6 +107,15 @@ void Film::mergeTile(const FilmTile &t) {
     }
 }
 
+float Film::toOutput(double v) const {
+    // Accumulators are double; a value beyond the float range of the outputs is
+    // clamped to +-FLT_MAX and counted (never written as Inf).
+    constexpr double big = std::numeric_limits<float>::max();
+    if (std::abs(v) <= big) return float(v);
+    ++clamped_;
+    return float(v > 0 ? big : -big);
+}
+
 Image Film::mainImage() const {
     Image img = Image::RGB(bounds_.width(), bounds_.height());
     for (int y = 0; y < bounds_.height(); ++y)
@@ -115,7 +125,7 @@ Image Film::mainImage() const {
             if (weight_[i] != 0) v = sum_[i] / weight_[i];
             if (splatSpp_ > 0) v += splat_[i] / splatSpp_;
             v *= scale_;
-            for (int c = 0; c < 3; ++c) img.at(x, y, c) = float(v[c]);
+            for (int c = 0; c < 3; ++c) img.at(x, y, c) = toOutput(v[c]);
         }
     return img;
 }
@@ -128,7 +138,7 @@ Image Film::layerImage(int layer) const {
             Spectrum v = count_[i] > 0 ? layers_[layer][i] / count_[i] : Spectrum(0);
             if (splatSpp_ > 0) v += layerSplats_[layer][i] / splatSpp_;
             v *= scale_;
-            for (int c = 0; c < 3; ++c) img.at(x, y, c) = float(v[c]);
+            for (int c = 0; c < 3; ++c) img.at(x, y, c) = toOutput(v[c]);
         }
     return img;
 }

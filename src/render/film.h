@@ -3,6 +3,7 @@
 // FilmTiles that are merged in a fixed order, so images do not depend on the
 // thread count.
 #pragma once
+#include <atomic>
 #include <memory>
 #include <string>
 #include <vector>
@@ -54,6 +55,8 @@ class Film {
     Image layerImage(int layer) const;
     // RGB main image and all layers ("name.R" ...) in one image.
     Image toImage() const;
+    // Output values clamped to the float range by the image functions so far.
+    uint64_t clampedValues() const { return clamped_; }
 
   private:
     friend class FilmTile;
@@ -73,6 +76,8 @@ class Film {
     std::vector<std::vector<Spectrum>> layers_;
     std::vector<std::vector<Spectrum>> layerSplats_;
     double splatSpp_ = 0;
+    float toOutput(double v) const;
+    mutable std::atomic<uint64_t> clamped_{0};
 };
 
 class FilmTile {

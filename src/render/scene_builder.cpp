@@ -361,6 +361,7 @@ RenderResult RenderJobImage(RenderJob &job, const RenderOptions &opts) {
     r.image.metadata["seed"] = std::to_string(r.stats.seed);
     r.image.metadata["render_seconds"] = std::to_string(r.stats.seconds);
     r.image.metadata["nonfinite_discarded"] = std::to_string(r.stats.nonFinite);
+    r.image.metadata["output_values_clamped"] = std::to_string(job.film->clampedValues());
     return r;
 }
 

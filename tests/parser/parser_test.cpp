@@ -485,6 +485,18 @@ TEST(ParserErrors, MalformedNumber) {
               "t.pbrt:2:24: parameter \"integer n\" expects integers, got '1.5'");
 }
 
+TEST(ParserErrors, NonFiniteNumbersAreRejected) {
+    EXPECT_EQ(ErrorOf("WorldBegin\nMaterial \"matte\" \"rgb Kd\" [0.5 nan 0.5]\nWorldEnd"),
+              "t.pbrt:2:32: non-finite number 'nan' in parameter \"rgb Kd\" (NaN and infinity are not valid values)");
+    EXPECT_EQ(ErrorOf("WorldBegin\nShape \"sphere\" \"float radius\" [inf]\nWorldEnd"),
+              "t.pbrt:2:32: non-finite number 'inf' in parameter \"float radius\" (NaN and infinity are not valid "
+              "values)");
+    EXPECT_EQ(ErrorOf("Translate 1 -inf 3\nWorldBegin\nWorldEnd"),
+              "t.pbrt:1:13: non-finite number '-inf' (NaN and infinity are not valid values)");
+    // Out of double range: not a number at all.
+    EXPECT_EQ(ErrorOf("Scale 1e400 1 1\nWorldBegin\nWorldEnd"), "t.pbrt:1:7: malformed number '1e400'");
+}
+
 TEST(ParserErrors, UnterminatedString) {
     EXPECT_EQ(ErrorOf("WorldBegin\nShape \"sphere\n\"float radius\" 1\nWorldEnd"),
               "t.pbrt:2:7: unterminated string");

@@ -2,6 +2,9 @@
 
 #include <cmath>
 #include <limits>
+#include <cstdio>
+
+#include <unistd.h>
 
 #include "core/error.h"
 
@@ -13,11 +16,29 @@ Film::Film(Point2i res, const Float crop[4], std::unique_ptr<Filter> filter, std
     bounds_.pMin = {int(std::ceil(res.x * crop[0])), int(std::ceil(res.y * crop[2]))};
     bounds_.pMax = {int(std::ceil(res.x * crop[1])), int(std::ceil(res.y * crop[3]))};
     if (bounds_.area() <= 0) throw Error("film crop window selects no pixels");
+    checkMemory("its accumulators", kBaseBytesPerPixel);
     size_t n = size_t(bounds_.area());
     sum_.assign(n, Spectrum(0));
     weight_.assign(n, 0);
     splat_.assign(n, Spectrum(0));
     count_.assign(n, 0);
+}
+
+void Film::checkMemory(const std::string &what, double bytesPerPixel) const {
+    // A request that cannot succeed fails with a message instead of std::bad_alloc.
+    static const double physical = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
+    const double need = double(bounds_.area()) * bytesPerPixel;
+    // Everything the film holds once this allocation is made (the constructor's
+    // check comes before any storage exists).
+    const double held = sum_.empty() ? 0 : double(bounds_.area()) * (kBaseBytesPerPixel + kLayerBytesPerPixel * numLayers());
+    const double total = held + need;
+    if (physical > 0 && total > physical) {
+        char buf[256];
+        std::snprintf(buf, sizeof buf, "film of %dx%d pixels: %s need %.3g GiB (%.3g GiB in all), more than the %.3g GiB "
+                      "of memory of this machine", bounds_.width(), bounds_.height(), what.c_str(), need / (1 << 30),
+                      total / (1 << 30), physical / (1 << 30));
+        throw Error(buf);
+    }
 }
 
 Bounds2i Film::sampleBounds() const {
@@ -32,6 +53,7 @@ Bounds2i Film::sampleBounds() const {
 int Film::addLayer(const std::string &name) {
     for (int i = 0; i < numLayers(); ++i)
         if (layerNames_[i] == name) return i;
+    checkMemory("layer \"" + name + "\"", kLayerBytesPerPixel);
     layerNames_.push_back(name);
     layers_.emplace_back(size_t(bounds_.area()), Spectrum(0));
     layerSplats_.emplace_back(size_t(bounds_.area()), Spectrum(0));

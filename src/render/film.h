@@ -77,6 +77,9 @@ class Film {
     std::vector<std::vector<Spectrum>> layerSplats_;
     double splatSpp_ = 0;
     float toOutput(double v) const;
+    static constexpr double kBaseBytesPerPixel = 2 * sizeof(Spectrum) + 2 * sizeof(double);
+    static constexpr double kLayerBytesPerPixel = 2 * sizeof(Spectrum);
+    void checkMemory(const std::string &what, double bytesPerPixel) const;
     mutable std::atomic<uint64_t> clamped_{0};
 };
 

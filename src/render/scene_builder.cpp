@@ -291,7 +291,13 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
         throw Error(fd.loc, "unknown film \"" + fd.type + "\" (valid: image)");
     const ParamSet &fp = fd.params;
     Point2i res{fp.getInt("xresolution", 640), fp.getInt("yresolution", 480)};
-    if (res.x <= 0 || res.y <= 0) throw Error(fd.loc, "film resolution must be positive");
+    constexpr int kMaxSide = 1 << 17;
+    for (const char *n : {"xresolution", "yresolution"}) {
+        int v = n[0] == 'x' ? res.x : res.y;
+        if (v <= 0 || v > kMaxSide)
+            throw Error(fp.locOf(n, fd.loc), std::string("\"") + n + "\" must be in [1, " + std::to_string(kMaxSide) +
+                                                 "], got " + std::to_string(v));
+    }
     if (opts.quick) res = {std::max(1, res.x / 4), std::max(1, res.y / 4)};
     Float crop[4] = {0, 1, 0, 1};
     std::vector<Float> cw = fp.getFloats("cropwindow");
@@ -312,7 +318,11 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
         throw UnsupportedError(fp.locOf("maxsampleluminance", fd.loc), "Film \"maxsampleluminance\" clamping");
     fp.checkUnused("Film \"image\"");
     if (!opts.outfileOverride.empty()) filename = opts.outfileOverride;
-    job.film = std::make_unique<Film>(res, crop, CreateFilter(desc.filter), filename, scale);
+    try {
+        job.film = std::make_unique<Film>(res, crop, CreateFilter(desc.filter), filename, scale);
+    } catch (const Error &e) {  // a film too large for this machine: located at the resolution
+        throw Error(fp.locOf("xresolution", fd.loc), e.what());
+    }
 
     // Sampler.
     EntityDesc sdesc = desc.sampler;

@@ -200,3 +200,28 @@ TEST_F(CliTest, DebugPixelReproducesThePixelOfTheFullRender) {
     EXPECT_EQ(run("tiny.pbrt --debugpixel 3").status, 1);
     EXPECT_EQ(run("tiny.pbrt --debugpixel 3,4,x").status, 1);
 }
+
+// Hostile numbers fail with located messages before any allocation.
+TEST_F(CliTest, HostileNumbersAreLocatedErrors) {
+    std::string scene = kTiny;
+    auto with = [&](const std::string &from, const std::string &to) {
+        std::string s = scene;
+        s.replace(s.find(from), from.size(), to);
+        write("bad.pbrt", s);
+        return run("bad.pbrt --quiet");
+    };
+    RunResult r = with("\"rgb I\" [5 5 5]", "\"rgb I\" [5 nan 5]");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("bad.pbrt:5:"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("non-finite"), std::string::npos) << r.err;
+    r = with("\"integer xresolution\" [16]", "\"integer xresolution\" [100000000]");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("bad.pbrt:3:"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("xresolution"), std::string::npos) << r.err;
+    // 2^17 x 2^17 pixels: 1 TiB of accumulators, more than any machine this runs on.
+    r = with("\"integer xresolution\" [16] \"integer yresolution\" [16]",
+             "\"integer xresolution\" [131072] \"integer yresolution\" [131072]");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("bad.pbrt:3:"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("GiB"), std::string::npos) << r.err;
+}

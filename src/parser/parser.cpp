@@ -568,6 +568,7 @@ class Parser {
                 std::string type = expectString(dn, "type name");
                 CameraDesc &c = scene_->camera;
                 static_cast<EntityDesc &>(c) = entity(t, std::move(type), parseParams());
+                noteMotion(t);
                 c.cameraFromWorld = ctm_[0];
                 c.mediumName = gs_.outsideMedium;
                 namedCoordSys_["camera"] = {ctm_[0].inverse(), ctm_[1].inverse()};
@@ -724,6 +725,7 @@ class Parser {
                 if (!currentInstance_.empty())
                     fail(t, "ObjectInstance inside the definition of object \"" + currentInstance_ + "\"");
                 if (!scene_->instances.count(n)) fail(nt, "ObjectInstance of unknown object \"" + n + "\"");
+                noteMotion(t);
                 scene_->instanceUses.push_back(InstanceUseDesc{n, ctm_[0], locOf(t)});
                 break;
             }
@@ -776,6 +778,7 @@ class Parser {
                                  tex.valueType + "\"");
                 std::string cls = expectString(dn, "texture class");
                 static_cast<EntityDesc &>(tex) = entity(t, std::move(cls), parseParams());
+                noteMotion(t);
                 tex.worldFromTexture = ctm_[0];
                 scene_->textures.push_back(std::move(tex));
                 break;
@@ -785,6 +788,7 @@ class Parser {
                 std::string type = expectString(dn, "light type");
                 LightDesc l;
                 static_cast<EntityDesc &>(l) = entity(t, std::move(type), parseParams());
+                noteMotion(t);
                 l.worldFromLight = ctm_[0];
                 l.outsideMedium = gs_.outsideMedium;
                 mediaRefs_.push_back({l.outsideMedium, l.loc});
@@ -803,6 +807,7 @@ class Parser {
                 std::string type = expectString(dn, "shape type");
                 ShapeDesc s;
                 static_cast<EntityDesc &>(s) = entity(t, std::move(type), parseParams());
+                noteMotion(t);
                 s.worldFromObject = ctm_[0];
                 s.reverseOrientation = gs_.reverseOrientation;
                 s.material = gs_.material;
@@ -823,6 +828,7 @@ class Parser {
                 if (!ps.find("type")) fail(t, "MakeNamedMedium \"" + m.name + "\" has no \"string type\" parameter");
                 std::string type = ps.getString("type", "");
                 static_cast<EntityDesc &>(m) = entity(t, type, std::move(ps));
+                noteMotion(t);
                 m.worldFromMedium = ctm_[0];
                 scene_->media.push_back(std::move(m));
                 break;
@@ -849,6 +855,15 @@ class Parser {
                 break;
             }
             case Dir::Unknown: break;
+        }
+    }
+
+    // An entity placed while the start and end transforms differ would need
+    // motion blur: remember the first one (the scene builder refuses it).
+    void noteMotion(const Token &t) {
+        if (!(ctm_[0] == ctm_[1]) && !scene_->motionBlur) {
+            scene_->motionBlur = true;
+            scene_->motionLoc = locOf(t);
         }
     }
 

@@ -77,8 +77,12 @@ struct SceneDesc {
     std::map<std::string, InstanceDesc> instances;
     std::vector<InstanceUseDesc> instanceUses;
     std::vector<MediumDesc> media;
-    // TransformTimes (Gradus keeps only the start transform; parsed for completeness).
+    // TransformTimes and the end transforms are parsed; an entity whose start
+    // and end transforms differ (motion blur) is refused by the scene builder
+    // at motionLoc. Media are refused there too.
     Float transformStartTime = 0, transformEndTime = 1;
+    bool motionBlur = false;
+    FileLoc motionLoc;
     // Directory of the top-level scene file: pbrt-v3 resolves plymesh and
     // imagemap filenames against it.
     std::string sceneDirectory;

@@ -145,6 +145,12 @@ ShapeBuild CreateShape(const ShapeDesc &sd, const SceneDesc &scene, const NamedT
 }  // namespace
 
 std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
+    // pbrt-v3 features that would otherwise be dropped silently.
+    if (!desc.media.empty())
+        throw UnsupportedError(desc.media.front().loc, "participating media (MakeNamedMedium \"" +
+                                                           desc.media.front().name + "\")");
+    if (desc.motionBlur)
+        throw UnsupportedError(desc.motionLoc, "motion blur (this entity's start and end transforms differ)");
     auto scene = std::make_unique<Scene>();
     SceneFeatures &feat = scene->features;
 

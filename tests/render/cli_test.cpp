@@ -225,3 +225,28 @@ TEST_F(CliTest, HostileNumbersAreLocatedErrors) {
     EXPECT_NE(r.err.find("bad.pbrt:3:"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("GiB"), std::string::npos) << r.err;
 }
+
+// pbrt-v3 features Gradus lacks are located errors, never dropped silently.
+TEST_F(CliTest, MediaAndMotionBlurAreNamedErrors) {
+    write("media.pbrt",
+          "LookAt 0 0 -3  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n"
+          "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n"
+          "MediumInterface \"fog\" \"\"\nShape \"sphere\"\nWorldEnd\n");
+    RunResult r = run("media.pbrt --quiet");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("media.pbrt:4:1"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("participating media"), std::string::npos) << r.err;
+    write("motion.pbrt",
+          "LookAt 0 0 -3  0 0 0  0 1 0\nCamera \"perspective\"\nTransformTimes 0 1\nWorldBegin\n"
+          "ActiveTransform EndTime\nTranslate 0 1 0\nActiveTransform All\nShape \"sphere\"\nWorldEnd\n");
+    r = run("motion.pbrt --quiet");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("motion.pbrt:8:1"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("motion blur"), std::string::npos) << r.err;
+    // Equal start and end transforms are no motion: renders.
+    write("still.pbrt",
+          "LookAt 0 0 -3  0 0 0  0 1 0\nCamera \"perspective\"\nFilm \"image\" \"integer xresolution\" [8] "
+          "\"integer yresolution\" [8] \"string filename\" [\"still.exr\"]\nTransformTimes 0 1\nWorldBegin\n"
+          "Translate 0 1 0\nShape \"sphere\"\nWorldEnd\n");
+    EXPECT_EQ(run("still.pbrt --quiet --spp 1").status, 0);
+}

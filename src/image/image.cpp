@@ -1,5 +1,8 @@
 #include "image/image.h"
 
+#include <cstdio>
+#include <cstdlib>
+
 #include <algorithm>
 #include <cmath>
 
@@ -90,6 +93,7 @@ Image Image::layerRGB(const std::string &prefix) const {
     }
     Image out = RGB(width_, height_);
     out.metadata = metadata;
+    out.originX = originX, out.originY = originY, out.displayWidth = displayWidth, out.displayHeight = displayHeight;
     size_t npix = size_t(width_) * size_t(height_), nc = channels_.size();
     for (size_t p = 0; p < npix; ++p)
         for (int c = 0; c < 3; ++c) out.data_[p * 3 + c] = data_[p * nc + idx[c]];
@@ -142,6 +146,26 @@ float SRGBToLinear(float v) {
 float LinearToSRGB(float v) {
     if (v <= 0.0031308f) return 12.92f * v;
     return 1.055f * std::pow(v, 1.f / 2.4f) - 0.055f;
+}
+
+MetaValue MetaValue::Int(int64_t v) {
+    MetaValue m(std::to_string(v));
+    m.type_ = Type::Int;
+    return m;
+}
+
+MetaValue MetaValue::Double(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    MetaValue m(buf);
+    m.type_ = Type::Double;
+    return m;
+}
+
+double MetaValue::number() const {
+    char *end = nullptr;
+    double v = std::strtod(text_.c_str(), &end);
+    return end && *end == 0 && !text_.empty() ? v : 0;
 }
 
 }  // namespace gradus

@@ -1,11 +1,39 @@
 // A float image with named channels ("R", "G", "B", "primal.R", "dx.G", ...),
-// stored interleaved per pixel, plus string metadata written to EXR headers.
+// stored interleaved per pixel, plus typed metadata written to EXR headers
+// and the placement of the pixels in a larger display window (crops).
 #pragma once
+#include <cstdint>
 #include <map>
+#include <ostream>
 #include <string>
 #include <vector>
 
 namespace gradus {
+
+// One metadata value: its text and the type it is written with (EXR string,
+// int or double attribute). Assigning a string gives a string value.
+class MetaValue {
+  public:
+    enum class Type { String, Int, Double };
+    MetaValue() = default;
+    MetaValue(std::string s) : text_(std::move(s)) {}
+    MetaValue(const char *s) : text_(s) {}
+    static MetaValue Int(int64_t v);
+    static MetaValue Double(double v);
+    Type type() const { return type_; }
+    const std::string &str() const { return text_; }
+    operator const std::string &() const { return text_; }
+    // Numeric value (0 for text that is not a number).
+    double number() const;
+    friend bool operator==(const MetaValue &a, const std::string &b) { return a.text_ == b; }
+    friend bool operator!=(const MetaValue &a, const std::string &b) { return a.text_ != b; }
+    friend std::ostream &operator<<(std::ostream &o, const MetaValue &v) { return o << v.text_; }
+
+  private:
+    Type type_ = Type::String;
+    std::string text_;
+};
+using Metadata = std::map<std::string, MetaValue>;
 
 class Image {
   public:
@@ -34,7 +62,10 @@ class Image {
     std::vector<float> &data() { return data_; }
     const std::vector<float> &data() const { return data_; }
 
-    std::map<std::string, std::string> metadata;
+    Metadata metadata;
+    // Placement in the display window (EXR dataWindow inside displayWindow):
+    // a crop of a larger image keeps its position. Display size 0 = the image's own size.
+    int originX = 0, originY = 0, displayWidth = 0, displayHeight = 0;
 
   private:
     int width_ = 0, height_ = 0;
@@ -55,9 +86,13 @@ float LinearToSRGB(float v);
 // PFM (either endianness); other formats stb_image knows (JPEG, TGA, BMP, HDR) too.
 // Format is chosen by the file's magic bytes. Throws gradus::Error naming the file on failure.
 Image ReadImage(const std::string &filename);
-// Writes by extension: .exr (float32, every channel, metadata as string
+// Writes atomically (a temporary file in the same directory, renamed into
+// place), by extension: .exr (float32, every channel, metadata as typed
 // attributes), .png (R,G,B clamped, sRGB-encoded, 8-bit), .pfm (R,G,B float).
 // PNG/PFM take the DefaultRGBLayer. Unknown extension -> gradus::Error.
 void WriteImage(const std::string &filename, const Image &image);
+// Throws (naming the file) unless `filename` has a writable extension and its
+// directory exists and is writable: checked before a render starts.
+void CheckWritableImagePath(const std::string &filename);
 
 }  // namespace gradus

@@ -12,9 +12,12 @@
 #include <OpenEXR/ImfPartType.h>
 #include <OpenEXR/ImfStringAttribute.h>
 #include <png.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -105,7 +108,8 @@ Image ReadEXR(const std::string &filename) {
     std::vector<Src> sources;
     Imath::Box2i window;
     bool haveWindow = false;
-    std::map<std::string, std::string> metadata;
+    Metadata metadata;
+    Imath::Box2i display = file.header(0).displayWindow();
     for (int p = 0; p < nparts; ++p) {
         const Imf::Header &h = file.header(p);
         if (h.hasType() && (h.type() == Imf::DEEPSCANLINE || h.type() == Imf::DEEPTILE))
@@ -134,18 +138,11 @@ Image ReadEXR(const std::string &filename) {
             if (auto *s = dynamic_cast<const Imf::StringAttribute *>(&a))
                 metadata[key] = s->value();
             else if (auto *i = dynamic_cast<const Imf::IntAttribute *>(&a))
-                metadata[key] = std::to_string(i->value());
-            else if (auto *f = dynamic_cast<const Imf::FloatAttribute *>(&a)) {
-                std::ostringstream os;
-                os.precision(9);
-                os << f->value();
-                metadata[key] = os.str();
-            } else if (auto *d = dynamic_cast<const Imf::DoubleAttribute *>(&a)) {
-                std::ostringstream os;
-                os.precision(17);
-                os << d->value();
-                metadata[key] = os.str();
-            }
+                metadata[key] = MetaValue::Int(i->value());
+            else if (auto *f = dynamic_cast<const Imf::FloatAttribute *>(&a))
+                metadata[key] = MetaValue::Double(f->value());
+            else if (auto *d = dynamic_cast<const Imf::DoubleAttribute *>(&a))
+                metadata[key] = MetaValue::Double(d->value());
         }
     }
     if (sources.empty()) throw Error(filename + ": EXR file has no channels");
@@ -165,6 +162,13 @@ Image ReadEXR(const std::string &filename) {
     int width = window.max.x - window.min.x + 1, height = window.max.y - window.min.y + 1;
     Image image(width, height, names);
     image.metadata = std::move(metadata);
+    // A data window inside a larger display window (a crop) keeps its placement.
+    if (!(display == window)) {
+        image.originX = window.min.x - display.min.x;
+        image.originY = window.min.y - display.min.y;
+        image.displayWidth = display.max.x - display.min.x + 1;
+        image.displayHeight = display.max.y - display.min.y + 1;
+    }
     size_t nc = names.size();
     size_t xStride = nc * sizeof(float), yStride = size_t(width) * xStride;
     for (int p = 0; p < nparts; ++p) {
@@ -187,7 +191,12 @@ Image ReadEXR(const std::string &filename) {
 }
 
 void WriteEXR(const std::string &filename, const Image &image) {
-    Imf::Header header(image.width(), image.height());
+    const int dispW = image.displayWidth > 0 ? image.displayWidth : image.width();
+    const int dispH = image.displayHeight > 0 ? image.displayHeight : image.height();
+    const Imath::Box2i display({0, 0}, {dispW - 1, dispH - 1});
+    const Imath::Box2i data({image.originX, image.originY},
+                            {image.originX + image.width() - 1, image.originY + image.height() - 1});
+    Imf::Header header(display, data);
     // PIZ: lossless, and on noisy float renders both faster and smaller than ZIP.
     header.compression() = Imf::PIZ_COMPRESSION;
     for (const auto &kv : image.metadata) {
@@ -195,7 +204,14 @@ void WriteEXR(const std::string &filename, const Image &image) {
         if (header.find(kv.first) != header.end() || IsStandardAttribute(kv.first))
             throw Error(filename + ": metadata key \"" + kv.first +
                         "\" collides with a standard EXR attribute");
-        header.insert(kv.first, Imf::StringAttribute(kv.second));
+        const MetaValue &v = kv.second;
+        const double x = v.number();
+        if (v.type() == MetaValue::Type::Int && x >= INT32_MIN && x <= INT32_MAX)
+            header.insert(kv.first, Imf::IntAttribute(int(x)));
+        else if (v.type() != MetaValue::Type::String)
+            header.insert(kv.first, Imf::DoubleAttribute(x));
+        else
+            header.insert(kv.first, Imf::StringAttribute(v.str()));
     }
     Imf::FrameBuffer fb;
     size_t nc = size_t(image.numChannels());
@@ -205,7 +221,7 @@ void WriteEXR(const std::string &filename, const Image &image) {
         if (name.empty()) throw Error(filename + ": empty channel name");
         header.channels().insert(name, Imf::Channel(Imf::FLOAT));
         char *base = const_cast<char *>(reinterpret_cast<const char *>(image.data().data() + c));
-        fb.insert(name, Imf::Slice(Imf::FLOAT, base, xStride, yStride));
+        fb.insert(name, Imf::Slice::Make(Imf::FLOAT, base, data, xStride, yStride));
     }
     Imf::OutputFile out(filename.c_str(), header);
     out.setFrameBuffer(fb);
@@ -394,25 +410,45 @@ Image ReadImage(const std::string &filename) {
     }
 }
 
+void CheckWritableImagePath(const std::string &filename) {
+    std::string ext = Extension(filename);
+    if (ext != "exr" && ext != "png" && ext != "pfm")
+        throw Error(filename + ": unknown image extension \"" + ext + "\" (supported for writing: .exr, .png, .pfm)");
+    size_t slash = filename.find_last_of('/');
+    std::string dir = slash == std::string::npos ? "." : (slash == 0 ? "/" : filename.substr(0, slash));
+    struct stat st;
+    if (stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
+        throw Error(filename + ": output directory \"" + dir + "\" does not exist");
+    if (access(dir.c_str(), W_OK) != 0) throw Error(filename + ": output directory \"" + dir + "\" is not writable");
+}
+
 void WriteImage(const std::string &filename, const Image &image) {
     if (image.width() <= 0 || image.height() <= 0 || image.numChannels() == 0)
         throw Error(filename + ": cannot write an empty image");
     std::string ext = Extension(filename);
+    // Written to a temporary file beside the target, then renamed: a reader or
+    // an interrupted write never sees a partial file.
+    const std::string tmp = filename + ".tmp-" + std::to_string(getpid());
     try {
         if (ext == "exr")
-            WriteEXR(filename, image);
+            WriteEXR(tmp, image);
         else if (ext == "png")
-            WritePNG(filename, image);
+            WritePNG(tmp, image);
         else if (ext == "pfm")
-            WritePFM(filename, image);
+            WritePFM(tmp, image);
         else
             throw Error(filename + ": unknown image extension \"" + ext +
                         "\" (supported for writing: .exr, .png, .pfm)");
+        if (std::rename(tmp.c_str(), filename.c_str()) != 0)
+            throw Error(filename + ": cannot rename " + tmp + " into place: " + std::strerror(errno));
     } catch (const Error &e) {
+        std::remove(tmp.c_str());
         std::string msg = e.what();
-        if (msg.compare(0, filename.size(), filename) == 0) throw;
+        if (msg.compare(0, tmp.size(), tmp) == 0) msg = filename + msg.substr(tmp.size());
+        if (msg.compare(0, filename.size(), filename) == 0) throw Error(msg);
         throw Error(filename + ": " + msg);
     } catch (const std::exception &e) {
+        std::remove(tmp.c_str());
         throw Error(filename + ": " + e.what());
     }
 }

@@ -199,8 +199,8 @@ std::vector<double> SppWeights(const std::vector<Image> &images, bool *fromSpp) 
         if (it != img.metadata.end()) {
             try {
                 size_t used = 0;
-                v = std::stod(it->second, &used);
-                if (used != it->second.size()) v = 0;
+                v = std::stod(it->second.str(), &used);
+                if (used != it->second.str().size()) v = 0;
             } catch (const std::exception &) {
                 v = 0;
             }

@@ -3,6 +3,7 @@
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfMultiPartOutputFile.h>
 #include <OpenEXR/ImfOutputPart.h>
 #include <OpenEXR/ImfPartType.h>
@@ -353,6 +354,67 @@ TEST(ImageIO, WriterErrors) {
     std::string p = dir.file("norgb.png");
     ExpectErrorNaming([&] { WriteImage(p, noRGB); }, p);
     EXPECT_NO_THROW(WriteImage(dir.file("norgb.exr"), noRGB));
+}
+
+TEST(ImageIO, TypedMetadataAndCropPlacementRoundTrip) {
+    TempDir dir;
+    Image img = Image::RGB(3, 2);
+    img.at(2, 1, 0) = 5;
+    img.metadata["scene"] = "a scene";
+    img.metadata["spp"] = MetaValue::Int(64);
+    img.metadata["seconds"] = MetaValue::Double(1.25);
+    img.metadata["big"] = MetaValue::Int(int64_t(1) << 40);  // beyond an EXR int: written as double
+    img.originX = 5, img.originY = 7, img.displayWidth = 16, img.displayHeight = 12;
+    std::string f = dir.file("typed.exr");
+    WriteImage(f, img);
+    Image back = ReadImage(f);
+    EXPECT_EQ(back.metadata.at("scene").type(), MetaValue::Type::String);
+    EXPECT_EQ(back.metadata.at("spp").type(), MetaValue::Type::Int);
+    EXPECT_EQ(back.metadata.at("spp"), "64");
+    EXPECT_EQ(back.metadata.at("seconds").type(), MetaValue::Type::Double);
+    EXPECT_EQ(back.metadata.at("seconds").number(), 1.25);
+    EXPECT_EQ(back.metadata.at("big").number(), double(int64_t(1) << 40));
+    EXPECT_EQ(back.width(), 3);
+    EXPECT_EQ(back.originX, 5);
+    EXPECT_EQ(back.originY, 7);
+    EXPECT_EQ(back.displayWidth, 16);
+    EXPECT_EQ(back.displayHeight, 12);
+    EXPECT_EQ(back.at(2, 1, 0), 5.0f);
+    // The EXR windows themselves: data window inside the display window.
+    Imf::InputFile in(f.c_str());
+    EXPECT_EQ(in.header().dataWindow().min.x, 5);
+    EXPECT_EQ(in.header().dataWindow().max.y, 8);
+    EXPECT_EQ(in.header().displayWindow().max.x, 15);
+}
+
+TEST(ImageIO, WritesAreAtomic) {
+    TempDir dir;
+    std::string f = dir.file("out.exr");
+    Image a = Image::RGB(2, 2);
+    a.at(0, 0, 0) = 1;
+    WriteImage(f, a);
+    // A failing write (a metadata key that collides with a standard attribute)
+    // leaves the previous file intact and no temporary file behind.
+    Image bad = a;
+    bad.at(0, 0, 0) = 2;
+    bad.metadata["channels"] = "oops";
+    EXPECT_THROW(WriteImage(f, bad), Error);
+    EXPECT_EQ(ReadImage(f).at(0, 0, 0), 1.0f);
+    int files = 0;
+    for (const auto &e : std::filesystem::directory_iterator(std::filesystem::path(f).parent_path())) {
+        (void)e;
+        ++files;
+    }
+    EXPECT_EQ(files, 1);
+}
+
+TEST(ImageIO, OutputPathIsCheckedBeforeWriting) {
+    TempDir dir;
+    EXPECT_NO_THROW(CheckWritableImagePath(dir.file("x.exr")));
+    EXPECT_NO_THROW(CheckWritableImagePath(dir.file("x.png")));
+    ExpectErrorNaming([&] { CheckWritableImagePath(dir.file("x.tiff")); }, dir.file("x.tiff"));
+    ExpectErrorNaming([&] { CheckWritableImagePath(dir.file("nope/x.exr")); }, dir.file("nope/x.exr"));
+    EXPECT_THROW(CheckWritableImagePath("/nonexistent/x.exr"), Error);
 }
 
 // The pbrt-v3 Cornell box reference: mean RGB matches ref.info.txt.

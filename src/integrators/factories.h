@@ -1,4 +1,5 @@
-// Factory functions of the integrators, one per folder (see registry.cpp).
+// Factory functions of the integrators and their parameter tables, one pair
+// per folder (see registry.cpp).
 #pragma once
 #include <memory>
 
@@ -7,13 +8,22 @@
 namespace gradus {
 
 std::unique_ptr<Integrator> CreatePathIntegrator(const EntityDesc &desc);
+std::vector<ParamInfo> PathParameters();
 std::unique_ptr<Integrator> CreateBDPTIntegrator(const EntityDesc &desc);
+std::vector<ParamInfo> BDPTParameters();
 std::unique_ptr<Integrator> CreateMBDPTIntegrator(const EntityDesc &desc);
+std::vector<ParamInfo> MBDPTParameters();
 std::unique_ptr<Integrator> CreateGPTIntegrator(const EntityDesc &desc);
+std::vector<ParamInfo> GPTParameters();
 std::unique_ptr<Integrator> CreateGBDPTIntegrator(const EntityDesc &desc);
+std::vector<ParamInfo> GBDPTParameters();
 std::unique_ptr<Integrator> CreateVCMIntegrator(const EntityDesc &desc);
+std::vector<ParamInfo> VCMParameters();
 std::unique_ptr<Integrator> CreateGVCMIntegrator(const EntityDesc &desc);
+std::vector<ParamInfo> GVCMParameters();
 std::unique_ptr<Integrator> CreateMLTIntegrator(const EntityDesc &desc);
+std::vector<ParamInfo> MLTParameters();
 std::unique_ptr<Integrator> CreateGMLTIntegrator(const EntityDesc &desc);
+std::vector<ParamInfo> GMLTParameters();
 
 }  // namespace gradus

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "image/image.h"
+#include "integrators/params.h"
 #include "parser/scene_desc.h"
 #include "render/render_loop.h"
 #include "render/film.h"
@@ -51,6 +52,8 @@ struct IntegratorInfo {
     std::string name;
     std::string description;
     IntegratorFactory create;
+    // The integrator's parameter table (gradus --describe), without a scene.
+    std::function<std::vector<ParamInfo>()> parameters;
 };
 
 // The one table of integrator names (src/integrators/registry.cpp).

@@ -10,30 +10,32 @@ std::unique_ptr<Integrator> CreatePathIntegrator(const EntityDesc &d) { return s
 
 const std::vector<IntegratorInfo> &IntegratorRegistry() {
     static const std::vector<IntegratorInfo> table = {
-        {"path", "unidirectional path tracing with next-event estimation and MIS", CreatePathIntegrator},
+        {"path", "unidirectional path tracing with next-event estimation and MIS", CreatePathIntegrator,
+         PathParameters},
 #ifdef GRADUS_HAS_BDPT
-        {"bdpt", "bidirectional path tracing (all strategies, MIS)", CreateBDPTIntegrator},
+        {"bdpt", "bidirectional path tracing (all strategies, MIS)", CreateBDPTIntegrator, BDPTParameters},
 #endif
 #ifdef GRADUS_HAS_MBDPT
-        {"mbdpt", "matrix bidirectional path tracing (image-wide stratified connections)", CreateMBDPTIntegrator},
+        {"mbdpt", "matrix bidirectional path tracing (image-wide stratified connections)", CreateMBDPTIntegrator,
+         MBDPTParameters},
 #endif
 #ifdef GRADUS_HAS_GPT
-        {"gpt", "gradient-domain path tracing", CreateGPTIntegrator},
+        {"gpt", "gradient-domain path tracing", CreateGPTIntegrator, GPTParameters},
 #endif
 #ifdef GRADUS_HAS_GBDPT
-        {"gbdpt", "gradient-domain bidirectional path tracing", CreateGBDPTIntegrator},
+        {"gbdpt", "gradient-domain bidirectional path tracing", CreateGBDPTIntegrator, GBDPTParameters},
 #endif
 #ifdef GRADUS_HAS_VCM
-        {"vcm", "vertex connection and merging", CreateVCMIntegrator},
+        {"vcm", "vertex connection and merging", CreateVCMIntegrator, VCMParameters},
 #endif
 #ifdef GRADUS_HAS_GVCM
-        {"gvcm", "gradient-domain vertex connection and merging", CreateGVCMIntegrator},
+        {"gvcm", "gradient-domain vertex connection and merging", CreateGVCMIntegrator, GVCMParameters},
 #endif
 #ifdef GRADUS_HAS_MLT
-        {"mlt", "Metropolis light transport", CreateMLTIntegrator},
+        {"mlt", "Metropolis light transport", CreateMLTIntegrator, MLTParameters},
 #endif
 #ifdef GRADUS_HAS_GMLT
-        {"gmlt", "gradient-domain Metropolis light transport", CreateGMLTIntegrator},
+        {"gmlt", "gradient-domain Metropolis light transport", CreateGMLTIntegrator, GMLTParameters},
 #endif
     };
     return table;

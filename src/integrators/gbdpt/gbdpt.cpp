@@ -34,62 +34,53 @@ GBDPTIntegrator::ThreadState &GBDPTIntegrator::local() const {
     return store_->threads.local();
 }
 
-GBDPTIntegrator::GBDPTIntegrator(const EntityDesc &desc) : loc_(desc.loc), store_(new Store) {
-    const ParamSet &ps = desc.params;
-    maxDepth_ = ps.getInt("maxdepth", 5);
-    strategy_ = ps.getString("lightsamplestrategy", "power");
-    threshold_ = ps.getFloat("shiftthreshold", 0.001);
-    std::string shift = ps.getString("shift", "manifold");
-    lightTracing_ = ps.getBool("lighttracing", true);
-    std::string mis = ps.getString("mis", "combined");
-    std::string rec = ps.getString("reconstruction", "l1");
-    alpha_ = ps.getFloat("alpha", 0.2);
-    ps.getInts("pixelbounds");
-    if (maxDepth_ < 0) throw Error(ps.locOf("maxdepth", desc.loc), "\"maxdepth\" must be >= 0");
-    if (!(threshold_ >= 0)) throw Error(ps.locOf("shiftthreshold", desc.loc), "\"shiftthreshold\" must be >= 0");
-    if (!(alpha_ >= 0)) throw Error(ps.locOf("alpha", desc.loc), "\"alpha\" must be >= 0");
-    if (strategy_ == "spatial")
-        throw Error(ps.locOf("lightsamplestrategy", desc.loc),
-                    "\"lightsamplestrategy\" \"spatial\" is not supported by gbdpt (uniform, power)");
-    if (shift == "manifold")
-        manifold_ = true;
-    else if (shift == "halfvector")
-        manifold_ = false;
-    else
-        throw Error(ps.locOf("shift", desc.loc), "unknown \"shift\" \"" + shift + "\" (manifold, halfvector)");
-    if (mis == "combined")
-        mis_ = MIS::Combined;
-    else if (mis == "simple")
-        mis_ = MIS::Simple;
-    else
-        throw Error(ps.locOf("mis", desc.loc), "unknown \"mis\" \"" + mis + "\" (combined, simple)");
-    try {
-        norm_ = ParseReconstructionNorm(rec);
-    } catch (const Error &) {
-        throw Error(ps.locOf("reconstruction", desc.loc),
-                    "unknown \"reconstruction\" \"" + rec + "\" (l1, l2, weighted)");
-    }
+namespace {
+ParamTable<GBDPTSettings> Table() {
+    using S = GBDPTSettings;
+    ParamTable<S> t("gbdpt");
+    BidirParamOptions b;
+    b.strategyLayers = false;  // Eq. 8 uses the balance heuristic
+    b.noSpatial = "is not supported by gbdpt (its MIS needs a position-free light choice)";
+    b.rrDepth = -1;
+    b.noRoulette = "Russian roulette is not supported by gbdpt yet (shifts would need the continuation "
+                   "probabilities)";
+    t.append(BidirParams(b));
+    GradientParamOptions g;
+    g.noFilmFilter = "is not supported by gbdpt yet";
+    t.append(GradientParams(g));
+    t.enumeration<bool>("shift", &S::manifold, "manifold", {{"manifold", true}, {"halfvector", false}},
+                        "camera subpath shift: manifold walk (Sec. 3.1) or half-vector copy (Kettunen et al. 2015)");
+    t.boolean("lighttracing", &S::lightTracing, true,
+              "false: no light-tracing paths, in no MIS weight either (Table 1 \"w/o LTP\")");
+    t.enumeration<S::MIS>("mis", &S::mis, "combined", {{"combined", S::MIS::Combined}, {"simple", S::MIS::Simple}},
+                          "gradient MIS: combined (Eq. 8) or simple (Eq. 9)");
+    return t;
 }
+}  // namespace
+
+std::vector<ParamInfo> GBDPTParameters() { return Table().describe(); }
+
+GBDPTIntegrator::GBDPTIntegrator(const EntityDesc &desc)
+    : set_(Table().parse(desc)), loc_(desc.loc), store_(new Store) {}
 
 void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     scene_ = &scene;
-    lightSampler_ = LightSampler(scene.lights, strategy_, loc_);
+    lightSampler_ = LightSampler(scene.lights, set_.lightStrategy, loc_);
     bctx_.init(scene, lightSampler_, MISHeuristic::Balance);  // Eq. 8 uses the balance heuristic
+    bctx_.rrDepth = set_.rrDepth;  // -1 (the table allows no other)
     mscene_ = std::make_unique<EmbreeManifoldScene>(scene);
     sctx_.bidir = &bctx_;
     sctx_.mscene = mscene_.get();
-    sctx_.threshold = threshold_;
-    sctx_.manifold = manifold_;
+    sctx_.threshold = set_.shiftThreshold;
+    sctx_.manifold = set_.manifold;
     // No specular or near-specular surface: no chain can be non-empty, no walk is attempted.
     sctx_.trySpecular = scene.features.specularSurfaces || scene.features.nearSpecularSurfaces;
     // Triangle hits come from Embree in single precision: positions are good to
     // ~1e-7 relative, so the double-precision walk tolerance (1e-7) is loosened.
     sctx_.walk.relativeTolerance = 1e-5;
-    gfilm_.init(film);
+    gfilm_.init(film, set_.filmFilter);  // box (the table allows no other)
     filmBounds_ = film.pixelBounds();
-    Point2i full = film.fullResolution();
-    int64_t sampled = film.sampleBounds().area();
-    splatScale_ = sampled > 0 ? Float(int64_t(full.x) * full.y) / Float(sampled) : 1;
+    splatScale_ = LightTracingSplatScale(film);
     store_->threads.clear();
     store_->pixels = size_t(filmBounds_.area());
     // Light-tracing (case iii) primal and gradients are film splats on hidden
@@ -143,7 +134,7 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
     for (int k = 0; k < kNumNeighbours; ++k) out.active[k] = inside[k];
 
     // [1] camera and light subpaths.
-    const int maxCam = maxDepth_ + 2, maxLight = maxDepth_ + 1;
+    const int maxCam = set_.maxDepth + 2, maxLight = set_.maxDepth + 1;
     ShiftSubpath cam, light;
     cam.v = static_cast<PathVertex *>(arena.alloc(sizeof(PathVertex) * maxCam, alignof(PathVertex)));
     light.v = static_cast<PathVertex *>(arena.alloc(sizeof(PathVertex) * maxLight, alignof(PathVertex)));
@@ -184,14 +175,14 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
     for (int t = 1; t <= cam.n; ++t) {
         for (int s = 0; s <= light.n; ++s) {
             int depth = s + t - 2;
-            if ((s == 1 && t == 1) || depth < 0 || depth > maxDepth_) continue;
+            if ((s == 1 && t == 1) || depth < 0 || depth > set_.maxDepth) continue;
             ConnectSamples u;
             if (s == 1) {
                 u.uLightSelect = sampler.get1D();
                 u.uLight = sampler.get2D();
             }
             if (t == 1) u.uLens = sampler.get2D();
-            if (t == 1 && !lightTracing_) continue;  // no light-tracing paths (Table 1, "w/o LTP")
+            if (t == 1 && !set_.lightTracing) continue;  // no light-tracing paths (Table 1, "w/o LTP")
             // Sec. 3.2: no connections at vertices classified specular.
             if (s >= 1 && t >= 2 && !diffuseAt(cam, t - 1)) continue;
             if (s >= 2 && !diffuseAt(light, s - 1)) continue;
@@ -223,7 +214,7 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                 lpv.pdfFwd = PdfLightOrigin(bctx_, lpv, cam.v[t - 1]);
             }
             auto noLT = [&](Float wb, SubpathView cv) {
-                if (lightTracing_ || t < 2 || !(wb > 0)) return wb;
+                if (set_.lightTracing || t < 2 || !(wb > 0)) return wb;
                 SubpathView lv = useLp ? SubpathView{&lpv, nullptr, 1} : lightView;
                 Float q = 1 - wb * LightTracingRatio(sctx_, lv, cv, s, t, useLp ? &lpv : nullptr);
                 return q > 1e-6 ? wb / q : Float(0);
@@ -244,14 +235,14 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                     Spectrum fy;
                     Float wy = 0, rho = 0;
                     bool shifted = false;
-                    if (lightTracing_) {
+                    if (set_.lightTracing) {
                         ++st.caseAttempts[2];
                         shifted = ShiftLightTracingPath(sctx_, light, s, lens, r.pRaster, r.unweighted, off, arena,
                                                         &fy, &wy, &rho, &st);
                         if (shifted) ++st.caseSuccesses[2];
                     }
                     if (shifted) {
-                        Float wg = mis_ == MIS::Combined ? CombinedWeight(wx, wy, rho) : 0.5 * wx;  // Eq. 8 / Eq. 9
+                        Float wg = set_.mis == MIS::Combined ? CombinedWeight(wx, wy, rho) : 0.5 * wx;  // Eq. 8 / Eq. 9
                         sp.diff[k] = (fy - r.unweighted) * wg;
                     } else {
                         sp.diff[k] = r.unweighted * -wx;  // fallback: zero offset, BDPT weight
@@ -295,7 +286,7 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                         oky = ConnectBDPT(bctx_, lightView, yv, s, t, u, &ry);
                     oky = oky && !ry.unweighted.isBlack() && ry.weight > 0;
                 }
-                if (oky && !lightTracing_) {
+                if (oky && !set_.lightTracing) {
                     if (useLp) lpv.pdfFwd = PdfLightOrigin(bctx_, lp.v, sh.y.v[kc]);
                     ry.weight = noLT(ry.weight, sh.y.view());
                     if (useLp) lpv.pdfFwd = PdfLightOrigin(bctx_, lp.v, cam.v[kc]);
@@ -304,7 +295,7 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                 if (oky) {
                     ++st.caseSuccesses[cas];
                     Spectrum fy = ry.unweighted * w;
-                    Float wg = mis_ == MIS::Combined ? CombinedWeight(wx, ry.weight, sh.rho[kc]) : 0.5 * wx;
+                    Float wg = set_.mis == MIS::Combined ? CombinedWeight(wx, ry.weight, sh.rho[kc]) : 0.5 * wx;
                     out.diff[k] += (fy - fx) * wg;
                 } else {
                     out.diff[k] += fx * -wx;
@@ -337,7 +328,7 @@ void GBDPTIntegrator::finish(const Film &film, const RenderStats &stats, Image *
                 g.dxVar[i] += float((at(LDxFSq) + at(LDxBSq)) * invN);
                 g.dyVar[i] += float((at(LDyFSq) + at(LDyBSq)) * invN);
             }
-    WriteGradientOutput(g, norm_, alpha_, out, &reconReport_);
+    WriteGradientOutput(g, set_.norm, set_.alpha, out, &reconReport_);
 }
 
 std::string GBDPTIntegrator::statistics() const {
@@ -356,8 +347,8 @@ std::string GBDPTIntegrator::statistics() const {
         tot.unsupportedChains += t.stats.unsupportedChains;
         for (size_t i = 0; i < size_t(ManifoldStatus::Count); ++i) tot.walkStatus[i] += t.stats.walkStatus[i];
     }
-    std::string s = ss.format(std::string("G-BDPT shifts (") + (manifold_ ? "manifold" : "halfvector") +
-                              ", threshold " + std::to_string(threshold_) + ")");
+    std::string s = ss.format(std::string("G-BDPT shifts (") + (set_.manifold ? "manifold" : "halfvector") +
+                              ", threshold " + std::to_string(set_.shiftThreshold) + ")");
     char buf[256];
     const char *names[3] = {"(i)   camera subpath, both chains", "(ii)  camera subpath, first chain",
                             "(iii) light-tracing path"};
@@ -380,7 +371,7 @@ std::string GBDPTIntegrator::statistics() const {
                           (unsigned long long)tot.walkStatus[i]);
             s += buf;
         }
-    if (!lightTracing_) s += "  light-tracing paths not shifted (lighttracing false)\n";
+    if (!set_.lightTracing) s += "  light-tracing paths not shifted (lighttracing false)\n";
     return s + reconReport_;
 }
 

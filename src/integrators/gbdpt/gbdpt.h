@@ -16,18 +16,24 @@
 // samples, line 16); the screened-Poisson reconstruction runs in finish()
 // (line 17).
 //
-// Parameters:
+// Parameters (bidirectional family, integrators/common/bidir_family.h; MIS
+// always the balance heuristic, as Eq. 8 assumes):
 //   integer maxdepth 5               maximum path depth (edges - 1)
 //   string lightsamplestrategy "power"  uniform | power (position-free, as the MIS assumes)
+//   integer rrdepth -1               off; Russian roulette is not supported by gbdpt yet
+//                                    (shifts would need the continuation probabilities)
+//   integer pixelbounds []           accepted (use --cropwindow)
+// (gradient family, integrators/gradient/gradient_params.h):
 //   float shiftthreshold 0.001       roughness below which a vertex is "specular"
+//   string reconstruction "l1"       l1 | l2 | weighted: the image in the unprefixed R,G,B
+//   float alpha 0.2                  screened-Poisson primal weight
+//   string pixelfilter "box"         box only (a sample counts in its own pixel); film is not supported yet
+// (gbdpt):
 //   string shift "manifold"          manifold (Sec. 3.1) | halfvector (Kettunen et al. 2015)
 //   bool lighttracing true           false: no light-tracing paths (t = 1 strategies are
 //                                    neither sampled nor counted in any MIS weight, primal
 //                                    and gradients; Table 1 "w/o LTP")
 //   string mis "combined"            combined (Eq. 8) | simple (Eq. 9)
-//   string reconstruction "l1"       l1 | l2 | weighted: the image in the unprefixed R,G,B
-//   float alpha 0.2                  screened-Poisson primal weight
-//   integer pixelbounds              accepted (use --cropwindow)
 // Output layers: primal, dx, dy, *_var, reconstructed_l1, reconstructed_l2
 // (and reconstructed_weighted).
 #pragma once
@@ -35,16 +41,26 @@
 #include <mutex>
 #include <vector>
 
+#include "integrators/common/bidir_family.h"
 #include "integrators/gbdpt/gbdpt_shift.h"
 #include "integrators/gradient/gradient_film.h"
+#include "integrators/gradient/gradient_params.h"
 #include "integrators/integrator.h"
 #include "lights/light_sampler.h"
 
 namespace gradus {
 
+// Every field is set by the parameter table (gbdpt.cpp).
+struct GBDPTSettings : BidirSettings, GradientSettings {
+    enum class MIS { Combined, Simple };
+    bool manifold;  // shift "manifold" (else "halfvector")
+    bool lightTracing;
+    MIS mis;
+};
+
 class GBDPTIntegrator : public PixelSampleIntegrator {
   public:
-    enum class MIS { Combined, Simple };
+    using MIS = GBDPTSettings::MIS;
     explicit GBDPTIntegrator(const EntityDesc &desc);
     ~GBDPTIntegrator() override;
     std::string name() const override { return "gbdpt"; }
@@ -67,16 +83,10 @@ class GBDPTIntegrator : public PixelSampleIntegrator {
     const GBDPTShiftContext &shiftContext() const { return sctx_; }
     const BidirContext &bidirContext() const { return bctx_; }
     Float splatScale() const { return splatScale_; }
-    int maxDepth() const { return maxDepth_; }
+    int maxDepth() const { return set_.maxDepth; }
 
   private:
-    int maxDepth_;
-    std::string strategy_;
-    Float threshold_;
-    bool manifold_, lightTracing_;
-    MIS mis_;
-    ReconstructionNorm norm_;
-    Float alpha_;
+    GBDPTSettings set_;
     FileLoc loc_;
     LightSampler lightSampler_;
     BidirContext bctx_;

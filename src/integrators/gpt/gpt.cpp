@@ -10,40 +10,26 @@ namespace gradus {
 
 std::unique_ptr<Integrator> CreateGPTIntegrator(const EntityDesc &d) { return std::make_unique<GPTIntegrator>(d); }
 
-GPTIntegrator::GPTIntegrator(const EntityDesc &desc) : loc_(desc.loc) {
-    const ParamSet &ps = desc.params;
-    maxDepth_ = ps.getInt("maxdepth", 5);
-    rrThreshold_ = ps.getFloat("rrthreshold", 1);
-    strategy_ = ps.getString("lightsamplestrategy", "spatial");
-    shiftThreshold_ = ps.getFloat("shiftthreshold", 0.001);
-    std::string mode = ps.getString("shift", "halfvector");
-    std::string rec = ps.getString("reconstruction", "l1");
-    alpha_ = ps.getFloat("alpha", 0.2);
-    std::string pf = ps.getString("pixelfilter", "film");
-    if (pf != "box" && pf != "film")
-        throw Error(ps.locOf("pixelfilter", desc.loc), "unknown \"pixelfilter\" \"" + pf + "\" (box, film)");
-    filmFilter_ = pf == "film";
-    ps.getInts("pixelbounds");
-    if (maxDepth_ < 0) throw Error(ps.locOf("maxdepth", desc.loc), "\"maxdepth\" must be >= 0");
-    if (!(shiftThreshold_ >= 0)) throw Error(ps.locOf("shiftthreshold", desc.loc), "\"shiftthreshold\" must be >= 0");
-    if (!(alpha_ >= 0)) throw Error(ps.locOf("alpha", desc.loc), "\"alpha\" must be >= 0");
-    if (mode == "halfvector")
-        mode_ = ShiftMode::HalfVector;
-    else if (mode == "hybrid")
-        mode_ = ShiftMode::Hybrid;
-    else
-        throw Error(ps.locOf("shift", desc.loc), "unknown \"shift\" \"" + mode + "\" (halfvector, hybrid)");
-    try {
-        norm_ = ParseReconstructionNorm(rec);
-    } catch (const Error &) {
-        throw Error(ps.locOf("reconstruction", desc.loc),
-                    "unknown \"reconstruction\" \"" + rec + "\" (l1, l2, weighted)");
-    }
+namespace {
+ParamTable<GPTSettings> Table() {
+    using S = GPTSettings;
+    ParamTable<S> t("gpt");
+    t.append(PathParams());
+    t.append(GradientParams());
+    t.enumeration<S::ShiftMode>("shift", &S::mode, "halfvector",
+                                {{"halfvector", S::ShiftMode::HalfVector}, {"hybrid", S::ShiftMode::Hybrid}},
+                                "offset paths: half-vector copy (G-PT), or hybrid: random replay until reconnection");
+    return t;
 }
+}  // namespace
+
+std::vector<ParamInfo> GPTParameters() { return Table().describe(); }
+
+GPTIntegrator::GPTIntegrator(const EntityDesc &desc) : set_(Table().parse(desc)), loc_(desc.loc) {}
 
 void GPTIntegrator::preprocess(const Scene &scene, Film &film) {
-    lightSampler_ = LightSampler(scene.lights, strategy_, loc_, scene.bounds);
-    gfilm_.init(film, filmFilter_);
+    lightSampler_ = LightSampler(scene.lights, set_.lightStrategy, loc_, scene.bounds);
+    gfilm_.init(film, set_.filmFilter);
     filmBounds_ = film.pixelBounds();
     scene_ = &scene;
     stats_.reset();
@@ -55,19 +41,19 @@ void GPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
     // Box: only pairs of film pixels need gradients. Film filter: samples of
     // pixels around the film reach it too (targets outside are dropped).
     for (int k = 0; k < kNumNeighbours; ++k)
-        inside[k] = filmFilter_ || (filmBounds_.inside(p) && filmBounds_.inside({p.x + kNeighbourOffsets[k].x,
+        inside[k] = set_.filmFilter || (filmBounds_.inside(p) && filmBounds_.inside({p.x + kNeighbourOffsets[k].x,
                                                                                  p.y + kNeighbourOffsets[k].y}));
     GradientSample s = sample(cs, sampler, arena, inside);
     gfilm_.record(rec, s);
 }
 
 void GPTIntegrator::finish(const Film &film, const RenderStats &stats, Image *out) {
-    gfilm_.finish(film, stats.spp, norm_, alpha_, out, &reconReport_);
+    gfilm_.finish(film, stats.spp, set_.norm, set_.alpha, out, &reconReport_);
 }
 
 std::string GPTIntegrator::statistics() const {
-    return stats_.format(std::string("G-PT shifts (") + (mode_ == ShiftMode::Hybrid ? "hybrid" : "halfvector") +
-                         ", threshold " + std::to_string(shiftThreshold_) + ")") +
+    return stats_.format(std::string("G-PT shifts (") + (set_.mode == ShiftMode::Hybrid ? "hybrid" : "halfvector") +
+                         ", threshold " + std::to_string(set_.shiftThreshold) + ")") +
            reconReport_;
 }
 
@@ -112,7 +98,7 @@ GradientSample GPTIntegrator::sample(const CameraSample &cs, Sampler &sampler, A
         if (!found) return ShiftVertexClass::Rough;  // a point at infinity
         if (!si.material) return ShiftVertexClass::Invalid;
         *b = si.material->getBSDF(si, arena, TransportMode::Radiance);
-        return ClassifyBSDF(b, shiftThreshold_);
+        return ClassifyBSDF(b, set_.shiftThreshold);
     };
 
     Ray ray;
@@ -231,7 +217,7 @@ GradientSample GPTIntegrator::sample(const CameraSample &cs, Sampler &sampler, A
                 if (o.state != OffsetPath::Dead) o.ratio *= o.lastPdfY * o.lastJ / prevBsdfPdf;
         }
 
-        if (!found || bounces >= maxDepth_) break;
+        if (!found || bounces >= set_.maxDepth) break;
         for (OffsetPath &o : off)
             if (o.state == OffsetPath::Diverged && !o.found) o.kill(st, ShiftFailure::Escaped);
 
@@ -407,7 +393,7 @@ GradientSample GPTIntegrator::sample(const CameraSample &cs, Sampler &sampler, A
                     break;
                 }
                 Vec3 wiY;
-                if (bs.isSpecular() || mode_ == ShiftMode::Hybrid) {
+                if (bs.isSpecular() || set_.mode == ShiftMode::Hybrid) {
                     st.attempt(ShiftType::Replay);
                     ReplayShift rp;
                     if (!ShiftReplay(o.bsdf, woY, uc, u, bs.pdf, TransportMode::Radiance, &rp)) {
@@ -464,7 +450,7 @@ GradientSample GPTIntegrator::sample(const CameraSample &cs, Sampler &sampler, A
         // Russian roulette on the base; offsets follow its decision.
         Spectrum rrBeta = beta * etaScale;
         Float uRR = sampler.get1D();
-        if (rrBeta.maxComponent() < rrThreshold_ && bounces > 3) {
+        if (rrBeta.maxComponent() < set_.rrThreshold && bounces > 3) {
             Float q = std::max<Float>(0.05, 1 - rrBeta.maxComponent());
             if (uRR < q) break;
             beta = beta / (1 - q);

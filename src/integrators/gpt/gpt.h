@@ -11,31 +11,41 @@
 // to counting the base contribution alone (Sec. 2.2). The primal and
 // gradients are reconstructed at the end (screened Poisson).
 //
-// Parameters:
+// Parameters (path tracing, integrators/path/path.h):
 //   integer maxdepth 5               maximum number of bounces
 //   float rrthreshold 1              Russian roulette threshold (pbrt-v3, after 3 bounces)
-//   string lightsamplestrategy "spatial"
+//   string lightsamplestrategy "spatial"   uniform | power | spatial
+//   integer pixelbounds []           accepted (use --cropwindow)
+// (gradient family, integrators/gradient/gradient_params.h):
 //   float shiftthreshold 0.001       roughness below which a vertex is not reconnected
-//   string shift "halfvector"        halfvector (G-PT) | hybrid (random replay until reconnection)
 //   string reconstruction "l1"       l1 | l2 | weighted: the image in the unprefixed R,G,B
 //   float alpha 0.2                  screened-Poisson primal weight
 //   string pixelfilter "film"        film (the scene's PixelFilter, so gpt estimates the same image as
 //                                    path; 9x lower relMSE than box against triangle-filtered references)
 //                                    | box (a sample counts in its own pixel, as in the papers)
-//   integer pixelbounds              accepted (use --cropwindow)
+// (gpt):
+//   string shift "halfvector"        halfvector (G-PT) | hybrid (random replay until reconnection)
 #pragma once
 #include <memory>
 
 #include "integrators/gradient/gradient_film.h"
+#include "integrators/gradient/gradient_params.h"
 #include "integrators/gradient/shift.h"
 #include "integrators/integrator.h"
+#include "integrators/path/path.h"
 #include "lights/light_sampler.h"
 
 namespace gradus {
 
+// Every field is set by the parameter table (gpt.cpp).
+struct GPTSettings : PathSettings, GradientSettings {
+    enum class ShiftMode { HalfVector, Hybrid };
+    ShiftMode mode;
+};
+
 class GPTIntegrator : public PixelSampleIntegrator {
   public:
-    enum class ShiftMode { HalfVector, Hybrid };
+    using ShiftMode = GPTSettings::ShiftMode;
     explicit GPTIntegrator(const EntityDesc &desc);
     std::string name() const override { return "gpt"; }
     void preprocess(const Scene &scene, Film &film) override;
@@ -50,14 +60,7 @@ class GPTIntegrator : public PixelSampleIntegrator {
     const ShiftStats &shiftStats() const { return stats_; }
 
   private:
-    int maxDepth_;
-    Float rrThreshold_;
-    std::string strategy_;
-    Float shiftThreshold_;
-    ShiftMode mode_;
-    ReconstructionNorm norm_;
-    Float alpha_;
-    bool filmFilter_;
+    GPTSettings set_;
     FileLoc loc_;
     LightSampler lightSampler_;
     GradientFilm gfilm_;

@@ -50,93 +50,53 @@ double Seconds() {
     return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
+ParamTable<MBDPTSettings> Table() {
+    using S = MBDPTSettings;
+    ParamTable<S> t("mbdpt");
+    t.append(BidirParams());  // rrdepth 3
+    t.enumeration<Reorder>("reorder", &S::reorder, "distance",
+                           {{"distance", Reorder::Distance}, {"morton", Reorder::Morton}, {"none", Reorder::None}},
+                           "order of the matrix rows and columns: Sec. 4.2 distance, Morton code of the end "
+                           "vertex, none");
+    t.integer("connections", &S::connections, 1, "m: light subpaths per camera subpath and strategy",
+              Range{1, 1024});
+    t.enumeration<bool>("matrixrows", &S::allRows, "matched", {{"matched", false}, {"all", true}},
+                        "matched: a camera subpath takes part in M_{s,t} with probability L_s / L | all: always");
+    t.boolean("combinatorial", &S::combinatorial, false,
+              "connect every camera subpath to all columns (Eq. 6; quadratic cost)");
+    t.enumeration<MatrixSampling>("matrixsampler", &S::sampling, "lattice",
+                                  {{"lattice", MatrixSampling::Lattice},
+                                   {"lhs", MatrixSampling::LHS},
+                                   {"random", MatrixSampling::Random},
+                                   {"diagonal", MatrixSampling::Diagonal}},
+                                  "columns of a row: rank-1 lattice (2D low discrepancy), Latin hypercube, "
+                                  "random, or q = p");
+    t.string("visualizematrix", &S::visualizeMatrix, "",
+             "\"s,t\": image of the matrix M_{s,t} of the first iteration (Fig. 4)")
+        .then([](S &s, const FileLoc &loc) {
+            if (s.visualizeMatrix.empty()) return;
+            char extra;
+            if (std::sscanf(s.visualizeMatrix.c_str(), "%d , %d %c", &s.visS, &s.visT, &extra) != 2 ||
+                s.visS < 2 || s.visT < 2 || s.visS + s.visT - 2 > s.maxDepth)
+                throw Error(loc, "\"visualizematrix\" must be \"s,t\" with s >= 2, t >= 2 and s + t - 2 <= maxdepth");
+        });
+    t.integer("matrixresolution", &S::matrixResolution, 256,
+              "maximum width/height of the matrix image (rows and columns subsampled evenly)", AtLeast(1));
+    t.string("matrixfile", &S::matrixFile, "",
+             "where to write it (\"\": <film name>_matrix_s<S>_t<T>.exr); layer \"unordered\" = random order");
+    return t;
+}
+
 }  // namespace
 
-MBDPTIntegrator::MBDPTIntegrator(const EntityDesc &desc) : loc_(desc.loc) {
-    const ParamSet &ps = desc.params;
-    set_.maxDepth = ps.getInt("maxdepth", 5);
-    set_.rrDepth = ps.getInt("rrdepth", 3);
-    set_.lightStrategy = ps.getString("lightsamplestrategy", "power");
-    set_.visStrategies = ps.getBool("visualizestrategies", false);
-    set_.visWeights = ps.getBool("visualizeweights", false);
-    ps.getInts("pixelbounds");
-    if (set_.maxDepth < 0) throw Error(ps.locOf("maxdepth", desc.loc), "\"maxdepth\" must be >= 0");
-    std::string h = ps.getString("misheuristic", "balance");
-    if (h == "balance")
-        set_.heuristic = MISHeuristic::Balance;
-    else if (h == "power")
-        set_.heuristic = MISHeuristic::Power;
-    else
-        throw Error(ps.locOf("misheuristic", desc.loc), "unknown \"misheuristic\" \"" + h + "\" (valid: balance, power)");
-    std::string r = ps.getString("reorder", "distance");
-    if (r == "distance")
-        set_.reorder = Reorder::Distance;
-    else if (r == "morton")
-        set_.reorder = Reorder::Morton;
-    else if (r == "none")
-        set_.reorder = Reorder::None;
-    else
-        throw Error(ps.locOf("reorder", desc.loc), "unknown \"reorder\" \"" + r + "\" (valid: distance, morton, none)");
-    std::string ms = ps.getString("matrixsampler", "lattice");
-    if (ms == "lattice")
-        set_.sampling = MatrixSampling::Lattice;
-    else if (ms == "lhs")
-        set_.sampling = MatrixSampling::LHS;
-    else if (ms == "random")
-        set_.sampling = MatrixSampling::Random;
-    else if (ms == "diagonal")
-        set_.sampling = MatrixSampling::Diagonal;
-    else
-        throw Error(ps.locOf("matrixsampler", desc.loc),
-                    "unknown \"matrixsampler\" \"" + ms + "\" (valid: lattice, lhs, random, diagonal)");
-    set_.connections = ps.getInt("connections", 1);
-    if (set_.connections < 1 || set_.connections > 1024)
-        throw Error(ps.locOf("connections", desc.loc), "\"connections\" must be in [1, 1024]");
-    set_.combinatorial = ps.getBool("combinatorial", false);
-    std::string mr = ps.getString("matrixrows", "matched");
-    if (mr == "matched" || mr == "all")
-        set_.allRows = mr == "all";
-    else
-        throw Error(ps.locOf("matrixrows", desc.loc), "unknown \"matrixrows\" \"" + mr + "\" (valid: matched, all)");
-    std::string vm = ps.getString("visualizematrix", "");
-    if (!vm.empty()) {
-        int s = -1, t = -1;
-        char extra;
-        if (std::sscanf(vm.c_str(), "%d , %d %c", &s, &t, &extra) != 2 || s < 2 || t < 2 || s + t - 2 > set_.maxDepth)
-            throw Error(ps.locOf("visualizematrix", desc.loc),
-                        "\"visualizematrix\" must be \"s,t\" with s >= 2, t >= 2 and s + t - 2 <= maxdepth");
-        set_.visS = s;
-        set_.visT = t;
-    }
-    set_.matrixResolution = ps.getInt("matrixresolution", 256);
-    if (set_.matrixResolution < 1) throw Error(ps.locOf("matrixresolution", desc.loc), "\"matrixresolution\" must be >= 1");
-    set_.matrixFile = ps.getString("matrixfile", "");
-}
+std::vector<ParamInfo> MBDPTParameters() { return Table().describe(); }
 
-std::string MBDPTIntegrator::LayerName(int s, int t) { return "mbdpt_s" + std::to_string(s) + "_t" + std::to_string(t); }
-
-int MBDPTIntegrator::strategyLayer(int s, int t) const {
-    if (layers_.empty() || s < 0 || t < 0 || s > set_.maxDepth + 2 || t > set_.maxDepth + 2) return -1;
-    return layers_[size_t(s) * (set_.maxDepth + 3) + t];
-}
+MBDPTIntegrator::MBDPTIntegrator(const EntityDesc &desc)
+    : BidirFamily("mbdpt", 2), set_(Table().parse(desc)), loc_(desc.loc) {}
 
 void MBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
-    lightSampler_ = LightSampler(scene.lights, set_.lightStrategy, loc_);
-    ctx_.init(scene, lightSampler_, set_.heuristic);
-    ctx_.rrDepth = set_.rrDepth;
-    Point2i full = film.fullResolution();
-    int64_t sampled = film.sampleBounds().area();
-    // One light subpath per sampled pixel: light tracing estimates the full image (see bdpt.cpp).
-    splatScale_ = sampled > 0 ? Float(int64_t(full.x) * full.y) / Float(sampled) : 1;
-    layers_.clear();
-    if (set_.visStrategies || set_.visWeights) {
-        layers_.assign(size_t(set_.maxDepth + 3) * (set_.maxDepth + 3), -1);
-        for (int depth = 0; depth <= set_.maxDepth; ++depth)
-            for (int t = 2; t <= depth + 2; ++t) {
-                int s = depth + 2 - t;
-                layers_[size_t(s) * (set_.maxDepth + 3) + t] = film.addLayer(LayerName(s, t));
-            }
-    }
+    // One light subpath per sampled pixel: light tracing estimates the full image.
+    preprocessBidir(scene, film, set_, loc_);
     if (set_.visS >= 0 && set_.matrixFile.empty()) {
         std::string f = film.filename();
         size_t dot = f.find_last_of('.'), slash = f.find_last_of('/');

@@ -18,8 +18,15 @@
 // Random numbers are addressed by (pixel, iteration) and the seed; the
 // result does not depend on the thread count.
 //
-// Parameters (besides bdpt's maxdepth, lightsamplestrategy, misheuristic,
-// visualizestrategies -> layers "mbdpt_s<S>_t<T>", visualizeweights, pixelbounds, rrdepth 3):
+// Parameters (bidirectional family, integrators/common/bidir_family.h):
+//   integer maxdepth 5              maximum path depth (edges - 1)
+//   string lightsamplestrategy "power"  uniform | power | spatial (= power)
+//   string misheuristic "balance"   balance (pbrt-v3) | power (exponent 2)
+//   bool visualizestrategies false  layers "mbdpt_s<S>_t<T>" (t >= 2): unweighted contribution of each strategy
+//   bool visualizeweights false     the same layers, MIS-weighted
+//   integer rrdepth 3               Russian roulette on subpaths after this many bounces (-1: off)
+//   integer pixelbounds []          accepted (use --cropwindow instead)
+// mbdpt's own:
 //   string reorder "distance"       distance (Sec. 4.2) | morton (end vertex) | none
 //   integer connections 1           m: light subpaths per camera subpath and strategy
 //   string matrixrows "matched"     matched: a camera subpath takes part in M_{s,t} with probability
@@ -36,31 +43,27 @@
 #include <vector>
 
 #include "image/image.h"
-#include "integrators/common/bidir.h"
+#include "integrators/common/bidir_family.h"
 #include "integrators/common/subpath_store.h"
 #include "integrators/integrator.h"
 #include "integrators/mbdpt/matrix.h"
-#include "lights/light_sampler.h"
 
 namespace gradus {
 
-struct MBDPTSettings {
-    int maxDepth = 5;
-    int rrDepth = 3;  // Russian roulette in subpath generation (BidirContext::rrDepth)
-    std::string lightStrategy = "power";
-    MISHeuristic heuristic = MISHeuristic::Balance;
-    mbdpt::Reorder reorder = mbdpt::Reorder::Distance;
-    mbdpt::MatrixSampling sampling = mbdpt::MatrixSampling::Lattice;
-    int connections = 1;
-    bool combinatorial = false;
-    bool allRows = false;
-    bool visStrategies = false, visWeights = false;
-    int visS = -1, visT = -1;  // visualised matrix
-    int matrixResolution = 256;
+// Every table field is set by the parameter table (mbdpt.cpp; defaults there).
+struct MBDPTSettings : BidirSettings {
+    mbdpt::Reorder reorder;
+    mbdpt::MatrixSampling sampling;
+    int connections;
+    bool combinatorial;
+    bool allRows;
+    std::string visualizeMatrix;
+    int visS = -1, visT = -1;  // visualised matrix (from visualizematrix)
+    int matrixResolution;
     std::string matrixFile;
 };
 
-class MBDPTIntegrator : public Integrator {
+class MBDPTIntegrator : public Integrator, public BidirFamily {
   public:
     explicit MBDPTIntegrator(const EntityDesc &desc);
     std::string name() const override { return "mbdpt"; }
@@ -71,7 +74,7 @@ class MBDPTIntegrator : public Integrator {
     std::string statistics() const override;
 
     const MBDPTSettings &settings() const { return set_; }
-    static std::string LayerName(int s, int t);
+    static std::string LayerName(int s, int t) { return StrategyLayerName("mbdpt", s, t); }
     // Matrix visualisation of the first iteration (empty unless visualizematrix is set).
     const Image &matrixImage() const { return matrixImage_; }
     // Bytes of stored subpaths and reordering tables per sampled pixel (last iteration).
@@ -81,14 +84,9 @@ class MBDPTIntegrator : public Integrator {
     void reorder(PassContext &ctx);
     void connect(PassContext &ctx);
     void visualizeMatrix(PassContext &ctx);
-    int strategyLayer(int s, int t) const;
 
     MBDPTSettings set_;
     FileLoc loc_;
-    LightSampler lightSampler_;
-    BidirContext ctx_;
-    std::vector<int> layers_;
-    Float splatScale_ = 1;
 
     // Per-iteration data (reused across iterations).
     ImageSubpaths paths_;                      // one camera and one light subpath per sampled pixel

@@ -2,21 +2,29 @@
 
 #include "core/error.h"
 #include "core/stats.h"
+#include "integrators/factories.h"
 #include "samplers/sampling.h"
 
 namespace gradus {
 
-PathIntegrator::PathIntegrator(const EntityDesc &desc) : loc_(desc.loc) {
-    const ParamSet &ps = desc.params;
-    maxDepth_ = ps.getInt("maxdepth", 5);
-    rrThreshold_ = ps.getFloat("rrthreshold", 1);
-    strategy_ = ps.getString("lightsamplestrategy", "spatial");
-    ps.getInts("pixelbounds");
-    if (maxDepth_ < 0) throw Error(ps.locOf("maxdepth", desc.loc), "\"maxdepth\" must be >= 0");
+ParamTable<PathSettings> PathParams() {
+    using S = PathSettings;
+    ParamTable<S> t("path tracing");
+    t.integer("maxdepth", &S::maxDepth, 5, "maximum number of bounces", AtLeast(0));
+    t.real("rrthreshold", &S::rrThreshold, 1,
+           "Russian roulette when max(beta) < rrthreshold, after 3 bounces (pbrt-v3)");
+    t.enumeration("lightsamplestrategy", &S::lightStrategy, "spatial", {"uniform", "power", "spatial"},
+                  "light choice; spatial: per-voxel distributions (see light_sampler.h)");
+    t.integers("pixelbounds", &S::pixelBounds, "accepted (use --cropwindow instead)");
+    return t;
 }
 
+std::vector<ParamInfo> PathParameters() { return PathParams().describe(); }
+
+PathIntegrator::PathIntegrator(const EntityDesc &desc) : set_(PathParams().parse(desc)), loc_(desc.loc) {}
+
 void PathIntegrator::preprocess(const Scene &scene, Film &) {
-    lightSampler_ = LightSampler(scene.lights, strategy_, loc_, scene.bounds);
+    lightSampler_ = LightSampler(scene.lights, set_.lightStrategy, loc_, scene.bounds);
 }
 
 void PathIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const {
@@ -73,7 +81,7 @@ Spectrum PathIntegrator::Li(const Ray &cameraRay, Sampler &sampler, Arena &arena
                        "(%.4g, %.4g, %.4g)",
                        bounces, isect.p.x, isect.p.y, isect.p.z, isect.n.x, isect.n.y, isect.n.z, beta.r, beta.g,
                        beta.b, L.r, L.g, L.b);
-        if (bounces >= maxDepth_) break;
+        if (bounces >= set_.maxDepth) break;
         ++nVertices;
 
         if (!isect.material) {  // interface: continue straight through
@@ -123,7 +131,7 @@ Spectrum PathIntegrator::Li(const Ray &cameraRay, Sampler &sampler, Arena &arena
         // Russian roulette (pbrt-v3: after three bounces, on beta scaled by eta^2).
         Spectrum rrBeta = beta * etaScale;
         Float uRR = sampler.get1D();
-        if (rrBeta.maxComponent() < rrThreshold_ && bounces > 3) {
+        if (rrBeta.maxComponent() < set_.rrThreshold && bounces > 3) {
             Float q = std::max<Float>(0.05, 1 - rrBeta.maxComponent());
             if (uRR < q) break;
             beta = beta / (1 - q);

@@ -5,12 +5,27 @@
 //   integer maxdepth 5            maximum number of bounces
 //   float rrthreshold 1           Russian roulette starts when max(beta) < rrthreshold (after 3 bounces)
 //   string lightsamplestrategy "spatial"   uniform | power | spatial (see light_sampler.h)
-//   integer pixelbounds [x0 x1 y0 y1]      accepted (use --cropwindow instead)
+//   integer pixelbounds []                 accepted (use --cropwindow instead)
+// gpt takes the same parameters (PathParams).
 #pragma once
+#include <vector>
+
 #include "integrators/integrator.h"
+#include "integrators/params.h"
 #include "lights/light_sampler.h"
 
 namespace gradus {
+
+// Every field is set by PathParams (defaults there).
+struct PathSettings {
+    int maxDepth;
+    Float rrThreshold;
+    std::string lightStrategy;
+    std::vector<int> pixelBounds;  // accepted for pbrt-v3 scenes; --cropwindow crops
+};
+
+// maxdepth, rrthreshold, lightsamplestrategy, pixelbounds (path, gpt).
+ParamTable<PathSettings> PathParams();
 
 class PathIntegrator : public PixelSampleIntegrator {
   public:
@@ -20,12 +35,10 @@ class PathIntegrator : public PixelSampleIntegrator {
     void estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const override;
     // Radiance along a camera ray (exposed for tests).
     Spectrum Li(const Ray &ray, Sampler &sampler, Arena &arena) const;
-    int maxDepth() const { return maxDepth_; }
+    int maxDepth() const { return set_.maxDepth; }
 
   private:
-    int maxDepth_;
-    Float rrThreshold_;
-    std::string strategy_;
+    PathSettings set_;
     FileLoc loc_;
     LightSampler lightSampler_;
 };

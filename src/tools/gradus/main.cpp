@@ -31,7 +31,8 @@ const char *kUsage =
     "  --quick              1/4 resolution and 1/8 of the samples\n"
     "  --stats              print the scene features after loading\n"
     "  --quiet              no progress bar or statistics\n"
-    "  --list-integrators   print the available integrators\n";
+    "  --list-integrators   print the available integrators\n"
+    "  --describe NAME      print an integrator's parameters (name, type, default, help)\n";
 
 [[noreturn]] void Usage(const std::string &msg) {
     std::fprintf(stderr, "gradus: %s\n%s", msg.c_str(), kUsage);
@@ -50,6 +51,22 @@ double ParseDouble(const std::string &opt, const char *s) {
     double v = std::strtod(s, &end);
     if (*s == 0 || *end != 0) Usage(opt + " expects a number, got \"" + s + "\"");
     return v;
+}
+
+// --describe NAME: the integrator's parameter table, grouped by family.
+int Describe(const std::string &name) {
+    std::string valid;
+    for (const auto &info : IntegratorRegistry()) {
+        if (info.name == name) {
+            std::printf("%s: %s\n\nParameters:\n%s", info.name.c_str(), info.description.c_str(),
+                        FormatParams(info.parameters()).c_str());
+            return 0;
+        }
+        valid += (valid.empty() ? "" : ", ") + info.name;
+    }
+    std::fprintf(stderr, "gradus: --describe: unknown integrator \"%s\" (available: %s)\n", name.c_str(),
+                 valid.c_str());
+    return 1;
 }
 
 }  // namespace
@@ -72,6 +89,8 @@ int main(int argc, char **argv) {
             for (const auto &info : IntegratorRegistry())
                 std::printf("%-8s %s\n", info.name.c_str(), info.description.c_str());
             return 0;
+        } else if (a == "--describe") {
+            return Describe(next());
         } else if (a == "--outfile") {
             bo.outfileOverride = next();
         } else if (a == "--nthreads") {

@@ -1,5 +1,6 @@
-// Default-tier G-BDPT render tests: output layers, parameters, no NaN/Inf and
-// no energy gain on scenes with glass and mirrors, statistics.
+// Default-tier G-BDPT render tests: output layers, parameters, no NaN/Inf on
+// scenes with glass and mirrors, statistics. Agreement with BDPT in
+// expectation is tested by the conformance table (tests/conformance).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,13 +13,6 @@ using namespace gradus::gbdpttest;
 
 namespace {
 
-double Mean(const Image &im, int c) {
-    double s = 0;
-    for (int y = 0; y < im.height(); ++y)
-        for (int x = 0; x < im.width(); ++x) s += im.at(x, y, c);
-    return s / (im.width() * im.height());
-}
-
 bool AllFinite(const Image &im) {
     for (float v : im.data())
         if (!std::isfinite(v)) return false;
@@ -27,12 +21,7 @@ bool AllFinite(const Image &im) {
 
 }  // namespace
 
-TEST(GBDPTRender, LayersFiniteAndNoEnergyGain) {
-    // Energy: every output's mean is compared with BDPT's at many more samples.
-    // The tolerance (15% of the mean) is far above the noise of 32 spp on this
-    // scene (measured < 3%) and far below what a doubled or missing strategy
-    // or a wrong Jacobian of the caustic paths would produce.
-    Image ref = Render(BoxScene("Integrator \"bdpt\""), 128, 3).layerRGB("");
+TEST(GBDPTRender, LayersFiniteAndStatistics) {
     for (bool glossy : {false, true})
         for (const char *line : {"Integrator \"gbdpt\"", "Integrator \"gbdpt\" \"string shift\" \"halfvector\"",
                                  "Integrator \"gbdpt\" \"string mis\" \"simple\" \"bool lighttracing\" \"false\""}) {
@@ -42,14 +31,6 @@ TEST(GBDPTRender, LayersFiniteAndNoEnergyGain) {
                 Image l = g.layerRGB(layer);
                 ASSERT_EQ(l.width(), 24) << layer;
                 EXPECT_TRUE(AllFinite(l)) << line << " " << layer;
-            }
-            for (int c = 0; c < 3; ++c) {
-                double m = Mean(ref, c);
-                for (const char *layer : {"primal", "reconstructed_l1", "reconstructed_l2"}) {
-                    double v = Mean(g.layerRGB(layer), c);
-                    EXPECT_LT(v, m * 1.15) << line << " glossy " << glossy << " " << layer << " channel " << c;
-                    EXPECT_GT(v, m * 0.85) << line << " glossy " << glossy << " " << layer << " channel " << c;
-                }
             }
             EXPECT_NE(stats.find("case (iii)"), std::string::npos);
             if (!glossy && std::string(line) == "Integrator \"gbdpt\"") {

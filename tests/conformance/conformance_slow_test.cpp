@@ -1,0 +1,20 @@
+// Slow tier of the conformance table's agreement check (agreement.h): the same
+// test with K = 40 runs of 64 spp per integrator and scene (20x the default
+// tier's samples), sensitive to biases of about 1-2% of a row band or block;
+// power margins for a 5% bias 7.8-12.8. Measured on the 2 shared cores (load
+// average 6-9 from other jobs): 14 min wall, 7 min CPU.
+#include <gtest/gtest.h>
+
+#include "agreement.h"
+
+using namespace gradus::conformance;
+
+class AgreementSlow : public ::testing::TestWithParam<AgreementParam> {};
+
+TEST_P(AgreementSlow, AgreesWithBdpt) {
+    CheckAgreement(std::get<0>(GetParam()), std::get<1>(GetParam()), {40, 64, 3000, 5000});
+}
+
+INSTANTIATE_TEST_SUITE_P(conformance_slow, AgreementSlow,
+                         ::testing::Combine(::testing::ValuesIn(Integrators()), ::testing::ValuesIn(Scenes())),
+                         AgreementName);

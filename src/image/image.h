@@ -22,6 +22,8 @@ class MetaValue {
     static MetaValue Double(double v);
     Type type() const { return type_; }
     const std::string &str() const { return text_; }
+    const char *c_str() const { return text_.c_str(); }
+    bool empty() const { return text_.empty(); }
     operator const std::string &() const { return text_; }
     // Numeric value (0 for text that is not a number).
     double number() const;

@@ -25,6 +25,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/provenance.h"
 #include "image/image.h"
 
 #pragma GCC diagnostic push
@@ -397,9 +398,14 @@ Image ReadImage(const std::string &filename) {
             in.read(reinterpret_cast<char *>(magic), 4);
             if (in.gcount() == 0) throw Error(filename + ": empty file");
         }
-        if (magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01)
-            return ReadEXR(filename);
+        // Images read by a render (textures) are part of its provenance.
+        if (magic[0] == 0x76 && magic[1] == 0x2f && magic[2] == 0x31 && magic[3] == 0x01) {
+            Image img = ReadEXR(filename);
+            RecordInputFile(filename);
+            return img;
+        }
         std::vector<unsigned char> bytes = ReadFileBytes(filename);
+        RecordInputFile(filename, bytes.data(), bytes.size());
         if (magic[0] == 'P' && (magic[1] == 'F' || magic[1] == 'f'))
             return ReadPFM(filename, bytes);
         return ReadSTB(filename, bytes);

@@ -37,7 +37,7 @@ Prepared Prepare(const Image &img, const Image &ref, const CompareOptions &opts)
     p.layer = opts.layer ? *opts.layer : DefaultRGBLayer(img);
     bool refHas = false;
     for (const std::string &l : ref.layers()) refHas |= (l == p.layer);
-    p.refLayer = refHas ? p.layer : DefaultRGBLayer(ref);
+    p.refLayer = opts.refLayer ? *opts.refLayer : refHas ? p.layer : DefaultRGBLayer(ref);
     p.a = img.layerRGB(p.layer);
     p.r = ref.layerRGB(p.refLayer);
     size_t npix = size_t(img.width()) * size_t(img.height());

@@ -14,6 +14,8 @@ struct CompareOptions {
     // Layer of the test image to compare (nullopt: DefaultRGBLayer). The reference
     // uses the same layer when it has it, else its own default layer.
     std::optional<std::string> layer;
+    // Layer of the reference (nullopt: as described above).
+    std::optional<std::string> refLayer;
     // Ignore the highest-error fraction of the finite pixels, ranked by per-pixel
     // relMSE averaged over channels; in [0, 1).
     double discardFraction = 0;

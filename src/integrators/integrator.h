@@ -31,6 +31,8 @@ class Integrator {
     virtual void endPass(PassContext &ctx) {}
     // Adds integrator-specific results (e.g. reconstructed layers) to the output image.
     virtual void finish(const Film &film, const RenderStats &stats, Image *out) {}
+    // Seconds finish() is expected to take (reserved from the time budget).
+    virtual double finishEstimate() const { return 0; }
     // Integrator-specific statistics for the end-of-render report.
     virtual std::string statistics() const { return ""; }
 };

@@ -1,11 +1,18 @@
 #include "parser/paramset.h"
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 
 namespace gradus {
 
 namespace {
+
+std::string Num(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.9g", v);
+    return buf;
+}
 
 std::string Describe(const Param &p) { return "\"" + p.type + " " + p.name + "\""; }
 
@@ -53,56 +60,164 @@ const Param *ParamSet::lookup(const std::string &name, std::initializer_list<con
     throw Error(p->loc, "parameter " + Describe(*p) + " has type " + p->type + ", expected " + expected);
 }
 
+
+// ---- resolved values (provenance)
+
+void ParamSet::note(const char *type, const std::string &name, const std::string &value) const {
+    for (const auto &r : resolved_)
+        if (r.first == name) return;
+    resolved_.push_back({name, "\"" + std::string(type) + " " + name + "\" " + value});
+}
+
+std::string ParamSet::resolved() const {
+    std::string out;
+    for (const auto &r : resolved_) out += (out.empty() ? "" : " ") + r.second;
+    return out;
+}
+
 int ParamSet::getInt(const std::string &name, int def) const {
+    int v = getIntRaw(name, def);
+    note("integer", name, std::to_string(v));
+    return v;
+}
+
+Float ParamSet::getFloat(const std::string &name, Float def) const {
+    Float v = getFloatRaw(name, def);
+    note("float", name, Num(v));
+    return v;
+}
+
+bool ParamSet::getBool(const std::string &name, bool def) const {
+    bool v = getBoolRaw(name, def);
+    note("bool", name, std::string(v ? "\"true\"" : "\"false\""));
+    return v;
+}
+
+std::string ParamSet::getString(const std::string &name, const std::string &def) const {
+    std::string v = getStringRaw(name, def);
+    note("string", name, "\"" + v + "\"");
+    return v;
+}
+
+Point2 ParamSet::getPoint2(const std::string &name, Point2 def) const {
+    Point2 v = getPoint2Raw(name, def);
+    note("point2", name, "[" + Num(v.x) + " " + Num(v.y) + "]");
+    return v;
+}
+
+Point3 ParamSet::getPoint3(const std::string &name, Point3 def) const {
+    Point3 v = getPoint3Raw(name, def);
+    note("point3", name, "[" + Num(v.x) + " " + Num(v.y) + " " + Num(v.z) + "]");
+    return v;
+}
+
+Vec3 ParamSet::getVector3(const std::string &name, Vec3 def) const {
+    Vec3 v = getVector3Raw(name, def);
+    note("vector3", name, "[" + Num(v.x) + " " + Num(v.y) + " " + Num(v.z) + "]");
+    return v;
+}
+
+Normal3 ParamSet::getNormal(const std::string &name, Normal3 def) const {
+    Normal3 v = getNormalRaw(name, def);
+    note("normal", name, "[" + Num(v.x) + " " + Num(v.y) + " " + Num(v.z) + "]");
+    return v;
+}
+
+Spectrum ParamSet::getSpectrum(const std::string &name, Spectrum def, SpectrumKind kind) const {
+    Spectrum v = getSpectrumRaw(name, def, kind);
+    note("rgb", name, "[" + Num(v.r) + " " + Num(v.g) + " " + Num(v.b) + "]");
+    return v;
+}
+
+std::vector<int> ParamSet::getInts(const std::string &name) const {
+    std::vector<int> v = getIntsRaw(name);
+    if (!v.empty()) {  // lists: recorded when given (at most 16 values)
+        std::string t = "[";
+        for (size_t i = 0; i < v.size() && i < 16; ++i) {
+            const auto &x = v[i];
+            t += std::string(i ? " " : "") + std::to_string(x);
+        }
+        note("integer", name, t + (v.size() > 16 ? " ...]" : "]"));
+    }
+    return v;
+}
+
+std::vector<Float> ParamSet::getFloats(const std::string &name) const {
+    std::vector<Float> v = getFloatsRaw(name);
+    if (!v.empty()) {  // lists: recorded when given (at most 16 values)
+        std::string t = "[";
+        for (size_t i = 0; i < v.size() && i < 16; ++i) {
+            const auto &x = v[i];
+            t += std::string(i ? " " : "") + Num(x);
+        }
+        note("float", name, t + (v.size() > 16 ? " ...]" : "]"));
+    }
+    return v;
+}
+
+std::vector<std::string> ParamSet::getStrings(const std::string &name) const {
+    std::vector<std::string> v = getStringsRaw(name);
+    if (!v.empty()) {  // lists: recorded when given (at most 16 values)
+        std::string t = "[";
+        for (size_t i = 0; i < v.size() && i < 16; ++i) {
+            const auto &x = v[i];
+            t += std::string(i ? " " : "") + "\"" + x + "\"";
+        }
+        note("string", name, t + (v.size() > 16 ? " ...]" : "]"));
+    }
+    return v;
+}
+
+int ParamSet::getIntRaw(const std::string &name, int def) const {
     const Param *p = lookup(name, {"integer"}, "integer");
     if (!p) return def;
     if (p->numbers.size() != 1) CountError(*p, "1 value");
     return static_cast<int>(p->numbers[0]);
 }
 
-Float ParamSet::getFloat(const std::string &name, Float def) const {
+Float ParamSet::getFloatRaw(const std::string &name, Float def) const {
     const Param *p = lookup(name, {"float", "integer"}, "float");
     if (!p) return def;
     if (p->numbers.size() != 1) CountError(*p, "1 value");
     return p->numbers[0];
 }
 
-bool ParamSet::getBool(const std::string &name, bool def) const {
+bool ParamSet::getBoolRaw(const std::string &name, bool def) const {
     const Param *p = lookup(name, {"bool"}, "bool");
     if (!p) return def;
     if (p->bools.size() != 1) CountError(*p, "1 value");
     return p->bools[0];
 }
 
-std::string ParamSet::getString(const std::string &name, const std::string &def) const {
+std::string ParamSet::getStringRaw(const std::string &name, const std::string &def) const {
     const Param *p = lookup(name, {"string"}, "string");
     if (!p) return def;
     if (p->strings.size() != 1) CountError(*p, "1 value");
     return p->strings[0];
 }
 
-Point2 ParamSet::getPoint2(const std::string &name, Point2 def) const {
+Point2 ParamSet::getPoint2Raw(const std::string &name, Point2 def) const {
     const Param *p = lookup(name, {"point2"}, "point2");
     if (!p) return def;
     if (p->numbers.size() != 2) CountError(*p, "2 values");
     return {p->numbers[0], p->numbers[1]};
 }
 
-Point3 ParamSet::getPoint3(const std::string &name, Point3 def) const {
+Point3 ParamSet::getPoint3Raw(const std::string &name, Point3 def) const {
     const Param *p = lookup(name, {"point3"}, "point3");
     if (!p) return def;
     if (p->numbers.size() != 3) CountError(*p, "3 values");
     return {p->numbers[0], p->numbers[1], p->numbers[2]};
 }
 
-Vec3 ParamSet::getVector3(const std::string &name, Vec3 def) const {
+Vec3 ParamSet::getVector3Raw(const std::string &name, Vec3 def) const {
     const Param *p = lookup(name, {"vector3"}, "vector3");
     if (!p) return def;
     if (p->numbers.size() != 3) CountError(*p, "3 values");
     return {p->numbers[0], p->numbers[1], p->numbers[2]};
 }
 
-Normal3 ParamSet::getNormal(const std::string &name, Normal3 def) const {
+Normal3 ParamSet::getNormalRaw(const std::string &name, Normal3 def) const {
     const Param *p = lookup(name, {"normal3"}, "normal3");
     if (!p) return def;
     if (p->numbers.size() != 3) CountError(*p, "3 values");
@@ -113,7 +228,7 @@ Spectrum ParamSet::getSpectrum(const std::string &name, Spectrum def) const {
     return getSpectrum(name, def, SpectrumKind::Reflectance);
 }
 
-Spectrum ParamSet::getSpectrum(const std::string &name, Spectrum def, SpectrumKind kind) const {
+Spectrum ParamSet::getSpectrumRaw(const std::string &name, Spectrum def, SpectrumKind kind) const {
     const Param *p = lookup(name, {"rgb", "spectrum", "blackbody"}, "rgb, color, spectrum or blackbody");
     if (!p) return def;
     std::string t = canonicalType(p->type);
@@ -154,7 +269,7 @@ std::string ParamSet::getTexture(const std::string &name) const {
     return "";
 }
 
-std::vector<int> ParamSet::getInts(const std::string &name) const {
+std::vector<int> ParamSet::getIntsRaw(const std::string &name) const {
     const Param *p = lookup(name, {"integer"}, "integer");
     if (!p) return {};
     std::vector<int> r;
@@ -163,7 +278,7 @@ std::vector<int> ParamSet::getInts(const std::string &name) const {
     return r;
 }
 
-std::vector<Float> ParamSet::getFloats(const std::string &name) const {
+std::vector<Float> ParamSet::getFloatsRaw(const std::string &name) const {
     const Param *p = lookup(name, {"float", "integer"}, "float");
     if (!p) return {};
     return p->numbers;
@@ -202,7 +317,7 @@ std::vector<Vec3> ParamSet::getVector3s(const std::string &name) const {
     return p ? Triples(*p) : std::vector<Vec3>{};
 }
 
-std::vector<std::string> ParamSet::getStrings(const std::string &name) const {
+std::vector<std::string> ParamSet::getStringsRaw(const std::string &name) const {
     const Param *p = lookup(name, {"string"}, "string");
     return p ? p->strings : std::vector<std::string>{};
 }

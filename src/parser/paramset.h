@@ -66,6 +66,11 @@ class ParamSet {
     // "file:l:c: parameter "float fvo" is not used by Camera "perspective" (misspelt or unsupported)".
     void checkUnused(const std::string &what) const;
 
+    // The values every scalar lookup returned, given or default, in lookup order,
+    // in scene-file syntax ("integer maxdepth" 5 "string strategy" "power" ...):
+    // the resolved parameters recorded in the outputs' metadata.
+    std::string resolved() const;
+
     // Canonical spelling of a parameter type: point->point3, vector->vector3,
     // normal->normal3, color->rgb; other names unchanged.
     static std::string canonicalType(const std::string &type);
@@ -75,7 +80,21 @@ class ParamSet {
     // located error naming `expected`), marks it used.
     const Param *lookup(const std::string &name, std::initializer_list<const char *> types,
                         const char *expected) const;
+    int getIntRaw(const std::string &name, int def) const;
+    Float getFloatRaw(const std::string &name, Float def) const;
+    bool getBoolRaw(const std::string &name, bool def) const;
+    std::string getStringRaw(const std::string &name, const std::string &def) const;
+    Point2 getPoint2Raw(const std::string &name, Point2 def) const;
+    Point3 getPoint3Raw(const std::string &name, Point3 def) const;
+    Vec3 getVector3Raw(const std::string &name, Vec3 def) const;
+    Normal3 getNormalRaw(const std::string &name, Normal3 def) const;
+    Spectrum getSpectrumRaw(const std::string &name, Spectrum def, SpectrumKind kind) const;
+    std::vector<int> getIntsRaw(const std::string &name) const;
+    std::vector<Float> getFloatsRaw(const std::string &name) const;
+    std::vector<std::string> getStringsRaw(const std::string &name) const;
+    void note(const char *type, const std::string &name, const std::string &value) const;
     std::vector<Param> params_;
+    mutable std::vector<std::pair<std::string, std::string>> resolved_;  // name, text
 };
 
 }  // namespace gradus

@@ -11,6 +11,7 @@
 #include <sstream>
 #include <string_view>
 
+#include "core/provenance.h"
 #include "parser/scene_desc.h"
 
 namespace gradus {
@@ -26,6 +27,7 @@ bool ReadWholeFile(const std::string &path, std::string *out) {
     ss << in.rdbuf();
     if (in.bad()) return false;
     *out = ss.str();
+    RecordInputFile(path, out->data(), out->size());  // every scene file read is part of the provenance
     return true;
 }
 

@@ -1,5 +1,7 @@
 #include "parser/ply.h"
 
+#include "core/provenance.h"
+
 #include <charconv>
 #include <climits>
 #include <cmath>
@@ -314,6 +316,7 @@ PlyMesh ReadPlyFromMemory(const char *data, size_t size, const std::string &name
 }
 
 PlyMesh ReadPly(const std::string &filename) {
+    RecordInputFile(filename);  // provenance: meshes are scene inputs
     std::ifstream f(filename, std::ios::binary);
     if (!f) throw Error(filename + ": cannot open PLY file");
     std::string data((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());

@@ -1,5 +1,7 @@
 #include "parser/spectrum_convert.h"
 
+#include "core/provenance.h"
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -113,6 +115,7 @@ Spectrum BlackbodyToRGB(double T, double scale) {
 }
 
 std::vector<double> ReadSpdFile(const std::string &filename) {
+    RecordInputFile(filename);  // provenance: spectra are scene inputs
     std::ifstream in(filename, std::ios::binary);
     if (!in) throw Error(filename + ": cannot open spectrum file");
     std::stringstream ss;

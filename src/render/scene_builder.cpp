@@ -1,8 +1,14 @@
 #include "render/scene_builder.h"
 
 #include <map>
+#include <sstream>
+#include <thread>
+#include <chrono>
+
+#include <sys/resource.h>
 
 #include "core/error.h"
+#include "core/provenance.h"
 #include "parser/ply.h"
 #include "samplers/sampling.h"
 #include "shapes/loopsubdiv.h"
@@ -142,6 +148,19 @@ ShapeBuild CreateShape(const ShapeDesc &sd, const SceneDesc &scene, const NamedT
     return b;
 }
 
+}  // namespace
+
+namespace {
+double CpuSeconds() {
+    rusage u;
+    getrusage(RUSAGE_SELF, &u);
+    return u.ru_utime.tv_sec + u.ru_stime.tv_sec + 1e-6 * (u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+double PeakRSSMegabytes() {
+    rusage u;
+    getrusage(RUSAGE_SELF, &u);
+    return u.ru_maxrss / 1024.0;  // ru_maxrss is in KiB on Linux
+}
 }  // namespace
 
 std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
@@ -324,6 +343,7 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
         throw UnsupportedError(fp.locOf("maxsampleluminance", fd.loc), "Film \"maxsampleluminance\" clamping");
     fp.checkUnused("Film \"image\"");
     if (!opts.outfileOverride.empty()) filename = opts.outfileOverride;
+    CheckWritableImagePath(filename);  // before any geometry is loaded or a sample rendered
     try {
         job.film = std::make_unique<Film>(res, crop, CreateFilter(desc.filter), filename, scale);
     } catch (const Error &e) {  // a film too large for this machine: located at the resolution
@@ -349,6 +369,7 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
     if (!idesc.present) idesc.type = "path";
     bool overridden = !opts.integratorOverride.empty() && opts.integratorOverride != idesc.type;
     if (!opts.integratorOverride.empty()) idesc.type = opts.integratorOverride;
+    ApplyParamOverrides(opts.paramOverrides, &idesc);
     job.integrator = CreateIntegrator(idesc);
     if (overridden) {
         // Parameters written for the scene's own integrator do not all apply to the override.
@@ -361,24 +382,132 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
             }
     }
     idesc.params.checkUnused("Integrator \"" + idesc.type + "\"");
+    // pbrt-v3's integrator "pixelbounds": accepted when it covers the film, else
+    // named as unsupported (never silently ignored).
+    std::vector<int> pb = idesc.params.getInts("pixelbounds");
+    if (!pb.empty()) {
+        FileLoc at = idesc.params.locOf("pixelbounds", idesc.loc);
+        if (pb.size() != 4) throw Error(at, "\"pixelbounds\" needs 4 values (x0 x1 y0 y1)");
+        const Bounds2i &fb = job.film->pixelBounds();
+        if (pb[0] > fb.pMin.x || pb[1] < fb.pMax.x || pb[2] > fb.pMin.y || pb[3] < fb.pMax.y)
+            throw UnsupportedError(at, "Integrator \"pixelbounds\" that exclude film pixels (use --cropwindow)");
+    }
 
     job.scene = BuildScene(desc, res);
+
+    Metadata &m = job.provenance;
+    auto entity = [](const EntityDesc &e, const std::string &type) {
+        std::string r = e.params.resolved();
+        return "\"" + type + "\"" + (r.empty() ? "" : " " + r);
+    };
+    m["camera"] = entity(desc.camera, desc.camera.present ? desc.camera.type : "perspective");
+    m["sampler"] = entity(sdesc, sdesc.type);
+    m["film"] = entity(fd, "image");
+    m["pixelfilter"] = entity(desc.filter, desc.filter.present ? desc.filter.type : "box");
+    m["integrator_parameters"] = entity(idesc, idesc.type);
+    m["resolution"] = std::to_string(res.x) + "x" + std::to_string(res.y);
+    m["cropwindow"] = std::to_string(crop[0]) + " " + std::to_string(crop[1]) + " " + std::to_string(crop[2]) +
+                      " " + std::to_string(crop[3]);
+    m["quick"] = MetaValue::Int(opts.quick ? 1 : 0);
+    InputFilesSummary in = InputFiles();
+    m["scene_files"] = MetaValue::Int(in.files);
+    m["scene_bytes"] = MetaValue::Int(int64_t(in.bytes));
+    m["scene_hash"] = "fnv1a64:" + in.hash;
     return job;
 }
 
 RenderResult RenderJobImage(RenderJob &job, const RenderOptions &opts) {
+    using Clock = std::chrono::steady_clock;
+    auto seconds = [](Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); };
+    const double cpu0 = CpuSeconds();
+    const auto t0 = Clock::now();
     job.integrator->preprocess(*job.scene, *job.film);
+    const auto t1 = Clock::now();
+    RenderOptions loopOpts = opts;
+    if (opts.timeLimit > 0)  // at least one pass runs whatever is left
+        loopOpts.timeLimit = std::max(1e-9, opts.timeLimit - seconds(t0, t1) - job.integrator->finishEstimate());
     RenderResult r;
-    r.stats = RunRender(*job.integrator, *job.scene, *job.film, *job.sampler, opts);
+    r.stats = RunRender(*job.integrator, *job.scene, *job.film, *job.sampler, loopOpts);
+    const auto t2 = Clock::now();
     r.image = job.film->toImage();
     job.integrator->finish(*job.film, r.stats, &r.image);
-    r.image.metadata["integrator"] = job.integrator->name();
-    r.image.metadata["spp"] = std::to_string(r.stats.spp);
-    r.image.metadata["seed"] = std::to_string(r.stats.seed);
-    r.image.metadata["render_seconds"] = std::to_string(r.stats.seconds);
-    r.image.metadata["nonfinite_discarded"] = std::to_string(r.stats.nonFinite);
-    r.image.metadata["output_values_clamped"] = std::to_string(job.film->clampedValues());
+    const auto t3 = Clock::now();
+    r.stats.seconds = seconds(t0, t3);
+
+    const Film &film = *job.film;
+    Metadata &m = r.image.metadata;
+    for (const auto &kv : job.provenance) m[kv.first] = kv.second;
+    m["integrator"] = job.integrator->name();
+    m["spp"] = MetaValue::Int(r.stats.spp);
+    m["passes"] = MetaValue::Int(r.stats.passes);
+    m["seed"] = std::to_string(r.stats.seed);
+    m["threads"] = MetaValue::Int(opts.nthreads > 0 ? opts.nthreads : int(std::thread::hardware_concurrency()));
+    m["render_seconds"] = MetaValue::Double(r.stats.seconds);
+    m["seconds_preprocess"] = MetaValue::Double(seconds(t0, t1));
+    m["seconds_passes"] = MetaValue::Double(seconds(t1, t2));
+    m["seconds_finish"] = MetaValue::Double(seconds(t2, t3));
+    m["cpu_seconds"] = MetaValue::Double(CpuSeconds() - cpu0);
+    m["stop_reason"] = r.stats.interrupted ? "interrupted" : r.stats.timeLimited ? "time budget" : "completed";
+    if (opts.timeLimit > 0) m["time_budget"] = MetaValue::Double(opts.timeLimit);
+    m["nonfinite_discarded"] = MetaValue::Int(int64_t(r.stats.nonFinite));
+    m["output_values_clamped"] = MetaValue::Int(int64_t(film.clampedValues()));
+    m["peak_rss_mb"] = MetaValue::Double(PeakRSSMegabytes());
+    m["gradus_version"] = std::string(GradusVersion()) + " (" + GradusGitCommit() + ")";
+    // Crops keep their place in the full image (EXR data window in the display window).
+    r.image.originX = film.pixelBounds().pMin.x;
+    r.image.originY = film.pixelBounds().pMin.y;
+    r.image.displayWidth = film.fullResolution().x;
+    r.image.displayHeight = film.fullResolution().y;
     return r;
+}
+
+void ApplyParamOverrides(const std::vector<std::string> &overrides, EntityDesc *idesc) {
+    if (overrides.empty()) return;
+    const IntegratorInfo *info = nullptr;
+    for (const auto &i : IntegratorRegistry())
+        if (i.name == idesc->type) info = &i;
+    if (!info) return;  // CreateIntegrator reports the unknown name
+    const std::vector<ParamInfo> table = info->parameters();
+    FileLoc loc;
+    loc.file = std::make_shared<const std::string>("<command line --param>");
+    for (const std::string &o : overrides) {
+        size_t eq = o.find('=');
+        std::string name = o.substr(0, eq);
+        if (eq == std::string::npos || name.empty())
+            throw Error(loc, "--param expects NAME=VALUE, got \"" + o + "\"");
+        const ParamInfo *pi = nullptr;
+        for (const auto &e : table)
+            if (e.name == name) pi = &e;
+        if (!pi)
+            throw Error(loc, "integrator \"" + idesc->type + "\" has no parameter \"" + name +
+                                 "\" (see gradus --describe " + idesc->type + ")");
+        Param p;
+        p.type = pi->typeName();
+        p.name = name;
+        p.loc = loc;
+        std::string value = o.substr(eq + 1);
+        if (p.type == "string") {
+            p.strings.push_back(value);
+        } else if (p.type == "bool") {
+            if (value != "true" && value != "false")
+                throw Error(loc, "--param " + name + " expects true or false, got \"" + value + "\"");
+            p.bools.push_back(value == "true");
+        } else {  // integer / float: one or more numbers separated by commas or spaces
+            for (char &c : value)
+                if (c == ',') c = ' ';
+            std::istringstream in(value);
+            std::string word;
+            while (in >> word) {
+                char *end = nullptr;
+                double v = std::strtod(word.c_str(), &end);
+                if (*end != 0 || !std::isfinite(v) || (p.type == "integer" && v != std::floor(v)))
+                    throw Error(loc, "--param " + name + " expects " + p.type + " values, got \"" + word + "\"");
+                p.numbers.push_back(v);
+            }
+            if (p.numbers.empty()) throw Error(loc, "--param " + name + " has no value");
+        }
+        idesc->params.add(std::move(p));
+    }
 }
 
 }  // namespace gradus

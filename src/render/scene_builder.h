@@ -22,6 +22,8 @@ struct BuildOptions {
     Float crop[4] = {0, 1, 0, 1};
     std::string outfileOverride;     // --outfile
     bool quiet = false;
+    // --param NAME=VALUE: integrator parameters from the command line (replace the scene's).
+    std::vector<std::string> paramOverrides;
 };
 
 struct RenderJob {
@@ -29,20 +31,35 @@ struct RenderJob {
     std::unique_ptr<Film> film;
     std::unique_ptr<Sampler> sampler;
     std::unique_ptr<Integrator> integrator;
+    // Notes for the user (always printed by gradus): e.g. scene parameters
+    // that an --integrator override does not use.
     std::vector<std::string> warnings;
+    // Provenance recorded in the output: resolved parameters of camera,
+    // sampler, film, filter and integrator, resolution, crop, quick flag,
+    // input files and their hash (RenderJobImage adds the render's figures).
+    Metadata provenance;
 };
 
 RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts);
 
 // A finished render: the film image with all layers after Integrator::finish,
-// with metadata (integrator, spp, seed, render_seconds, nonfinite_discarded).
+// with the job's provenance and the render's figures as typed metadata
+// (integrator, spp, seed, threads, render_seconds = everything after scene
+// loading: preprocess + passes + finish, seconds_* per phase, cpu_seconds,
+// stop_reason, nonfinite_discarded, output_values_clamped, peak_rss_mb).
 struct RenderResult {
     Image image;
     RenderStats stats;
 };
 // Preprocess, the render loop, the film image and the integrator's finish:
 // the one route from a built job to an image (gradus, tests, benchmarks).
+// opts.timeLimit bounds all of it: the loop gets what preprocessing left,
+// minus the integrator's estimate of its finish (e.g. reconstruction).
 RenderResult RenderJobImage(RenderJob &job, const RenderOptions &opts);
+
+// --param NAME=VALUE overrides for the integrator entity (typed by its
+// parameter table; located errors name the command line).
+void ApplyParamOverrides(const std::vector<std::string> &overrides, EntityDesc *integrator);
 
 // Builds only the scene (geometry, materials, lights, camera) for the given film resolution.
 std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution);

@@ -63,20 +63,26 @@ TEST(Imgtool, HelpAndBadUsage) {
     RunResult h = RunTool(dir, {"--help"});
     EXPECT_EQ(h.code, 0);
     EXPECT_NE(h.out.find("relMSE"), std::string::npos);
-    EXPECT_EQ(RunTool(dir, {}).code, 1);
+    EXPECT_EQ(RunTool(dir, {}).code, 2);
     RunResult u = RunTool(dir, {"frobnicate"});
-    EXPECT_EQ(u.code, 1);
+    EXPECT_EQ(u.code, 2);
     EXPECT_NE(u.err.find("unknown command"), std::string::npos);
     Pair p = WritePair(dir);
     RunResult o = RunTool(dir, {"diff", p.img, p.ref, "--no-such-option"});
-    EXPECT_EQ(o.code, 1);
+    EXPECT_EQ(o.code, 2);
     EXPECT_NE(o.err.find("--no-such-option"), std::string::npos);
-    EXPECT_EQ(RunTool(dir, {"diff", p.img}).code, 1);
-    EXPECT_EQ(RunTool(dir, {"diff", p.img, p.ref, "--metric", "ssim"}).code, 1);
-    EXPECT_EQ(RunTool(dir, {"diff", p.img, p.ref, "--tolerance", "abc"}).code, 1);
+    EXPECT_EQ(RunTool(dir, {"diff", p.img}).code, 2);
+    EXPECT_EQ(RunTool(dir, {"diff", p.img, p.ref, "--metric", "ssim"}).code, 2);
+    EXPECT_EQ(RunTool(dir, {"diff", p.img, p.ref, "--tolerance", "abc"}).code, 2);
     RunResult missing = RunTool(dir, {"info", dir.file("missing.exr")});
-    EXPECT_EQ(missing.code, 1);
+    EXPECT_EQ(missing.code, 2);
     EXPECT_NE(missing.err.find("missing.exr"), std::string::npos);
+    // Per-command help: that command's options only.
+    RunResult dh = RunTool(dir, {"diff", "--help"});
+    EXPECT_EQ(dh.code, 0);
+    EXPECT_NE(dh.out.find("--ref-layer"), std::string::npos);
+    EXPECT_EQ(dh.out.find("falsecolor"), std::string::npos);
+    EXPECT_EQ(dh.out.find("--weights"), std::string::npos);
 }
 
 TEST(Imgtool, DiffJsonAndTolerance) {
@@ -118,7 +124,7 @@ TEST(Imgtool, DiffSizeMismatchNaNAndOutfile) {
     std::string big = dir.file("big.exr");
     WriteImage(big, Image::RGB(3, 1));
     RunResult m = RunTool(dir, {"diff", p.img, big});
-    EXPECT_EQ(m.code, 1);
+    EXPECT_EQ(m.code, 2);
     EXPECT_NE(m.err.find("size mismatch"), std::string::npos);
 
     std::string nan = dir.file("nan.exr");
@@ -191,7 +197,7 @@ TEST(Imgtool, ConvertMergeFalsecolor) {
     Image p = ReadImage(png);
     EXPECT_NEAR(p.at(0, 0, 1), 0.5f, 0.01f);
     EXPECT_FLOAT_EQ(p.at(1, 0, 2), 1.f);  // clamped
-    EXPECT_EQ(RunTool(dir, {"convert", in, dir.file("out.bmp")}).code, 1);
+    EXPECT_EQ(RunTool(dir, {"convert", in, dir.file("out.bmp")}).code, 2);
 
     Image a = Make(1, 1, {1, 1, 1}), b = Make(1, 1, {3, 3, 3});
     a.metadata["spp"] = "10";
@@ -205,11 +211,11 @@ TEST(Imgtool, ConvertMergeFalsecolor) {
     EXPECT_EQ(m.metadata.at("spp"), "40");
     ASSERT_EQ(RunTool(dir, {"merge", out, fa, fb, "--weights", "1,1"}).code, 0);
     EXPECT_NEAR(ReadImage(out).at(0, 0, 0), 2.f, 1e-6f);
-    EXPECT_EQ(RunTool(dir, {"merge", out, fa, fb, "--weights", "1"}).code, 1);
+    EXPECT_EQ(RunTool(dir, {"merge", out, fa, fb, "--weights", "1"}).code, 2);
     std::string big = dir.file("big.exr");
     WriteImage(big, Image::RGB(2, 1));
     RunResult mm = RunTool(dir, {"merge", out, fa, big});
-    EXPECT_EQ(mm.code, 1);
+    EXPECT_EQ(mm.code, 2);
     EXPECT_NE(mm.err.find("2x1"), std::string::npos) << mm.err;
 
     std::string fc = dir.file("fc.png");
@@ -233,4 +239,47 @@ TEST(Imgtool, CornellReferencePair) {
     EXPECT_NEAR(j["mean_rel_diff"].get<double>() * 100, -0.009891, 1e-5);
     double noise = std::stod(ReadBytes(dirRef + "ref.noise"));
     EXPECT_NEAR(j["relmse"].get<double>() / 5, noise, 0.01 * noise);
+}
+
+// merge records its inputs, sums spp and render time, and refuses renders
+// that share a seed unless told otherwise.
+TEST(Imgtool, MergeProvenanceAndEqualSeeds) {
+    TempDir dir;
+    Image a = Make(1, 1, {1, 1, 1}), b = Make(1, 1, {3, 3, 3});
+    a.metadata["spp"] = MetaValue::Int(10);
+    b.metadata["spp"] = MetaValue::Int(30);
+    a.metadata["render_seconds"] = MetaValue::Double(1.5);
+    b.metadata["render_seconds"] = MetaValue::Double(2.0);
+    a.metadata["seed"] = "1";
+    b.metadata["seed"] = "1";
+    std::string fa = dir.file("a.exr"), fb = dir.file("b.exr"), out = dir.file("m.exr");
+    WriteImage(fa, a);
+    WriteImage(fb, b);
+    RunResult same = RunTool(dir, {"merge", out, fa, fb});
+    EXPECT_EQ(same.code, 2);
+    EXPECT_NE(same.err.find("same seed"), std::string::npos) << same.err;
+    ASSERT_EQ(RunTool(dir, {"merge", out, fa, fb, "--allow-equal-seeds"}).code, 0);
+    b.metadata["seed"] = "2";
+    WriteImage(fb, b);
+    ASSERT_EQ(RunTool(dir, {"merge", out, fa, fb}).code, 0);
+    Image m = ReadImage(out);
+    EXPECT_EQ(m.metadata.at("spp"), "40");
+    EXPECT_EQ(m.metadata.at("render_seconds").number(), 3.5);
+    EXPECT_NE(m.metadata.at("merged_inputs").str().find("a.exr (seed 1)"), std::string::npos);
+    EXPECT_NE(m.metadata.at("merged_inputs").str().find("b.exr (seed 2)"), std::string::npos);
+    EXPECT_EQ(m.metadata.count("seed"), 0u);
+}
+
+// --ref-layer picks the reference's layer independently of --layer.
+TEST(Imgtool, DiffRefLayer) {
+    TempDir dir;
+    Image img = Make(2, 1, {1, 1, 1, 2, 2, 2});
+    Image ref = Make(2, 1, {0, 0, 0, 0, 0, 0});
+    ref.setLayerRGB("truth", Make(2, 1, {1, 1, 1, 2, 2, 2}));
+    std::string fi = dir.file("i.exr"), fr = dir.file("r.exr");
+    WriteImage(fi, img);
+    WriteImage(fr, ref);
+    RunResult r = RunTool(dir, {"diff", fi, fr, "--ref-layer", "truth", "--metric", "mse", "--tolerance", "0"});
+    EXPECT_EQ(r.code, 0) << r.out << r.err;
+    EXPECT_EQ(RunTool(dir, {"diff", fi, fr, "--metric", "mse", "--tolerance", "0"}).code, 1);
 }

@@ -1,5 +1,9 @@
 // gradus: renders a pbrt-v3 scene.
+#include <cerrno>
 #include <chrono>
+#include <cmath>
+#include <limits>
+#include <new>
 #include <cstdio>
 #include <cstring>
 #include <iostream>
@@ -7,6 +11,7 @@
 #include <thread>
 
 #include "core/error.h"
+#include "core/provenance.h"
 #include "core/stats.h"
 #include "image/image.h"
 #include "parser/scene_desc.h"
@@ -19,12 +24,14 @@ namespace {
 const char *kUsage =
     "usage: gradus scene.pbrt [options]\n"
     "  --outfile F          output image (.exr, .png, .pfm); default: the Film's filename\n"
-    "  --nthreads N         worker threads (default: all cores)\n"
+    "  --nthreads N         worker threads, 1 to 1024 (default: all cores)\n"
     "  --spp N              samples per pixel (overrides the Sampler's)\n"
-    "  --seed S             random seed (default 0)\n"
-    "  --time S             wall-clock budget in seconds (with --spp: whichever ends first)\n"
-    "  --cropwindow x0 x1 y0 y1   render a sub-rectangle (fractions of the image)\n"
+    "  --seed S             random seed, a non-negative integer (default 0)\n"
+    "  --time S             wall-clock budget in seconds for everything after scene loading\n"
+    "                       (preprocess, passes, reconstruction; with --spp: whichever ends first)\n"
+    "  --cropwindow x0 x1 y0 y1   render a sub-rectangle (fractions of the image, in [0, 1])\n"
     "  --integrator NAME    override the scene's integrator (see --list-integrators)\n"
+    "  --param NAME=VALUE   set an integrator parameter (repeatable; see --describe NAME)\n"
     "  --debugpixel x,y[,s] re-run the samples (or sample s) of one pixel single-threaded with the\n"
     "                       random numbers of the full render; prints vertices and contributions\n"
     "                       on stdout and writes no image\n"
@@ -32,24 +39,31 @@ const char *kUsage =
     "  --stats              print the scene features after loading\n"
     "  --quiet              no progress bar or statistics\n"
     "  --list-integrators   print the available integrators\n"
-    "  --describe NAME      print an integrator's parameters (name, type, default, help)\n";
+    "  --describe NAME      print an integrator's parameters (name, type, default, help)\n"
+    "  --version            print the version and git commit\n"
+    "Exit status: 0 rendered, 1 error (message with file:line:column where it has one),\n"
+    "130 interrupted (SIGINT/SIGTERM; the image rendered so far is written).\n";
 
-[[noreturn]] void Usage(const std::string &msg) {
-    std::fprintf(stderr, "gradus: %s\n%s", msg.c_str(), kUsage);
+// A bad command line: one line saying what is wrong, exit 1.
+[[noreturn]] void Fail(const std::string &msg) {
+    std::fprintf(stderr, "gradus: %s (see gradus --help)\n", msg.c_str());
     std::exit(1);
 }
 
-long ParseInt(const std::string &opt, const char *s) {
+long long ParseInt(const std::string &opt, const char *s, long long lo, long long hi) {
     char *end;
-    long v = std::strtol(s, &end, 10);
-    if (*s == 0 || *end != 0) Usage(opt + " expects an integer, got \"" + s + "\"");
+    errno = 0;
+    long long v = std::strtoll(s, &end, 10);
+    if (*s == 0 || *end != 0 || errno == ERANGE) Fail(opt + " expects an integer, got \"" + std::string(s) + "\"");
+    if (v < lo || v > hi)
+        Fail(opt + " must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + std::to_string(v));
     return v;
 }
 
 double ParseDouble(const std::string &opt, const char *s) {
     char *end;
     double v = std::strtod(s, &end);
-    if (*s == 0 || *end != 0) Usage(opt + " expects a number, got \"" + s + "\"");
+    if (*s == 0 || *end != 0 || !std::isfinite(v)) Fail(opt + " expects a finite number, got \"" + std::string(s) + "\"");
     return v;
 }
 
@@ -79,7 +93,7 @@ int main(int argc, char **argv) {
     for (int i = 1; i < argc; ++i) {
         std::string a = argv[i];
         auto next = [&](int n = 1) {
-            if (i + n >= argc) Usage(a + " needs " + std::to_string(n) + " value(s)");
+            if (i + n >= argc) Fail(a + " needs " + std::to_string(n) + " value" + (n > 1 ? "s" : ""));
             return argv[++i];
         };
         if (a == "--help" || a == "-h") {
@@ -91,16 +105,20 @@ int main(int argc, char **argv) {
             return 0;
         } else if (a == "--describe") {
             return Describe(next());
+        } else if (a == "--version") {
+            std::printf("gradus %s (%s)\n", GradusVersion(), GradusGitCommit());
+            return 0;
+        } else if (a == "--param") {
+            bo.paramOverrides.push_back(next());
         } else if (a == "--outfile") {
             bo.outfileOverride = next();
         } else if (a == "--nthreads") {
-            ro.nthreads = int(ParseInt(a, next()));
+            ro.nthreads = int(ParseInt(a, next(), 1, 1024));
         } else if (a == "--spp") {
-            bo.sppOverride = int(ParseInt(a, next()));
-            if (bo.sppOverride <= 0) Usage("--spp must be positive");
+            bo.sppOverride = int(ParseInt(a, next(), 1, 1 << 30));
             ro.spp = bo.sppOverride;
         } else if (a == "--seed") {
-            bo.seed = uint64_t(ParseInt(a, next()));
+            bo.seed = uint64_t(ParseInt(a, next(), 0, std::numeric_limits<long long>::max()));
         } else if (a == "--debugpixel") {
             const char *v = next();
             int x, y, s = -1, n = 0;
@@ -109,17 +127,21 @@ int main(int argc, char **argv) {
             if (got == 2 && v[n] == ',') got = std::sscanf(v, "%d,%d,%d %c", &x, &y, &s, &extra) == 3 ? 3 : -1;
             else if (got == 2 && v[n] != 0) got = -1;
             if (got < 2 || x < 0 || y < 0 || (got == 3 && s < 0))
-                Usage("--debugpixel expects x,y or x,y,s (non-negative integers), got \"" + std::string(v) + "\"");
+                Fail("--debugpixel expects x,y or x,y,s (non-negative integers), got \"" + std::string(v) + "\"");
             ro.debug = true;
             ro.debugPixel = {x, y};
             ro.debugSample = s;
         } else if (a == "--time") {
             ro.timeLimit = ParseDouble(a, next());
-            if (!(ro.timeLimit > 0)) Usage("--time must be positive");
+            if (!(ro.timeLimit > 0)) Fail("--time must be a positive number of seconds, got " + std::string(argv[i]));
         } else if (a == "--cropwindow") {
-            if (i + 4 >= argc) Usage("--cropwindow needs 4 values");
+            if (i + 4 >= argc) Fail("--cropwindow needs 4 values");
             bo.hasCrop = true;
-            for (int k = 0; k < 4; ++k) bo.crop[k] = ParseDouble(a, argv[++i]);
+            for (int k = 0; k < 4; ++k) {
+                bo.crop[k] = ParseDouble(a, argv[++i]);
+                if (bo.crop[k] < 0 || bo.crop[k] > 1) Fail("--cropwindow values must be in [0, 1], got " + std::string(argv[i]));
+            }
+            if (bo.crop[0] >= bo.crop[1] || bo.crop[2] >= bo.crop[3]) Fail("--cropwindow needs x0 < x1 and y0 < y1");
         } else if (a == "--integrator") {
             bo.integratorOverride = next();
         } else if (a == "--quick") {
@@ -129,21 +151,29 @@ int main(int argc, char **argv) {
         } else if (a == "--stats") {
             printStats = true;
         } else if (!a.empty() && a[0] == '-') {
-            Usage("unknown option " + a);
+            Fail("unknown option " + a);
         } else if (sceneFile.empty()) {
             sceneFile = a;
         } else {
-            Usage("more than one scene file given");
+            Fail("more than one scene file given");
         }
     }
-    if (sceneFile.empty()) Usage("no scene file given");
+    if (sceneFile.empty()) {
+        std::fprintf(stderr, "gradus: no scene file given\n%s", kUsage);
+        return 1;
+    }
+    std::string commandLine;
+    for (int i = 0; i < argc; ++i) commandLine += (i ? " " : "") + std::string(argv[i]);
 
     try {
+        // The output is checked before anything is loaded (again once the Film's name is known).
+        if (!bo.outfileOverride.empty()) CheckWritableImagePath(bo.outfileOverride);
         auto t0 = std::chrono::steady_clock::now();
+        ResetInputFiles();
         SceneDesc desc = ParseFile(sceneFile);
         RenderJob job = BuildRenderJob(desc, bo);
-        if (printStats)  // notes about the scene integrator's parameters that an override ignores
-            for (const auto &w : job.warnings) std::fprintf(stderr, "note: %s\n", w.c_str());
+        // Always said: e.g. scene parameters an --integrator override does not use.
+        for (const auto &w : job.warnings) std::fprintf(stderr, "note: %s\n", w.c_str());
         double loadSec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         if (printStats) std::fprintf(stderr, "%s", job.scene->features.describe().c_str());
         if (ro.spp <= 0) ro.spp = job.sampler->samplesPerPixel();
@@ -157,6 +187,8 @@ int main(int argc, char **argv) {
         const RenderStats &rs = res.stats;
         Image &img = res.image;
         img.metadata["scene"] = sceneFile;
+        img.metadata["command_line"] = commandLine;
+        img.metadata["scene_load_seconds"] = MetaValue::Double(loadSec);
         if (ro.debug) {
             std::fprintf(stderr, "--debugpixel: no image written\n");
             return 0;
@@ -174,6 +206,9 @@ int main(int argc, char **argv) {
             std::fprintf(stderr, "Wrote %s\n", job.film->filename().c_str());
         }
         return rs.interrupted ? 130 : 0;
+    } catch (const std::bad_alloc &) {
+        std::fprintf(stderr, "gradus: out of memory\n");
+        return 1;
     } catch (const std::exception &e) {
         std::fprintf(stderr, "%s\n", e.what());
         return 1;

@@ -1,5 +1,6 @@
 // imgtool: compare, convert, inspect, merge and false-colour images.
-// Every failure prints "imgtool: error: ..." on stderr and exits 1.
+// Exit status: 0 success, 1 a tolerance was exceeded (diff --tolerance),
+// 2 an error (printed as "imgtool: error: ..." on stderr).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -20,12 +21,14 @@ using nlohmann::json;
 
 namespace {
 
-const char *kUsage = R"(usage: imgtool <command> [arguments] [options]
-
-commands:
-  diff A B      compare image A against the reference B (on R,G,B)
+struct CommandHelp {
+    const char *name, *text;
+};
+const CommandHelp kHelp[] = {
+    {"diff", R"(  diff A B      compare image A against the reference B (on R,G,B)
       --layer NAME            layer of A to compare (default: unprefixed R,G,B, else the
                               first layer with R,G,B); B uses the same layer if it has it
+      --ref-layer NAME        layer of B to compare (default: as above)
       --discard-fraction F    ignore the fraction F in [0,1) of finite pixels with the
                               highest per-pixel relMSE (averaged over channels)
       --discard-count N       ignore N more of the highest-error pixels
@@ -38,20 +41,37 @@ commands:
     Metrics: MSE = mean (X-R)^2; RMSE = sqrt(MSE); PSNR = 10 log10(1/MSE) (peak 1.0);
     relMSE = mean over pixels and channels of (X-R)^2/(R^2+0.001). Pixels with NaN/Inf
     in A or B are counted, reported and excluded from every figure.
-  convert IN OUT                 EXR/PNG/PFM -> EXR/PNG/PFM (PNG: clamped 8-bit sRGB)
+)"},
+    {"convert", R"(  convert IN OUT                 EXR/PNG/PFM -> EXR/PNG/PFM (PNG: clamped 8-bit sRGB)
       --exposure EV           multiply by 2^EV
       --scale S               multiply by S
       --layer NAME            write only this layer, as R,G,B
-  info FILE                      size, channels, NaN/Inf per layer, min/max/mean, metadata
+)"},
+    {"info", R"(  info FILE                      size, channels, NaN/Inf per layer, min/max/mean, metadata
       --json                  print one JSON object
-  merge OUT IN1 [IN2 ...]        weighted average of images (every channel)
+)"},
+    {"merge", R"(  merge OUT IN1 [IN2 ...]        weighted average of images (every channel)
       --weights w1,w2,...     explicit weights (default: "spp" metadata of every
                               input when all have it, else equal weights)
-  falsecolor A REF OUT.png       per-pixel relMSE of A vs REF as a colour ramp
+      --allow-equal-seeds     merge renders that share a seed (correlated: refused by default)
+    The output records its inputs (merged_inputs), the summed spp and render_seconds, and
+    keeps the first input's other metadata.
+)"},
+    {"falsecolor", R"(  falsecolor A REF OUT.png       per-pixel relMSE of A vs REF as a colour ramp
       --max V                 value mapped to white (default: 99th percentile)
       --layer NAME            as for diff
-  --help                         this text (also: imgtool <command> --help)
-)";
+      --ref-layer NAME        as for diff
+)"},
+};
+
+std::string Usage() {
+    std::string u = "usage: imgtool <command> [arguments] [options]\n\ncommands:\n";
+    for (const CommandHelp &h : kHelp) u += h.text;
+    u += "  --help                         this text (also: imgtool <command> --help)\n"
+         "exit status: 0 success, 1 tolerance exceeded (diff --tolerance), 2 error\n";
+    return u;
+}
+
 
 // Parsed command line of one command: positionals and --options.
 struct Args {
@@ -128,6 +148,7 @@ json JsonNumber(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 CompareOptions CompareOpts(const Args &a) {
     CompareOptions o;
     if (a.has("layer")) o.layer = a.opt.at("layer");
+    if (a.has("ref-layer")) o.refLayer = a.opt.at("ref-layer");
     if (a.has("discard-fraction"))
         o.discardFraction = ParseDouble("--discard-fraction", a.opt.at("discard-fraction"));
     if (a.has("discard-count")) o.discardCount = ParseCount("--discard-count", a.opt.at("discard-count"));
@@ -144,7 +165,7 @@ void NeedPositionals(const Args &a, size_t n, const std::string &cmd, bool atLea
 
 int CmdDiff(const std::vector<std::string> &argv) {
     Args a = Parse(argv,
-                   {"layer", "discard-fraction", "discard-count", "tolerance", "metric", "outfile",
+                   {"layer", "ref-layer", "discard-fraction", "discard-count", "tolerance", "metric", "outfile",
                     "epsilon"},
                    {"json"});
     NeedPositionals(a, 2, "diff");
@@ -262,7 +283,14 @@ int CmdInfo(const std::vector<std::string> &argv) {
             jc.push_back({{"name", s.name}, {"min", s.min}, {"max", s.max}, {"mean", s.mean},
                           {"nan", s.nan}, {"inf", s.inf}, {"finite", s.finite}});
         j["channel_stats"] = jc;
-        j["metadata"] = img.metadata;
+        json meta = json::object();
+        for (const auto &kv : img.metadata) {
+            const MetaValue &v = kv.second;
+            if (v.type() == MetaValue::Type::Int) meta[kv.first] = (long long)v.number();
+            else if (v.type() == MetaValue::Type::Double) meta[kv.first] = JsonNumber(v.number());
+            else meta[kv.first] = v.str();
+        }
+        j["metadata"] = meta;
         std::cout << j.dump() << "\n";
         return 0;
     }
@@ -288,10 +316,21 @@ int CmdInfo(const std::vector<std::string> &argv) {
 }
 
 int CmdMerge(const std::vector<std::string> &argv) {
-    Args a = Parse(argv, {"weights"}, {});
+    Args a = Parse(argv, {"weights"}, {"allow-equal-seeds"});
     NeedPositionals(a, 2, "merge", true);
     std::vector<Image> images;
     for (size_t i = 1; i < a.pos.size(); ++i) images.push_back(ReadImage(a.pos[i]));
+    // Renders with the same seed (and scene) repeat the same random numbers:
+    // their average is no better than one of them.
+    std::map<std::string, size_t> seeds;
+    for (size_t k = 0; k < images.size(); ++k) {
+        auto it = images[k].metadata.find("seed");
+        if (it == images[k].metadata.end()) continue;
+        auto [at, fresh] = seeds.insert({it->second.str(), k});
+        if (!fresh && !a.has("allow-equal-seeds"))
+            throw Error("merge: " + a.pos[at->second + 1] + " and " + a.pos[k + 1] + " have the same seed " +
+                        it->second.str() + " (correlated renders; --allow-equal-seeds merges them anyway)");
+    }
     std::vector<double> weights;
     std::string source;
     if (a.has("weights")) {
@@ -309,6 +348,21 @@ int CmdMerge(const std::vector<std::string> &argv) {
     }
     long long skipped = 0;
     Image out = MergeImages(images, weights, &skipped);
+    // Provenance: the inputs and the summed render time.
+    std::string inputs;
+    double seconds = 0;
+    bool allTimed = true;
+    for (size_t k = 0; k < images.size(); ++k) {
+        inputs += (k ? "; " : "") + a.pos[k + 1];
+        auto sd = images[k].metadata.find("seed");
+        if (sd != images[k].metadata.end()) inputs += " (seed " + sd->second.str() + ")";
+        auto t = images[k].metadata.find("render_seconds");
+        if (t == images[k].metadata.end()) allTimed = false;
+        else seconds += t->second.number();
+    }
+    out.metadata["merged_inputs"] = inputs;
+    if (allTimed) out.metadata["render_seconds"] = MetaValue::Double(seconds);
+    out.metadata.erase("seed");
     WriteImage(a.pos[0], out);
     std::cout << "merged " << images.size() << " images into " << a.pos[0] << ", weights ("
               << source << "):";
@@ -320,7 +374,7 @@ int CmdMerge(const std::vector<std::string> &argv) {
 }
 
 int CmdFalsecolor(const std::vector<std::string> &argv) {
-    Args a = Parse(argv, {"max", "layer", "epsilon"}, {});
+    Args a = Parse(argv, {"max", "layer", "ref-layer", "epsilon"}, {});
     NeedPositionals(a, 3, "falsecolor");
     CompareOptions opts = CompareOpts(a);
     Image img = ReadImage(a.pos[0]), ref = ReadImage(a.pos[1]);
@@ -359,19 +413,26 @@ bool WantsHelp(const std::vector<std::string> &args) {
     return false;
 }
 
+constexpr int kExitError = 2;
+
 }  // namespace
 
 int main(int argc, char **argv) {
     std::vector<std::string> args(argv + 1, argv + argc);
     if (args.empty()) {
-        std::cerr << kUsage;
-        return 1;
-    }
-    if (WantsHelp(args)) {
-        std::cout << kUsage;
-        return 0;
+        std::cerr << Usage();
+        return kExitError;
     }
     std::string cmd = args[0];
+    if (WantsHelp(args)) {  // imgtool CMD --help: that command's text only
+        for (const CommandHelp &h : kHelp)
+            if (cmd == h.name) {
+                std::cout << "usage: imgtool " << h.text << "exit status: 0 success, 1 tolerance exceeded, 2 error\n";
+                return 0;
+            }
+        std::cout << Usage();
+        return 0;
+    }
     std::vector<std::string> rest(args.begin() + 1, args.end());
     try {
         if (cmd == "diff") return CmdDiff(rest);
@@ -383,6 +444,6 @@ int main(int argc, char **argv) {
                     "\" (valid: diff, convert, info, merge, falsecolor; see imgtool --help)");
     } catch (const std::exception &e) {
         std::cerr << "imgtool: error: " << e.what() << "\n";
-        return 1;
+        return kExitError;
     }
 }

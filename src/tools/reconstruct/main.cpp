@@ -158,14 +158,16 @@ int Run(int argc, char **argv) {
     if (ext != "exr" && ext != "png" && ext != "pfm")
         Fail("--outfile '" + out + "' must end in .exr, .png or .pfm");
 
-    // Inputs.
+    // Inputs. The render's metadata and crop placement are carried through.
     GradientImages in;
+    Image source;
     const bool separate = opt.count("--primal") || opt.count("--dx") || opt.count("--dy");
     if (separate) {
         if (!pos.empty()) Fail("give either one multi-layer input or --primal/--dx/--dy, not both");
         for (const char *k : {"--primal", "--dx", "--dy"})
             if (!opt.count(k)) Fail(std::string("missing ") + k + " (separate inputs need --primal, --dx and --dy)");
-        in = GradientImagesFromImages(ReadImage(opt["--primal"]), ReadImage(opt["--dx"]), ReadImage(opt["--dy"]));
+        source = ReadImage(opt["--primal"]);
+        in = GradientImagesFromImages(source, ReadImage(opt["--dx"]), ReadImage(opt["--dy"]));
         const int nv = int(opt.count("--primal-var") + opt.count("--dx-var") + opt.count("--dy-var"));
         if (nv != 0 && nv != 3) Fail("give all of --primal-var, --dx-var and --dy-var, or none");
         if (nv == 3) {
@@ -182,6 +184,7 @@ int Run(int argc, char **argv) {
         for (const char *k : {"--primal-var", "--dx-var", "--dy-var"})
             if (opt.count(k)) Fail(std::string(k) + " goes with --primal/--dx/--dy; a multi-layer input carries its own variance layers");
         Image img = ReadImage(pos[0]);
+        source = img;
         try {
             in = GradientImagesFromImage(img);
         } catch (const Error &e) {
@@ -192,10 +195,16 @@ int Run(int argc, char **argv) {
     ReconstructionResult r = Reconstruct(in, o);
     Image result = ResultToImage(r);
     const ReconstructionStats &st = r.stats;
+    result.metadata = source.metadata;
+    result.originX = source.originX, result.originY = source.originY;
+    result.displayWidth = source.displayWidth, result.displayHeight = source.displayHeight;
     result.metadata["reconstruction"] = st.method;
     result.metadata["reconstruction_norm"] = ReconstructionNormName(o.norm);
-    result.metadata["reconstruction_alpha"] = std::to_string(o.alpha);
-    result.metadata["reconstruction_seconds"] = std::to_string(st.seconds);
+    result.metadata["reconstruction_alpha"] = MetaValue::Double(o.alpha);
+    result.metadata["reconstruction_seconds"] = MetaValue::Double(st.seconds);
+    std::string cmd;
+    for (int i = 0; i < argc; ++i) cmd += (i ? " " : "") + std::string(argv[i]);
+    result.metadata["reconstruct_command_line"] = cmd;
     WriteImage(out, result);
     std::string png;
     if (ext == "exr" && !opt.count("--no-png")) {

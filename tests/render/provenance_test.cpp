@@ -1,0 +1,204 @@
+// What a render records and refuses (issue "Results a researcher can
+// reproduce"): typed provenance metadata, the scene hash over included files,
+// crop placement, --param, notes about dropped parameters, outputs checked
+// before rendering, time budgets that include reconstruction.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "image/image.h"
+
+namespace fs = std::filesystem;
+using gradus::Image;
+using gradus::MetaValue;
+using gradus::ReadImage;
+
+namespace {
+
+class Provenance : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        dir_ = fs::temp_directory_path() / ("gradus_prov_" + std::to_string(::getpid()) + "_" +
+                                            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::create_directories(dir_);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+    std::string write(const std::string &name, const std::string &text) {
+        std::ofstream(dir_ / name) << text;
+        return (dir_ / name).string();
+    }
+    struct Run {
+        int status;
+        std::string err;
+        double wall;
+    };
+    Run run(const std::string &args) {
+        std::string errFile = (dir_ / "stderr.txt").string();
+        std::string cmd = "cd '" + dir_.string() + "' && '" + GRADUS_BIN + "' " + args + " 2> '" + errFile + "' > /dev/null";
+        auto t0 = std::chrono::steady_clock::now();
+        int st = std::system(cmd.c_str());
+        double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        std::ifstream in(errFile);
+        std::stringstream ss;
+        ss << in.rdbuf();
+        return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, ss.str(), wall};
+    }
+    Image image(const std::string &name) { return ReadImage((dir_ / name).string()); }
+    fs::path dir_;
+};
+
+const char *kScene =
+    "LookAt 0 0 -3  0 0 0  0 1 0\n"
+    "Camera \"perspective\" \"float fov\" [40]\n"
+    "Film \"image\" \"integer xresolution\" [20] \"integer yresolution\" [16] \"string filename\" [\"out.exr\"]\n"
+    "Integrator \"bdpt\" \"integer maxdepth\" [3] \"string misheuristic\" \"power\"\n"
+    "WorldBegin\n"
+    "Include \"lights.pbrt\"\n"
+    "Material \"matte\"\n"
+    "Shape \"sphere\" \"float radius\" [1]\n"
+    "WorldEnd\n";
+
+}  // namespace
+
+TEST_F(Provenance, TypedMetadataOfEveryRender) {
+    write("scene.pbrt", kScene);
+    write("lights.pbrt", "LightSource \"point\" \"point from\" [0 0 -3] \"rgb I\" [5 5 5]\n");
+    Run r = run("scene.pbrt --spp 2 --seed 9 --nthreads 2 --quiet");
+    ASSERT_EQ(r.status, 0) << r.err;
+    Image img = image("out.exr");
+    auto &m = img.metadata;
+    for (const char *k : {"gradus_version", "command_line", "camera", "sampler", "film", "pixelfilter",
+                          "integrator_parameters", "resolution", "cropwindow", "scene_hash", "scene"})
+        EXPECT_EQ(m.at(k).type(), MetaValue::Type::String) << k;
+    for (const char *k : {"spp", "passes", "threads", "quick", "scene_files", "nonfinite_discarded"})
+        EXPECT_EQ(m.at(k).type(), MetaValue::Type::Int) << k;
+    for (const char *k : {"render_seconds", "seconds_preprocess", "seconds_passes", "seconds_finish", "cpu_seconds",
+                          "peak_rss_mb", "scene_load_seconds"})
+        EXPECT_EQ(m.at(k).type(), MetaValue::Type::Double) << k;
+    EXPECT_EQ(m.at("spp"), "2");
+    EXPECT_EQ(m.at("seed"), "9");
+    EXPECT_EQ(m.at("threads"), "2");
+    EXPECT_EQ(m.at("scene_files"), "2");  // the scene and its Include
+    EXPECT_EQ(m.at("stop_reason"), "completed");
+    EXPECT_EQ(m.at("resolution"), "20x16");
+    EXPECT_NE(m.at("command_line").str().find("--seed 9"), std::string::npos);
+    // Resolved parameters, given and default.
+    EXPECT_NE(m.at("integrator_parameters").str().find("\"integer maxdepth\" 3"), std::string::npos) << m.at("integrator_parameters");
+    EXPECT_NE(m.at("integrator_parameters").str().find("\"integer rrdepth\" 3"), std::string::npos) << m.at("integrator_parameters");
+    EXPECT_NE(m.at("camera").str().find("\"float fov\" 40"), std::string::npos) << m.at("camera");
+    EXPECT_GT(m.at("peak_rss_mb").number(), 1);
+    const double total = m.at("render_seconds").number();
+    EXPECT_NEAR(total, m.at("seconds_preprocess").number() + m.at("seconds_passes").number() +
+                           m.at("seconds_finish").number(), 1e-3);
+}
+
+TEST_F(Provenance, SceneHashCoversIncludedFiles) {
+    write("scene.pbrt", kScene);
+    write("lights.pbrt", "LightSource \"point\" \"point from\" [0 0 -3] \"rgb I\" [5 5 5]\n");
+    ASSERT_EQ(run("scene.pbrt --spp 1 --quiet").status, 0);
+    std::string h1 = image("out.exr").metadata.at("scene_hash");
+    ASSERT_EQ(run("scene.pbrt --spp 1 --quiet --seed 4").status, 0);
+    EXPECT_EQ(image("out.exr").metadata.at("scene_hash").str(), h1);  // same inputs, same hash
+    write("lights.pbrt", "LightSource \"point\" \"point from\" [0 0 -3] \"rgb I\" [5 5 6]\n");
+    ASSERT_EQ(run("scene.pbrt --spp 1 --quiet").status, 0);
+    EXPECT_NE(image("out.exr").metadata.at("scene_hash").str(), h1);
+}
+
+TEST_F(Provenance, CropKeepsItsPlaceAndPixels) {
+    write("scene.pbrt", kScene);
+    write("lights.pbrt", "LightSource \"point\" \"point from\" [0 0 -3] \"rgb I\" [5 5 5]\n");
+    ASSERT_EQ(run("scene.pbrt --spp 4 --quiet --integrator path --outfile full.exr").status, 0);
+    ASSERT_EQ(run("scene.pbrt --spp 4 --quiet --integrator path --outfile crop.exr --cropwindow 0.25 0.75 0.5 1").status, 0);
+    Image full = image("full.exr"), crop = image("crop.exr");
+    ASSERT_EQ(crop.width(), 10);
+    ASSERT_EQ(crop.height(), 8);
+    EXPECT_EQ(crop.originX, 5);
+    EXPECT_EQ(crop.originY, 8);
+    EXPECT_EQ(crop.displayWidth, 20);
+    EXPECT_EQ(crop.displayHeight, 16);
+    // Random numbers are addressed by pixel: the crop is the full render's pixels.
+    for (int y = 0; y < crop.height(); ++y)
+        for (int x = 0; x < crop.width(); ++x)
+            for (int c = 0; c < 3; ++c) ASSERT_EQ(crop.at(x, y, c), full.at(x + 5, y + 8, c)) << x << "," << y;
+}
+
+TEST_F(Provenance, ParamOverridesAndDroppedParametersAreSaid) {
+    write("scene.pbrt", kScene);
+    write("lights.pbrt", "LightSource \"point\" \"point from\" [0 0 -3] \"rgb I\" [5 5 5]\n");
+    Run r = run("scene.pbrt --spp 1 --quiet --param maxdepth=1 --param misheuristic=balance");
+    ASSERT_EQ(r.status, 0) << r.err;
+    std::string ip = image("out.exr").metadata.at("integrator_parameters");
+    EXPECT_NE(ip.find("\"integer maxdepth\" 1"), std::string::npos) << ip;
+    EXPECT_NE(ip.find("\"string misheuristic\" \"balance\""), std::string::npos) << ip;
+    Run bad = run("scene.pbrt --spp 1 --quiet --param maxdepth=x");
+    EXPECT_EQ(bad.status, 1);
+    EXPECT_NE(bad.err.find("--param maxdepth"), std::string::npos) << bad.err;
+    EXPECT_EQ(run("scene.pbrt --spp 1 --quiet --param nosuch=1").status, 1);
+    // The scene's bdpt parameter misheuristic is not path's: said even with --quiet.
+    Run o = run("scene.pbrt --spp 1 --quiet --integrator path");
+    ASSERT_EQ(o.status, 0) << o.err;
+    EXPECT_NE(o.err.find("misheuristic"), std::string::npos) << o.err;
+    EXPECT_NE(o.err.find("is ignored by \"path\""), std::string::npos) << o.err;
+}
+
+TEST_F(Provenance, OutputsAreCheckedBeforeRendering) {
+    write("scene.pbrt", kScene);
+    write("lights.pbrt", "LightSource \"point\" \"point from\" [0 0 -3] \"rgb I\" [5 5 5]\n");
+    // A render of 10^8 spp would take hours: these must fail at once.
+    for (const char *out : {"/nonexistent/x.exr", "x.tiff"}) {
+        Run r = run(std::string("scene.pbrt --spp 100000000 --quiet --outfile ") + out);
+        EXPECT_EQ(r.status, 1) << out;
+        EXPECT_LT(r.wall, 10) << out;
+        EXPECT_NE(r.err.find(out), std::string::npos) << r.err;
+    }
+    // The same for the Film's own filename.
+    std::string s = kScene;
+    s.replace(s.find("\"out.exr\""), 9, "\"missing/out.exr\"");
+    write("badfilm.pbrt", s);
+    Run r = run("badfilm.pbrt --spp 100000000 --quiet");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_LT(r.wall, 10);
+    EXPECT_NE(r.err.find("missing"), std::string::npos) << r.err;
+}
+
+TEST_F(Provenance, PbrtIntegratorsWeLackAndRestrictingPixelBoundsAreNamed) {
+    write("lights.pbrt", "LightSource \"point\" \"point from\" [0 0 -3] \"rgb I\" [5 5 5]\n");
+    std::string s = kScene;
+    const std::string line = "Integrator \"bdpt\" \"integer maxdepth\" [3] \"string misheuristic\" \"power\"";
+    s.replace(s.find(line), line.size(), "Integrator \"sppm\"");
+    write("sppm.pbrt", s);
+    Run r = run("sppm.pbrt --spp 1 --quiet");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("sppm.pbrt:4:1"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("pbrt-v3 feature that Gradus does not support"), std::string::npos) << r.err;
+    std::string pb = kScene;
+    pb.replace(pb.find("\"string misheuristic\" \"power\""), 29, "\"integer pixelbounds\" [0 10 0 16]");
+    write("pb.pbrt", pb);
+    r = run("pb.pbrt --spp 1 --quiet");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("pixelbounds"), std::string::npos) << r.err;
+    pb.replace(pb.find("[0 10 0 16]"), 11, "[0 20 0 16]");  // the whole film: accepted
+    write("pb.pbrt", pb);
+    EXPECT_EQ(run("pb.pbrt --spp 1 --quiet").status, 0);
+}
+
+// --time covers everything after scene loading, reconstruction included: a
+// gradient render ends within the budget plus one pass.
+TEST_F(Provenance, TimeBudgetIncludesReconstruction) {
+    write("scene.pbrt", kScene);
+    write("lights.pbrt", "LightSource \"point\" \"point from\" [0 0 -3] \"rgb I\" [5 5 5]\n");
+    Run r = run("scene.pbrt --quiet --integrator gpt --time 1.0");
+    ASSERT_EQ(r.status, 0) << r.err;
+    const gradus::Metadata m = image("out.exr").metadata;
+    const double total = m.at("render_seconds").number(), passes = m.at("seconds_passes").number();
+    const double onePass = passes / std::max(1.0, m.at("passes").number());
+    EXPECT_EQ(m.at("stop_reason"), "time budget");
+    EXPECT_GT(m.at("seconds_finish").number(), 0);
+    // Slack: one pass (the loop's rule) plus 0.1 s for the finish estimate's error.
+    EXPECT_LE(total, 1.0 + onePass + 0.1) << "finish " << m.at("seconds_finish") << ", pass " << onePass;
+}

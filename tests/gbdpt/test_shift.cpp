@@ -8,6 +8,7 @@
 #include "gbdpt_test_util.h"
 #include "integrators/gbdpt/gbdpt.h"
 #include "integrators/manifold/manifold.h"
+#include "integrators/manifold/manifold_scene.h"
 
 using namespace gradus;
 using namespace gradus::gbdpttest;

@@ -50,7 +50,7 @@
 #include <cstdint>
 
 #include "integrators/common/bidir.h"
-#include "integrators/gbdpt/manifold_scene.h"
+#include "integrators/manifold/manifold_scene.h"
 #include "integrators/gradient/shift.h"
 
 namespace gradus {

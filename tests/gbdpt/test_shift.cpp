@@ -1,4 +1,5 @@
-// G-BDPT shift tests: Jacobians against finite differences, invertibility of
+// Tests of the subpath shifts (gradient/camera_shift.h, lighttracing_shift.h)
+// as G-BDPT sets them up: Jacobians against finite differences, invertibility of
 // the camera-subpath shift and the Eq. 8 weight identity on random paths.
 #include <gtest/gtest.h>
 
@@ -7,6 +8,8 @@
 
 #include "gbdpt_test_util.h"
 #include "integrators/gbdpt/gbdpt.h"
+#include "integrators/gradient/camera_shift.h"
+#include "integrators/gradient/lighttracing_shift.h"
 #include "integrators/manifold/manifold.h"
 #include "integrators/manifold/manifold_scene.h"
 
@@ -208,7 +211,7 @@ ShiftSubpath ReversedTail(const BidirContext &bc, const ShiftSubpath &x, int s, 
 // sum_st [w_ij,st(x) + w_ji,st(T_ij x)] = 1.
 TEST(GBDPTShift, CombinedWeightsOfAllStrategiesSumToOne) {
     Fixture f;
-    const GBDPTShiftContext &sc = f.g->shiftContext();
+    const SubpathShiftContext &sc = f.g->shiftContext();
     const BidirContext &bc = f.g->bidirContext();
     std::unique_ptr<Sampler> sampler = f.job.sampler->clone();
     Arena arena;
@@ -233,7 +236,7 @@ TEST(GBDPTShift, CombinedWeightsOfAllStrategiesSumToOne) {
         if (corner) continue;
         PrepareSubpath(sc, &x);
         CameraShift sh;
-        GBDPTLocalStats st;
+        SubpathShiftStats st;
         ShiftCameraSubpath(sc, x, cs, {1, 0}, arena, &sh, &st);
         if (sh.validUpTo != n - 1) continue;  // a failed path falls back as a whole
         double sum = 0, sumx = 0;
@@ -286,7 +289,7 @@ TEST(GBDPTShift, CombinedWeightsOfAllStrategiesSumToOne) {
 TEST(GBDPTShift, CameraShiftIsInvertibleAndWeightsPair) {
     for (const char *line : {"Integrator \"gbdpt\"", "Integrator \"gbdpt\" \"string shift\" \"halfvector\""}) {
         Fixture f(line);
-        const GBDPTShiftContext &sc = f.g->shiftContext();
+        const SubpathShiftContext &sc = f.g->shiftContext();
         const BidirContext &bc = f.g->bidirContext();
         std::unique_ptr<Sampler> sampler = f.job.sampler->clone();
         Arena arena;
@@ -305,7 +308,7 @@ TEST(GBDPTShift, CameraShiftIsInvertibleAndWeightsPair) {
             x.n = GenerateCameraSubpath(bc, ray, *sampler, arena, maxV, x.v, x.b);
             PrepareSubpath(sc, &x);
             CameraShift fwd, back;
-            GBDPTLocalStats st;
+            SubpathShiftStats st;
             ShiftCameraSubpath(sc, x, cs, {1, 0}, arena, &fwd, &st);
             if (fwd.r < 0 || fwd.validUpTo != x.n - 1) continue;
             // Paths through the box's corners (vertices within 1e-2 of each other)
@@ -315,7 +318,7 @@ TEST(GBDPTShift, CameraShiftIsInvertibleAndWeightsPair) {
             if (corner) continue;
             CameraSample cs2 = cs;
             cs2.pFilm.x += 1;
-            GBDPTLocalStats stb;
+            SubpathShiftStats stb;
             ShiftCameraSubpath(sc, fwd.y, cs2, {-1, 0}, arena, &back, &stb);
             // The inverse must succeed where the forward shift did (else the
             // fallback would be one-sided); single-precision hits make rare

@@ -12,16 +12,14 @@ namespace gradus {
 std::unique_ptr<Integrator> CreateGBDPTIntegrator(const EntityDesc &d) { return std::make_unique<GBDPTIntegrator>(d); }
 
 namespace {
-Spectrum SafeRatio(const Spectrum &a, const Spectrum &b) {
-    return Spectrum(b.r != 0 ? a.r / b.r : 0, b.g != 0 ? a.g / b.g : 0, b.b != 0 ? a.b / b.b : 0);
-}
 // Layers of the light-tracing buffer (same meaning as GradientFilm's).
 enum { LPrimal, LPrimalSq, LDxF, LDxFSq, LDxB, LDxBSq, LDyF, LDyFSq, LDyB, LDyBSq, LNum };
 }  // namespace
 
 struct GBDPTIntegrator::ThreadState {
-    GBDPTLocalStats stats;
-    uint64_t cases[3] = {};  // base connections by case
+    SubpathShiftStats shift;
+    // By case (i), (ii), (iii): base connections, gradient samples, shifted ones.
+    uint64_t cases[3] = {}, caseAttempts[3] = {}, caseSuccesses[3] = {};
 };
 struct GBDPTIntegrator::Store {
     tbb::enumerable_thread_specific<ThreadState> threads;
@@ -135,7 +133,7 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                                        const bool inside[kNumNeighbours], std::vector<Splat> *splats) const {
     GradientSample out;
     ThreadState &ts = local();
-    GBDPTLocalStats &st = ts.stats;
+    SubpathShiftStats &st = ts.shift;
     const Scene &scene = *scene_;
     Ray ray;
     Float w = scene.camera->generateRay(cs, &ray);
@@ -245,10 +243,10 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                     Float wy = 0, rho = 0;
                     bool shifted = false;
                     if (lightTracing_) {
-                        ++st.caseAttempts[2];
+                        ++ts.caseAttempts[2];
                         shifted = ShiftLightTracingPath(sctx_, light, s, lens, r.pRaster, r.unweighted, off, arena,
                                                         &fy, &wy, &rho, &st);
-                        if (shifted) ++st.caseSuccesses[2];
+                        if (shifted) ++ts.caseSuccesses[2];
                     }
                     if (shifted) {
                         Float wg = mis_ == MIS::Combined ? CombinedWeight(wx, wy, rho) : 0.5 * wx;  // Eq. 8 / Eq. 9
@@ -270,7 +268,7 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
             for (int k = 0; k < kNumNeighbours; ++k) {
                 if (!inside[k]) continue;
                 const CameraShift &sh = shifts[k];
-                ++st.caseAttempts[cas];
+                ++ts.caseAttempts[cas];
                 ConnectResult ry;
                 bool oky = false;
                 if (kc <= sh.validUpTo && sh.r >= 0 && kc > sh.r && !(s == 1 && !useLp)) {
@@ -278,7 +276,7 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                     // (same vertices, same shadow ray): only the camera-side
                     // throughput and the offset's MIS densities differ.
                     SubpathView yv = sh.y.view();
-                    ry.unweighted = r.unweighted * SafeRatio(sh.y.v[kc].throughput(), cam.v[kc].throughput());
+                    ry.unweighted = r.unweighted * SafeDiv(sh.y.v[kc].throughput(), cam.v[kc].throughput());
                     if (useLp) {
                         PathVertex sv = lp.v;
                         sv.pdfFwd = PdfLightOrigin(bctx_, sv, sh.y.v[kc]);
@@ -302,7 +300,7 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                     oky = ry.weight > 0;
                 }
                 if (oky) {
-                    ++st.caseSuccesses[cas];
+                    ++ts.caseSuccesses[cas];
                     Spectrum fy = ry.unweighted * w;
                     Float wg = mis_ == MIS::Combined ? CombinedWeight(wx, ry.weight, sh.rho[kc]) : 0.5 * wx;
                     out.diff[k] += (fy - fx) * wg;
@@ -341,21 +339,18 @@ void GBDPTIntegrator::finish(const Film &film, const RenderStats &stats, Image *
 }
 
 std::string GBDPTIntegrator::statistics() const {
-    GBDPTLocalStats tot;
-    uint64_t cases[3] = {};
-    ShiftStats ss;
+    SubpathShiftStats tot;
+    uint64_t cases[3] = {}, attempts[3] = {}, successes[3] = {};
     for (const ThreadState &t : store_->threads) {
-        ss.add(t.stats.shift);
+        tot.add(t.shift);
         for (int i = 0; i < 3; ++i) {
-            tot.caseAttempts[i] += t.stats.caseAttempts[i];
-            tot.caseSuccesses[i] += t.stats.caseSuccesses[i];
             cases[i] += t.cases[i];
+            attempts[i] += t.caseAttempts[i];
+            successes[i] += t.caseSuccesses[i];
         }
-        tot.walks += t.stats.walks;
-        tot.walkFailures += t.stats.walkFailures;
-        tot.unsupportedChains += t.stats.unsupportedChains;
-        for (size_t i = 0; i < size_t(ManifoldStatus::Count); ++i) tot.walkStatus[i] += t.stats.walkStatus[i];
     }
+    ShiftStats ss;
+    ss.add(tot.shift);
     std::string s = ss.format(std::string("G-BDPT shifts (") + (manifold_ ? "manifold" : "halfvector") +
                               ", threshold " + std::to_string(threshold_) + ")");
     char buf[256];
@@ -363,23 +358,11 @@ std::string GBDPTIntegrator::statistics() const {
                             "(iii) light-tracing path"};
     for (int i = 0; i < 3; ++i) {
         std::snprintf(buf, sizeof buf, "  case %s: base paths %llu, gradient samples %llu, shifted %llu (%.2f%%)\n",
-                      names[i], (unsigned long long)cases[i], (unsigned long long)tot.caseAttempts[i],
-                      (unsigned long long)tot.caseSuccesses[i],
-                      tot.caseAttempts[i] ? 100.0 * tot.caseSuccesses[i] / tot.caseAttempts[i] : 0.0);
+                      names[i], (unsigned long long)cases[i], (unsigned long long)attempts[i],
+                      (unsigned long long)successes[i], attempts[i] ? 100.0 * successes[i] / attempts[i] : 0.0);
         s += buf;
     }
-    if (!sctx_.trySpecular) s += "  manifold walks: skipped (no specular or near-specular surfaces)\n";
-    std::snprintf(buf, sizeof buf, "  manifold walks %llu, failures %llu; second chains with glossy vertices "
-                                   "(fallback) %llu\n",
-                  (unsigned long long)tot.walks, (unsigned long long)tot.walkFailures,
-                  (unsigned long long)tot.unsupportedChains);
-    s += buf;
-    for (size_t i = 1; i < size_t(ManifoldStatus::Count); ++i)
-        if (tot.walkStatus[i]) {
-            std::snprintf(buf, sizeof buf, "    walk failure %-26s %llu\n", ToString(ManifoldStatus(i)),
-                          (unsigned long long)tot.walkStatus[i]);
-            s += buf;
-        }
+    s += tot.formatWalks(sctx_.trySpecular);
     if (!lightTracing_) s += "  light-tracing paths not shifted (lighttracing false)\n";
     return s + reconReport_;
 }

@@ -64,7 +64,7 @@ class GBDPTIntegrator : public PixelSampleIntegrator {
     // differences, and the light-tracing splats (values before the splat scale).
     GradientSample sample(const CameraSample &cs, Sampler &sampler, Arena &arena, const bool inside[kNumNeighbours],
                           std::vector<Splat> *splats) const;
-    const GBDPTShiftContext &shiftContext() const { return sctx_; }
+    const SubpathShiftContext &shiftContext() const { return sctx_; }
     const BidirContext &bidirContext() const { return bctx_; }
     Float splatScale() const { return splatScale_; }
     int maxDepth() const { return maxDepth_; }
@@ -81,7 +81,7 @@ class GBDPTIntegrator : public PixelSampleIntegrator {
     LightSampler lightSampler_;
     BidirContext bctx_;
     std::unique_ptr<EmbreeManifoldScene> mscene_;
-    GBDPTShiftContext sctx_;
+    SubpathShiftContext sctx_;
     GradientFilm gfilm_;
     Bounds2i filmBounds_;
     int ltLayer_[10] = {};  // hidden film layers of the light-tracing splats (gbdpt.cpp)

@@ -73,6 +73,8 @@ void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     scene_ = &scene;
     lightSampler_ = LightSampler(scene.lights, strategy_, loc_);
     bctx_.init(scene, lightSampler_, MISHeuristic::Balance);  // Eq. 8 uses the balance heuristic
+    // "lighttracing false": the t = 1 strategies are neither sampled nor in any MIS sum.
+    bctx_.strategies.lightTracing = lightTracing_;
     mscene_ = std::make_unique<EmbreeManifoldScene>(scene);
     sctx_.bidir = &bctx_;
     sctx_.mscene = mscene_.get();
@@ -212,21 +214,9 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
             }
             if (!ok) continue;  // blocked or black base path: nothing to shift (Sec. 4)
             const Spectrum fx = r.unweighted * w;
-            Float wx = r.weight;
-            // Without light-tracing paths every weight leaves the t = 1 strategy
-            // out: w' = p_st / sum_{k != LT} p_k = w / (1 - w p_LT / p_st).
-            PathVertex lpv;
-            if (useLp) {
-                lpv = lp.v;
-                lpv.pdfFwd = PdfLightOrigin(bctx_, lpv, cam.v[t - 1]);
-            }
-            auto noLT = [&](Float wb, SubpathView cv) {
-                if (lightTracing_ || t < 2 || !(wb > 0)) return wb;
-                SubpathView lv = useLp ? SubpathView{&lpv, nullptr, 1} : lightView;
-                Float q = 1 - wb * LightTracingRatio(sctx_, lv, cv, s, t, useLp ? &lpv : nullptr);
-                return q > 1e-6 ? wb / q : Float(0);
-            };
-            wx = noLT(wx, camView);
+            // BDPT weight over the strategies in play (bctx_.strategies: without
+            // light tracing the t = 1 terms are left out of every sum).
+            const Float wx = r.weight;
 
             if (t == 1) {
                 // [8-11] light-tracing path (case (iii)): shifted one by one.
@@ -241,14 +231,11 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                     sp.active[k] = true;
                     Spectrum fy;
                     Float wy = 0, rho = 0;
-                    bool shifted = false;
-                    if (lightTracing_) {
-                        ++ts.caseAttempts[2];
-                        shifted = ShiftLightTracingPath(sctx_, light, s, lens, r.pRaster, r.unweighted, off, arena,
-                                                        &fy, &wy, &rho, &st);
-                        if (shifted) ++ts.caseSuccesses[2];
-                    }
+                    ++ts.caseAttempts[2];
+                    bool shifted = ShiftLightTracingPath(sctx_, light, s, lens, r.pRaster, r.unweighted, off, arena,
+                                                         &fy, &wy, &rho, &st);
                     if (shifted) {
+                        ++ts.caseSuccesses[2];
                         Float wg = mis_ == MIS::Combined ? CombinedWeight(wx, wy, rho) : 0.5 * wx;  // Eq. 8 / Eq. 9
                         sp.diff[k] = (fy - r.unweighted) * wg;
                     } else {
@@ -292,12 +279,6 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                     else if (!(s == 1))  // infinite-light NEE: not shifted (fallback)
                         oky = ConnectBDPT(bctx_, lightView, yv, s, t, u, &ry);
                     oky = oky && !ry.unweighted.isBlack() && ry.weight > 0;
-                }
-                if (oky && !lightTracing_) {
-                    if (useLp) lpv.pdfFwd = PdfLightOrigin(bctx_, lp.v, sh.y.v[kc]);
-                    ry.weight = noLT(ry.weight, sh.y.view());
-                    if (useLp) lpv.pdfFwd = PdfLightOrigin(bctx_, lp.v, cam.v[kc]);
-                    oky = ry.weight > 0;
                 }
                 if (oky) {
                     ++ts.caseSuccesses[cas];

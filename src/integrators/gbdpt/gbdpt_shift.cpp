@@ -4,35 +4,6 @@
 
 namespace gradus {
 
-Float LightTracingRatio(const SubpathShiftContext &ctx, SubpathView light, SubpathView cam, int s, int t,
-                        const PathVertex *sampled) {
-    const BidirContext &bc = *ctx.bidir;
-    if (t < 2 || s + t - 1 < 2) return 0;
-    auto Lv = [&](int i) -> const PathVertex & { return (s == 1 && i == 0 && sampled) ? *sampled : light.v[i]; };
-    auto Lb = [&](int i) -> const BSDF * { return light.bsdf && !(s == 1 && sampled) ? &light.bsdf[i] : nullptr; };
-    const PathVertex &x1 = cam.v[1];
-    if (x1.type != VertexType::Surface || !IsDiffuseVertex(ctx, x1, &cam.bsdf[1]) ||
-        !EdgeConnectible(bc, x1, cam.v[0]))
-        return 0;
-    auto remap = [](Float f) { return f != 0 ? f : Float(1); };
-    // Reverse densities of the camera vertices t-1 and t-2 given the light side.
-    const PathVertex &pt = cam.v[t - 1];
-    Float revT1 = 0, revT2 = 0;
-    if (s > 0) {
-        revT1 = PdfArea(bc, Lv(s - 1), Lb(s - 1), s > 1 ? &Lv(s - 2) : nullptr, pt, TransportMode::Importance);
-        revT2 = PdfArea(bc, pt, &cam.bsdf[t - 1], &Lv(s - 1), cam.v[t - 2], TransportMode::Importance);
-    } else {
-        revT1 = PdfLightOrigin(bc, pt, cam.v[t - 2]);
-        revT2 = PdfLightDirection(bc, pt, cam.v[t - 2]);
-    }
-    Float r = 1;
-    for (int i = t - 1; i >= 1; --i) {
-        Float rev = i == t - 1 ? revT1 : (i == t - 2 ? revT2 : cam.v[i].pdfRev);
-        r *= remap(rev) / remap(cam.v[i].pdfFwd);
-    }
-    return std::isfinite(r) ? r : 0;
-}
-
 bool SampleLightPoint(const SubpathShiftContext &ctx, const PathVertex &pt, Float uSel, Point2 u, LightPoint *lp) {
     const BidirContext &bc = *ctx.bidir;
     Float pmf;

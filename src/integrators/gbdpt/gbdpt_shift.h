@@ -25,13 +25,4 @@ bool SampleLightPoint(const SubpathShiftContext &ctx, const PathVertex &pt, Floa
 bool ConnectLightPoint(const SubpathShiftContext &ctx, const LightPoint &lp, SubpathView cam, int t,
                        ConnectResult *res);
 
-// p_{s+t-1,1}(x) / p_{s,t}(x): the light-tracing strategy's density relative
-// to strategy (s, t) of the same full path, in the MIS densities of common/
-// (the product of MISWeight's ratios down to one camera vertex); 0 when the
-// path has no light-tracing strategy (x_1 specular or not connectible).
-// `sampled` is the light vertex of s = 1. Lets "lighttracing false" leave the
-// t = 1 strategies out of all weights: w' = w / (1 - ratio w).
-Float LightTracingRatio(const SubpathShiftContext &ctx, SubpathView light, SubpathView cam, int s, int t,
-                        const PathVertex *sampled);
-
 }  // namespace gradus

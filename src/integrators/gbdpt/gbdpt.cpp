@@ -12,8 +12,6 @@ namespace gradus {
 std::unique_ptr<Integrator> CreateGBDPTIntegrator(const EntityDesc &d) { return std::make_unique<GBDPTIntegrator>(d); }
 
 namespace {
-// Layers of the light-tracing buffer (same meaning as GradientFilm's).
-enum { LPrimal, LPrimalSq, LDxF, LDxFSq, LDxB, LDxBSq, LDyF, LDyFSq, LDyB, LDyBSq, LNum };
 }  // namespace
 
 struct GBDPTIntegrator::ThreadState {
@@ -85,18 +83,15 @@ void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     // Triangle hits come from Embree in single precision: positions are good to
     // ~1e-7 relative, so the double-precision walk tolerance (1e-7) is loosened.
     sctx_.walk.relativeTolerance = 1e-5;
-    gfilm_.init(film);
+    // Light-tracing (case iii) primal and gradients are GradientFilm splats:
+    // merged in tile order, so images do not depend on the thread count.
+    gfilm_.init(film, false, true);
     filmBounds_ = film.pixelBounds();
     Point2i full = film.fullResolution();
     int64_t sampled = film.sampleBounds().area();
     splatScale_ = sampled > 0 ? Float(int64_t(full.x) * full.y) / Float(sampled) : 1;
     store_->threads.clear();
     store_->pixels = size_t(filmBounds_.area());
-    // Light-tracing (case iii) primal and gradients are film splats on hidden
-    // layers: merged in tile order, so images do not depend on the thread count.
-    static const char *names[LNum] = {"primal", "primal_sq", "dxf", "dxf_sq", "dxb",
-                                      "dxb_sq", "dyf", "dyf_sq", "dyb", "dyb_sq"};
-    for (int l = 0; l < LNum; ++l) ltLayer_[l] = film.addLayer(std::string("gbdpt_lighttracing_") + names[l]);
 }
 
 void GBDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const {
@@ -105,34 +100,15 @@ void GBDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &
     for (int k = 0; k < kNumNeighbours; ++k)
         inside[k] = filmBounds_.inside(p) &&
                     filmBounds_.inside({p.x + kNeighbourOffsets[k].x, p.y + kNeighbourOffsets[k].y});
-    std::vector<Splat> splats;
+    std::vector<GradientSplat> splats;
     GradientSample s = sample(cs, sampler, arena, inside, &splats);
     gfilm_.record(rec, s);
-    if (splats.empty()) return;
-    auto add = [&](Point2i px, int layer, const Spectrum &v) {
-        if (!filmBounds_.inside(px)) return;
-        rec.splat(Point2(px.x + 0.5, px.y + 0.5), v, ltLayer_[layer]);
-    };
-    const int lay[kNumNeighbours][2] = {{LDxF, LDxFSq}, {LDxB, LDxBSq}, {LDyF, LDyFSq}, {LDyB, LDyBSq}};
-    for (const Splat &sp : splats) {
-        if (!sp.primal.isFinite()) continue;
-        Spectrum v = sp.primal * splatScale_;
-        add(sp.pixel, LPrimal, v);
-        add(sp.pixel, LPrimalSq, v * v);
-        for (int k = 0; k < kNumNeighbours; ++k) {
-            if (!sp.active[k]) continue;
-            Point2i off = kNeighbourOffsets[k];
-            bool forward = off.x + off.y > 0;
-            Spectrum d = sp.diff[k] * (forward ? splatScale_ : -splatScale_);
-            Point2i at = forward ? sp.pixel : Point2i{sp.pixel.x + off.x, sp.pixel.y + off.y};
-            add(at, lay[k][0], d);
-            add(at, lay[k][1], d * d);
-        }
-    }
+    // Light-tracing values are normalised like BDPT's splats (line 16).
+    for (const GradientSplat &sp : splats) gfilm_.splatLightTracing(rec, sp, splatScale_);
 }
 
 GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler, Arena &arena,
-                                       const bool inside[kNumNeighbours], std::vector<Splat> *splats) const {
+                                       const bool inside[kNumNeighbours], std::vector<GradientSplat> *splats) const {
     GradientSample out;
     ThreadState &ts = local();
     SubpathShiftStats &st = ts.shift;
@@ -221,14 +197,15 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
             if (t == 1) {
                 // [8-11] light-tracing path (case (iii)): shifted one by one.
                 ++ts.cases[2];
-                Splat sp;
+                GradientSplat sp;
+                GradientSample &g = sp.value;
                 sp.pixel = Point2i{int(std::floor(r.pRaster.x)), int(std::floor(r.pRaster.y))};
-                sp.primal = r.L;
+                g.primal = r.L;
                 for (int k = 0; k < kNumNeighbours; ++k) {
                     Point2i off = kNeighbourOffsets[k];
                     Point2i pj{sp.pixel.x + off.x, sp.pixel.y + off.y};
                     if (!filmBounds_.inside(sp.pixel) || !filmBounds_.inside(pj)) continue;
-                    sp.active[k] = true;
+                    g.active[k] = true;
                     Spectrum fy;
                     Float wy = 0, rho = 0;
                     ++ts.caseAttempts[2];
@@ -237,9 +214,9 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                     if (shifted) {
                         ++ts.caseSuccesses[2];
                         Float wg = mis_ == MIS::Combined ? CombinedWeight(wx, wy, rho) : 0.5 * wx;  // Eq. 8 / Eq. 9
-                        sp.diff[k] = (fy - r.unweighted) * wg;
+                        g.diff[k] = (fy - r.unweighted) * wg;
                     } else {
-                        sp.diff[k] = r.unweighted * -wx;  // fallback: zero offset, BDPT weight
+                        g.diff[k] = r.unweighted * -wx;  // fallback: zero offset, BDPT weight
                     }
                 }
                 splats->push_back(sp);
@@ -296,27 +273,7 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
 }
 
 void GBDPTIntegrator::finish(const Film &film, const RenderStats &stats, Image *out) {
-    const double spp = stats.spp;
-    GradientImages g = gfilm_.images(film, spp);
-    // Light-tracing splats: the film normalises them by the number of
-    // bidirectional samples (spp per pixel; the splat scale is already applied), line 16.
-    Image lt[LNum];
-    for (int l = 0; l < LNum; ++l) lt[l] = film.layerImage(ltLayer_[l]);
-    double invN = spp > 0 ? 1 / spp : 0;
-    for (int y = 0; y < g.height; ++y)
-        for (int x = 0; x < g.width; ++x)
-            for (int ch = 0; ch < 3; ++ch) {
-                auto at = [&](int layer) { return double(lt[layer].at(x, y, ch)); };
-                size_t i = (size_t(y) * g.width + x) * 3 + ch;
-                g.primal[i] += float(at(LPrimal));
-                g.dx[i] += float(at(LDxF) + at(LDxB));
-                g.dy[i] += float(at(LDyF) + at(LDyB));
-                // Variance of the splatted part approximated by its second moment / N.
-                g.primalVar[i] += float(at(LPrimalSq) * invN);
-                g.dxVar[i] += float((at(LDxFSq) + at(LDxBSq)) * invN);
-                g.dyVar[i] += float((at(LDyFSq) + at(LDyBSq)) * invN);
-            }
-    WriteGradientOutput(g, norm_, alpha_, out, &reconReport_);
+    WriteGradientOutput(gfilm_.images(film, stats.spp), norm_, alpha_, out, &reconReport_);
 }
 
 std::string GBDPTIntegrator::statistics() const {

@@ -53,17 +53,10 @@ class GBDPTIntegrator : public PixelSampleIntegrator {
     void finish(const Film &film, const RenderStats &stats, Image *out) override;
     std::string statistics() const override;
 
-    // Light-tracing contributions of one sample (raster pixel, primal, four differences).
-    struct Splat {
-        Point2i pixel;
-        Spectrum primal{0};
-        Spectrum diff[kNumNeighbours] = {Spectrum(0), Spectrum(0), Spectrum(0), Spectrum(0)};
-        bool active[kNumNeighbours] = {false, false, false, false};
-    };
     // One camera sample without a film (tests): camera-side primal and
     // differences, and the light-tracing splats (values before the splat scale).
     GradientSample sample(const CameraSample &cs, Sampler &sampler, Arena &arena, const bool inside[kNumNeighbours],
-                          std::vector<Splat> *splats) const;
+                          std::vector<GradientSplat> *splats) const;
     const SubpathShiftContext &shiftContext() const { return sctx_; }
     const BidirContext &bidirContext() const { return bctx_; }
     Float splatScale() const { return splatScale_; }
@@ -84,7 +77,6 @@ class GBDPTIntegrator : public PixelSampleIntegrator {
     SubpathShiftContext sctx_;
     GradientFilm gfilm_;
     Bounds2i filmBounds_;
-    int ltLayer_[10] = {};  // hidden film layers of the light-tracing splats (gbdpt.cpp)
     Float splatScale_ = 1;
     std::string reconReport_;
     // Per-thread light-tracing accumulation and statistics (merged at the end).

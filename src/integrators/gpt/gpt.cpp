@@ -62,7 +62,7 @@ void GPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
 }
 
 void GPTIntegrator::finish(const Film &film, const RenderStats &stats, Image *out) {
-    gfilm_.finish(film, stats.spp, norm_, alpha_, out, &reconReport_);
+    WriteGradientOutput(gfilm_.images(film, stats.spp), norm_, alpha_, out, &reconReport_);
 }
 
 std::string GPTIntegrator::statistics() const {

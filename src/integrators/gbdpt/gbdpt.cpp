@@ -21,7 +21,6 @@ struct GBDPTIntegrator::ThreadState {
 };
 struct GBDPTIntegrator::Store {
     tbb::enumerable_thread_specific<ThreadState> threads;
-    size_t pixels = 0;
 };
 
 GBDPTIntegrator::~GBDPTIntegrator() = default;
@@ -85,21 +84,17 @@ void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     sctx_.walk.relativeTolerance = 1e-5;
     // Light-tracing (case iii) primal and gradients are GradientFilm splats:
     // merged in tile order, so images do not depend on the thread count.
-    gfilm_.init(film, false, true);
-    filmBounds_ = film.pixelBounds();
+    initGradients(film, false, true);
     Point2i full = film.fullResolution();
     int64_t sampled = film.sampleBounds().area();
     splatScale_ = sampled > 0 ? Float(int64_t(full.x) * full.y) / Float(sampled) : 1;
     store_->threads.clear();
-    store_->pixels = size_t(filmBounds_.area());
 }
 
 void GBDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const {
     bool inside[kNumNeighbours];
     Point2i p = rec.pixel();
-    for (int k = 0; k < kNumNeighbours; ++k)
-        inside[k] = filmBounds_.inside(p) &&
-                    filmBounds_.inside({p.x + kNeighbourOffsets[k].x, p.y + kNeighbourOffsets[k].y});
+    for (int k = 0; k < kNumNeighbours; ++k) inside[k] = pairInside(p, k);
     std::vector<GradientSplat> splats;
     GradientSample s = sample(cs, sampler, arena, inside, &splats);
     gfilm_.record(rec, s);
@@ -202,9 +197,8 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                 sp.pixel = Point2i{int(std::floor(r.pRaster.x)), int(std::floor(r.pRaster.y))};
                 g.primal = r.L;
                 for (int k = 0; k < kNumNeighbours; ++k) {
+                    if (!pairInside(sp.pixel, k)) continue;
                     Point2i off = kNeighbourOffsets[k];
-                    Point2i pj{sp.pixel.x + off.x, sp.pixel.y + off.y};
-                    if (!filmBounds_.inside(sp.pixel) || !filmBounds_.inside(pj)) continue;
                     g.active[k] = true;
                     Spectrum fy;
                     Float wy = 0, rho = 0;
@@ -273,7 +267,7 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
 }
 
 void GBDPTIntegrator::finish(const Film &film, const RenderStats &stats, Image *out) {
-    WriteGradientOutput(gfilm_.images(film, stats.spp), norm_, alpha_, out, &reconReport_);
+    finishGradients(film, stats, norm_, alpha_, out);
 }
 
 std::string GBDPTIntegrator::statistics() const {
@@ -302,7 +296,7 @@ std::string GBDPTIntegrator::statistics() const {
     }
     s += tot.formatWalks(sctx_.trySpecular);
     if (!lightTracing_) s += "  light-tracing paths not shifted (lighttracing false)\n";
-    return s + reconReport_;
+    return withReconstructionReport(s);
 }
 
 }  // namespace gradus

@@ -36,13 +36,13 @@
 #include <vector>
 
 #include "integrators/gbdpt/gbdpt_shift.h"
-#include "integrators/gradient/gradient_film.h"
+#include "integrators/gradient/gradient_family.h"
 #include "integrators/integrator.h"
 #include "lights/light_sampler.h"
 
 namespace gradus {
 
-class GBDPTIntegrator : public PixelSampleIntegrator {
+class GBDPTIntegrator : public PixelSampleIntegrator, public GradientFamily {
   public:
     enum class MIS { Combined, Simple };
     explicit GBDPTIntegrator(const EntityDesc &desc);
@@ -75,11 +75,8 @@ class GBDPTIntegrator : public PixelSampleIntegrator {
     BidirContext bctx_;
     std::unique_ptr<EmbreeManifoldScene> mscene_;
     SubpathShiftContext sctx_;
-    GradientFilm gfilm_;
-    Bounds2i filmBounds_;
     Float splatScale_ = 1;
-    std::string reconReport_;
-    // Per-thread light-tracing accumulation and statistics (merged at the end).
+    // Per-thread statistics (summed by statistics()).
     struct ThreadState;
     struct Store;
     std::unique_ptr<Store> store_;

@@ -43,8 +43,7 @@ GPTIntegrator::GPTIntegrator(const EntityDesc &desc) : loc_(desc.loc) {
 
 void GPTIntegrator::preprocess(const Scene &scene, Film &film) {
     lightSampler_ = LightSampler(scene.lights, strategy_, loc_, scene.bounds);
-    gfilm_.init(film, filmFilter_);
-    filmBounds_ = film.pixelBounds();
+    initGradients(film, filmFilter_);
     scene_ = &scene;
     stats_.reset();
 }
@@ -54,21 +53,19 @@ void GPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
     Point2i p = rec.pixel();
     // Box: only pairs of film pixels need gradients. Film filter: samples of
     // pixels around the film reach it too (targets outside are dropped).
-    for (int k = 0; k < kNumNeighbours; ++k)
-        inside[k] = filmFilter_ || (filmBounds_.inside(p) && filmBounds_.inside({p.x + kNeighbourOffsets[k].x,
-                                                                                 p.y + kNeighbourOffsets[k].y}));
+    for (int k = 0; k < kNumNeighbours; ++k) inside[k] = filmFilter_ || pairInside(p, k);
     GradientSample s = sample(cs, sampler, arena, inside);
     gfilm_.record(rec, s);
 }
 
 void GPTIntegrator::finish(const Film &film, const RenderStats &stats, Image *out) {
-    WriteGradientOutput(gfilm_.images(film, stats.spp), norm_, alpha_, out, &reconReport_);
+    finishGradients(film, stats, norm_, alpha_, out);
 }
 
 std::string GPTIntegrator::statistics() const {
-    return stats_.format(std::string("G-PT shifts (") + (mode_ == ShiftMode::Hybrid ? "hybrid" : "halfvector") +
-                         ", threshold " + std::to_string(shiftThreshold_) + ")") +
-           reconReport_;
+    return withReconstructionReport(stats_.format(std::string("G-PT shifts (") +
+                                                  (mode_ == ShiftMode::Hybrid ? "hybrid" : "halfvector") +
+                                                  ", threshold " + std::to_string(shiftThreshold_) + ")"));
 }
 
 namespace {

@@ -26,14 +26,14 @@
 #pragma once
 #include <memory>
 
-#include "integrators/gradient/gradient_film.h"
+#include "integrators/gradient/gradient_family.h"
 #include "integrators/gradient/shift.h"
 #include "integrators/integrator.h"
 #include "lights/light_sampler.h"
 
 namespace gradus {
 
-class GPTIntegrator : public PixelSampleIntegrator {
+class GPTIntegrator : public PixelSampleIntegrator, public GradientFamily {
   public:
     enum class ShiftMode { HalfVector, Hybrid };
     explicit GPTIntegrator(const EntityDesc &desc);
@@ -60,9 +60,6 @@ class GPTIntegrator : public PixelSampleIntegrator {
     bool filmFilter_;
     FileLoc loc_;
     LightSampler lightSampler_;
-    GradientFilm gfilm_;
-    Bounds2i filmBounds_;
-    std::string reconReport_;
     mutable ShiftStats stats_;
 };
 

@@ -201,48 +201,32 @@ bool ShiftToReconnection(const SubpathShiftContext &ctx, const ShiftSubpath &x, 
     if (xr.isInfiniteLight()) ok = false;
     if (!ok) return false;
     if (k == 0) {
-        st->shift.attempt(ShiftType::Reconnection);
-        ShiftVertex tgt;
-        tgt.p = xr.p;
-        tgt.n = xr.onSurface() ? Vec3(xr.ng) : Vec3(0, 0, 0);
         ReconnectionShift rc;
-        if (!ShiftReconnect(xi.p, yi.p, tgt, &rc)) {
-            st->shift.fail(ShiftFailure::Geometry);
-            return false;
-        }
-        if (!scene.unoccluded(VertexIt(yi), VertexIt(xr))) {
-            st->shift.fail(ShiftFailure::Occluded);
-            return false;
-        }
+        if (!ReconnectToVertex(scene, xi.p, VertexIt(yi), xr, &st->shift, &rc)) return false;
         *J = rc.jacobian;
         *wiY = rc.wi;
         return true;
     }
     // Manifold walk from offset b to base c with the base's half vectors.
-    SurfaceInteraction xsi[kMaxManifoldVertices];
-    const BSDF *xb[kMaxManifoldVertices];
-    Vec3 wos[kMaxManifoldVertices], wis[kMaxManifoldVertices];
-    bool tr[kMaxManifoldVertices];
-    int gids[kMaxManifoldVertices];
+    ChainInterior in;
     ok = ctx.trySpecular && k + 2 <= kMaxManifoldVertices;
     for (int j = 0; ok && j < k; ++j) {
         const PathVertex &xv = x.v[i + 1 + j];
-        ok = VertexInteraction(scene, xv, x.v[i + j].p, &xsi[j]);
-        xb[j] = &x.b[i + 1 + j];
-        wos[j] = xv.wo;
-        wis[j] = Normalize(x.v[i + 2 + j].p - xv.p);
-        tr[j] = Transmits(wos[j], wis[j], Vec3(x.b[i + 1 + j].ns()));
-        gids[j] = xv.geomId;
+        ok = VertexInteraction(scene, xv, x.v[i + j].p, &in.si[j]);
+        in.bsdf[j] = &x.b[i + 1 + j];
+        in.wo[j] = xv.wo;
+        in.wi[j] = Normalize(x.v[i + 2 + j].p - xv.p);
+        in.transmit[j] = Transmits(in.wo[j], in.wi[j], Vec3(x.b[i + 1 + j].ns()));
+        in.geomId[j] = xv.geomId;
     }
     ManifoldChain base, offChain;
     if (ok)
-        ok = BuildChain(ctx, EndpointSP(xi.p, xi.ng, xi.geomId), xsi, xb, wos, wis, k,
-                        EndpointSP(xr.p, xr.ng, xr.geomId), &base);
+        ok = BuildChain(ctx, EndpointSP(xi.p, xi.ng, xi.geomId), in, k, EndpointSP(xr.p, xr.ng, xr.geomId), &base);
     if (!ok) {
         st->shift.fail(ShiftFailure::Geometry);
         return false;
     }
-    if (!WalkSecondChain(ctx, base, EndpointSP(yi.p, yi.ng, yi.geomId), tr, gids, arena, st, &offChain, walked, J))
+    if (!WalkSecondChain(ctx, base, EndpointSP(yi.p, yi.ng, yi.geomId), in, arena, st, &offChain, walked, J))
         return false;
     *wiY = Normalize(offChain.v[1].sp.p - yi.p);
     return true;

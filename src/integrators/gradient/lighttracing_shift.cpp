@@ -40,19 +40,8 @@ bool ShiftChain(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s
     const PathVertex &x1 = light.v[s - 1], &xc = light.v[c];
     const int k = s - 2 - c;
     if (k == 0) {
-        st->shift.attempt(ShiftType::Reconnection);
-        ShiftVertex tgt;
-        tgt.p = xc.p;
-        tgt.n = xc.onSurface() ? Vec3(xc.ng) : Vec3(0, 0, 0);
         ReconnectionShift rc;
-        if (!ShiftReconnect(x1.p, yHit.p, tgt, &rc)) {
-            st->shift.fail(ShiftFailure::Geometry);
-            return false;
-        }
-        if (!scene.unoccluded(Interaction(yHit.p, yHit.n, woY1), VertexIt(xc))) {
-            st->shift.fail(ShiftFailure::Occluded);
-            return false;
-        }
+        if (!ReconnectToVertex(scene, x1.p, Interaction(yHit.p, yHit.n, woY1), xc, &st->shift, &rc)) return false;
         st->shift.success(ShiftType::Reconnection);
         ch->J = rc.jacobian;
         ch->wiY1 = rc.wi;
@@ -60,41 +49,39 @@ bool ShiftChain(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s
         ch->towardCamY = -ch->wiY1;
         return true;
     }
-    SurfaceInteraction xsi[kMaxManifoldVertices];
-    const BSDF *xb[kMaxManifoldVertices];
-    Vec3 wos[kMaxManifoldVertices], wis[kMaxManifoldVertices];
-    bool tr[kMaxManifoldVertices];
-    int gids[kMaxManifoldVertices];
+    ChainInterior in;
     if (k + 2 > kMaxManifoldVertices) return false;
     // Chain from b = x1 (camera side) to c; interior j is light vertex s-2-j.
     for (int j = 0; j < k; ++j) {
         const PathVertex &v = light.v[s - 2 - j];
-        if (!VertexInteraction(scene, v, light.v[s - 1 - j].p, &xsi[j])) {
+        if (!VertexInteraction(scene, v, light.v[s - 1 - j].p, &in.si[j])) {
             st->shift.fail(ShiftFailure::Geometry);
             return false;
         }
-        xb[j] = &light.b[s - 2 - j];
-        wos[j] = Normalize(light.v[s - 1 - j].p - v.p);  // towards the camera side
-        wis[j] = Normalize(light.v[s - 3 - j].p - v.p);
-        tr[j] = Transmits(wos[j], wis[j], Vec3(xb[j]->ns()));
-        gids[j] = v.geomId;
+        const BSDF &b = light.b[s - 2 - j];
+        in.bsdf[j] = &b;
+        in.wo[j] = Normalize(light.v[s - 1 - j].p - v.p);  // towards the camera side
+        in.wi[j] = Normalize(light.v[s - 3 - j].p - v.p);
+        in.transmit[j] = Transmits(in.wo[j], in.wi[j], Vec3(b.ns()));
+        in.geomId[j] = v.geomId;
         BSDFSample sx;
-        if (!DeltaLobe(*xb[j], wos[j], tr[j], TransportMode::Radiance, &sx) || Dot(sx.wi, wis[j]) < 1 - kShiftDirTol) {
+        if (!DeltaLobe(b, in.wo[j], in.transmit[j], TransportMode::Radiance, &sx) ||
+            Dot(sx.wi, in.wi[j]) < 1 - kShiftDirTol) {
             st->shift.fail(ShiftFailure::Geometry);
             return false;
         }
-        ch->chainX *= sx.f * AbsDot(sx.wi, Vec3(xb[j]->ns()));
+        ch->chainX *= sx.f * AbsDot(sx.wi, Vec3(b.ns()));
         ch->discX *= sx.pdf;
     }
     ManifoldChain base;
     // The walk ends on c's shape (an area light's emitting shape for a light vertex).
     int gidc = xc.type == VertexType::Surface ? xc.geomId : ctx.mscene->geomOfLight(xc.light);
-    if (gidc < 0 || !BuildChain(ctx, EndpointSP(x1.p, x1.ng, x1.geomId), xsi, xb, wos, wis, k,
-                                EndpointSP(xc.p, xc.ng, gidc), &base)) {
+    if (gidc < 0 ||
+        !BuildChain(ctx, EndpointSP(x1.p, x1.ng, x1.geomId), in, k, EndpointSP(xc.p, xc.ng, gidc), &base)) {
         st->shift.fail(ShiftFailure::Geometry);
         return false;
     }
-    if (!WalkSecondChain(ctx, base, EndpointSP(yHit.p, yHit.n, yHit.geomId), tr, gids, arena, st, &ch->offChain,
+    if (!WalkSecondChain(ctx, base, EndpointSP(yHit.p, yHit.n, yHit.geomId), in, arena, st, &ch->offChain,
                          &ch->walked, &ch->J))
         return false;
     ch->chainY = ch->walked.factor;

@@ -162,24 +162,25 @@ ManifoldSurfacePoint EndpointSP(const Point3 &p, const Vec3 &ng, int geomId) {
     return sp;
 }
 
-bool BuildChain(const SubpathShiftContext &ctx, const ManifoldSurfacePoint &start, const SurfaceInteraction *interior,
-                const BSDF *const *bsdfs, const Vec3 *wos, const Vec3 *wis, int k, const ManifoldSurfacePoint &end,
-                ManifoldChain *chain) {
+bool BuildChain(const SubpathShiftContext &ctx, const ManifoldSurfacePoint &start, const ChainInterior &interior, int k,
+                const ManifoldSurfacePoint &end, ManifoldChain *chain) {
     ManifoldSurfacePoint pts[kMaxManifoldVertices];
     bool refl[kMaxManifoldVertices], spec[kMaxManifoldVertices];
     if (k + 2 > kMaxManifoldVertices) return false;
     pts[0] = start;
     for (int j = 0; j < k; ++j) {
-        ManifoldSurfacePoint sp = ctx.mscene->fromInteraction(interior[j]);
-        bool tr = Transmits(wos[j], wis[j], Vec3(sp.n));
+        ManifoldSurfacePoint sp = ctx.mscene->fromInteraction(interior.si[j]);
+        const BSDF &b = *interior.bsdf[j];
+        const Vec3 &wo = interior.wo[j];
+        bool tr = Transmits(wo, interior.wi[j], Vec3(sp.n));
         if (tr) {
             BSDFSample s;
-            if (!DeltaLobe(*bsdfs[j], wos[j], true, TransportMode::Radiance, &s)) return false;
-            Float etaIn = Dot(wos[j], Vec3(bsdfs[j]->ns())) > 0 ? s.eta : 1 / s.eta;
+            if (!DeltaLobe(b, wo, true, TransportMode::Radiance, &s)) return false;
+            Float etaIn = Dot(wo, Vec3(b.ns())) > 0 ? s.eta : 1 / s.eta;
             ctx.mscene->recordEta(sp.primitiveId, etaIn);
             sp.etaInterior = etaIn;
             sp.etaExterior = 1;
-            if (Dot(Vec3(sp.n), Vec3(bsdfs[j]->ns())) < 0) std::swap(sp.etaInterior, sp.etaExterior);
+            if (Dot(Vec3(sp.n), Vec3(b.ns())) < 0) std::swap(sp.etaInterior, sp.etaExterior);
         }
         pts[j + 1] = sp;
         refl[j] = !tr;
@@ -189,9 +190,26 @@ bool BuildChain(const SubpathShiftContext &ctx, const ManifoldSurfacePoint &star
     return MakeChain(pts, k + 2, refl, spec, chain);
 }
 
+bool ReconnectToVertex(const Scene &scene, const Point3 &xFrom, const Interaction &yFrom, const PathVertex &target,
+                       LocalShiftStats *st, ReconnectionShift *rc) {
+    st->attempt(ShiftType::Reconnection);
+    ShiftVertex tgt;
+    tgt.p = target.p;
+    tgt.n = target.onSurface() ? Vec3(target.ng) : Vec3(0, 0, 0);
+    if (!ShiftReconnect(xFrom, yFrom.p, tgt, rc)) {
+        st->fail(ShiftFailure::Geometry);
+        return false;
+    }
+    if (!scene.unoccluded(yFrom, VertexIt(target))) {
+        st->fail(ShiftFailure::Occluded);
+        return false;
+    }
+    return true;
+}
+
 bool WalkSecondChain(const SubpathShiftContext &ctx, const ManifoldChain &base, const ManifoldSurfacePoint &start,
-                     const bool *transmit, const int *geomIds, Arena &arena, SubpathShiftStats *st,
-                     ManifoldChain *offset, WalkedInterior *walked, Float *J) {
+                     const ChainInterior &interior, Arena &arena, SubpathShiftStats *st, ManifoldChain *offset,
+                     WalkedInterior *walked, Float *J) {
     ManifoldWalkResult res = ManifoldWalk(*ctx.mscene, base, start, base.back().sp, ctx.walk);
     if (res.ok()) res.status = CheckReversible(*ctx.mscene, base, res.chain, ctx.walk, 1e-4);
     st->recordWalk(res);
@@ -201,7 +219,8 @@ bool WalkSecondChain(const SubpathShiftContext &ctx, const ManifoldChain &base, 
     }
     Float ax = ChainSolidAnglePerArea(base), ay = ChainSolidAnglePerArea(res.chain);
     if (!(ax > 0) || !(ay > 0) ||
-        !EvaluateWalked(*ctx.bidir->scene, res.chain, transmit, geomIds, arena, TransportMode::Radiance, walked)) {
+        !EvaluateWalked(*ctx.bidir->scene, res.chain, interior.transmit, interior.geomId, arena,
+                        TransportMode::Radiance, walked)) {
         st->shift.fail(ShiftFailure::Geometry);
         return false;
     }

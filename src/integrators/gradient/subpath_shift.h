@@ -113,12 +113,25 @@ bool DeltaLobe(const BSDF &bsdf, const Vec3 &wo, bool transmit, TransportMode mo
 bool VertexInteraction(const Scene &scene, const PathVertex &v, const Point3 &from, SurfaceInteraction *si);
 // Endpoint of a chain: geometric normal (area measure), no curvature.
 ManifoldSurfacePoint EndpointSP(const Point3 &p, const Vec3 &ng, int geomId);
-// Builds the base chain start, interior[0..k-1], end (interior: ideal specular
-// vertices, wos/wis their directions towards start/end); records the index of
+// The interior (ideal specular) vertices of a base chain, from its start
+// towards its end: interactions, BSDFs, the directions towards the start (wo)
+// and the end (wi), the event (refraction or reflection) and the geometry.
+struct ChainInterior {
+    SurfaceInteraction si[kMaxManifoldVertices];
+    const BSDF *bsdf[kMaxManifoldVertices];
+    Vec3 wo[kMaxManifoldVertices], wi[kMaxManifoldVertices];
+    bool transmit[kMaxManifoldVertices];
+    int geomId[kMaxManifoldVertices];
+};
+// Builds the base chain start, interior[0..k-1], end; records the index of
 // refraction of refracting interiors.
-bool BuildChain(const SubpathShiftContext &ctx, const ManifoldSurfacePoint &start, const SurfaceInteraction *interior,
-                const BSDF *const *bsdfs, const Vec3 *wos, const Vec3 *wis, int k, const ManifoldSurfacePoint &end,
-                ManifoldChain *chain);
+bool BuildChain(const SubpathShiftContext &ctx, const ManifoldSurfacePoint &start, const ChainInterior &interior, int k,
+                const ManifoldSurfacePoint &end, ManifoldChain *chain);
+// Empty second chain: the offset vertex yFrom (base: xFrom) reconnects to the
+// base vertex `target` (ShiftReconnect's Jacobian) if it sees it. Counts the
+// attempt and a failure in `st` (the success is the caller's).
+bool ReconnectToVertex(const Scene &scene, const Point3 &xFrom, const Interaction &yFrom, const PathVertex &target,
+                       LocalShiftStats *st, ReconnectionShift *rc);
 // Interactions, BSDFs and the specular factors of a walked offset interior
 // (re-traced from the chain's start, each vertex with the base's event).
 struct WalkedInterior {
@@ -135,7 +148,7 @@ struct WalkedInterior {
 // Jacobian |d omega_y,b / d omega_x,b| with the chain's end fixed. Records the
 // walk and a failure in `st`.
 bool WalkSecondChain(const SubpathShiftContext &ctx, const ManifoldChain &base, const ManifoldSurfacePoint &start,
-                     const bool *transmit, const int *geomIds, Arena &arena, SubpathShiftStats *st,
-                     ManifoldChain *offset, WalkedInterior *walked, Float *J);
+                     const ChainInterior &interior, Arena &arena, SubpathShiftStats *st, ManifoldChain *offset,
+                     WalkedInterior *walked, Float *J);
 
 }  // namespace gradus

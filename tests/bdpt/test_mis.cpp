@@ -75,8 +75,11 @@ Subpaths Generate(Fixture &f, Arena &arena, int i, int maxDepth) {
     return sp;
 }
 
-// Sum over the evaluated strategies of the MIS weights of the path x (light to camera).
-double WeightSum(const BidirContext &ctx, std::vector<PathVertex> x, const std::vector<BSDF> &b, int *nValid) {
+// Sum over the strategies `evaluated` leaves in play of their MIS weights
+// over the strategies of `weighting` for the path x (light to camera); *wLT
+// gets the light-tracing strategy's weight (0 when it is not valid or not in play).
+double WeightSum(const BidirContext &ctx, const StrategySet &evaluated, const StrategySet &weighting,
+                 std::vector<PathVertex> x, const std::vector<BSDF> &b, int *nValid, double *wLT = nullptr) {
     const int k = int(x.size());
     auto fwdL = [&](int i) {
         if (i == 0) return PdfLightOrigin(ctx, x[0], x[1]);
@@ -88,6 +91,7 @@ double WeightSum(const BidirContext &ctx, std::vector<PathVertex> x, const std::
     };
     double sum = 0;
     *nValid = 0;
+    if (wLT) *wLT = 0;
     for (int sp = 0; sp < k; ++sp) {
         int tp = k - sp;
         std::vector<PathVertex> L(x.begin(), x.begin() + sp), C;
@@ -111,18 +115,22 @@ double WeightSum(const BidirContext &ctx, std::vector<PathVertex> x, const std::
         else
             valid = !x[sp].delta() && (sp == 1 || !x[sp - 1].delta()) && EdgeConnectible(ctx, x[sp - 1], x[sp]) &&
                     x[sp].type != VertexType::Light;
-        if (!valid) continue;
+        if (!valid || (tp == 1 && !evaluated.lightTracing)) continue;
         ++*nValid;
-        sum += MISWeight(ctx, {L.data(), LB.data(), sp}, {C.data(), CB.data(), tp}, sp, tp, nullptr);
+        double w = MISWeight(ctx, weighting, {L.data(), LB.data(), sp}, {C.data(), CB.data(), tp}, sp, tp, nullptr);
+        sum += w;
+        if (tp == 1 && wLT) *wLT = w;
     }
     return sum;
 }
 
-void CheckWeightSums(const std::string &scene, MISHeuristic h) {
-    Fixture f(scene, h);
+// Calls fn(x, b, s, t) for the full paths of (s >= 2, t >= 2) connections and
+// of camera paths that hit emitters, up to `maxPaths` paths.
+template <typename Fn>
+void ForEachConnectedPath(Fixture &f, int maxPaths, Fn fn) {
     Arena arena;
-    int checked = 0, withDelta = 0;
-    for (int i = 0; i < 3000 && checked < 400; ++i) {
+    int checked = 0;
+    for (int i = 0; i < 3000 && checked < maxPaths; ++i) {
         arena.reset();
         Subpaths sp = Generate(f, arena, i, 5);
         // Paths from (s >= 2, t >= 2) connections and from camera paths that hit emitters.
@@ -144,15 +152,25 @@ void CheckWeightSums(const std::string &scene, MISHeuristic h) {
                 // The connection endpoints scatter through the connection (non-delta).
                 if (s > 0) x[s - 1].flags &= ~VERTEX_DELTA;
                 x[s].flags &= ~VERTEX_DELTA;
-                bool delta = false;
-                for (auto &v : x) delta |= v.delta();
-                int nValid;
-                double sum = WeightSum(f.ctx, x, b, &nValid);
-                ASSERT_NEAR(sum, 1.0, 1e-9) << "s=" << s << " t=" << t << " valid strategies " << nValid;
+                if (!fn(x, b, s, t)) return;
                 ++checked;
-                withDelta += delta;
             }
     }
+}
+
+void CheckWeightSums(const std::string &scene, MISHeuristic h) {
+    Fixture f(scene, h);
+    int checked = 0, withDelta = 0;
+    ForEachConnectedPath(f, 400, [&](const std::vector<PathVertex> &x, const std::vector<BSDF> &b, int s, int t) {
+        bool delta = false;
+        for (auto &v : x) delta |= v.delta();
+        int nValid;
+        double sum = WeightSum(f.ctx, f.ctx.strategies, f.ctx.strategies, x, b, &nValid);
+        EXPECT_NEAR(sum, 1.0, 1e-9) << "s=" << s << " t=" << t << " valid strategies " << nValid;
+        ++checked;
+        withDelta += delta;
+        return sum == sum;
+    });
     EXPECT_GE(checked, 200);
     EXPECT_GT(withDelta, 0);
 }
@@ -160,6 +178,98 @@ void CheckWeightSums(const std::string &scene, MISHeuristic h) {
 TEST(BDPTMIS, WeightsSumToOneBalance) { CheckWeightSums(MixedScene(), MISHeuristic::Balance); }
 TEST(BDPTMIS, WeightsSumToOnePower) { CheckWeightSums(MixedScene(), MISHeuristic::Power); }
 TEST(BDPTMIS, WeightsSumToOneEnvironmentThinLens) { CheckWeightSums(EnvScene(), MISHeuristic::Balance); }
+
+// StrategySet without light tracing (G-BDPT "lighttracing false"): the weights
+// of the strategies still evaluated sum to one. Weighted with the t = 1 terms
+// still in the sums they add up to 1 - w_LT instead, far from one on the
+// paths where light tracing has a sizeable weight (so the check can fail).
+void CheckWeightSumsWithoutLightTracing(const std::string &scene, MISHeuristic h, int minWithLT) {
+    Fixture f(scene, h);
+    StrategySet noLT;
+    noLT.lightTracing = false;
+    const StrategySet &all = f.ctx.strategies;
+    int checked = 0, withLT = 0;
+    ForEachConnectedPath(f, 400, [&](const std::vector<PathVertex> &x, const std::vector<BSDF> &b, int s, int t) {
+        int nValid, nAll;
+        double wLT;
+        double sum = WeightSum(f.ctx, noLT, noLT, x, b, &nValid);
+        EXPECT_NEAR(sum, 1.0, 1e-9) << "s=" << s << " t=" << t << " strategies " << nValid;
+        WeightSum(f.ctx, all, all, x, b, &nAll, &wLT);
+        if (wLT > 1e-3) {
+            double counted = WeightSum(f.ctx, noLT, all, x, b, &nValid);
+            EXPECT_NEAR(counted, 1 - wLT, 1e-9);
+            EXPECT_LT(counted, 1 - 1e-3);
+            ++withLT;
+        }
+        ++checked;
+        return true;
+    });
+    EXPECT_GE(checked, 200);
+    EXPECT_GE(withLT, minWithLT) << "paths on which light tracing has a sizeable weight";
+}
+TEST(BDPTMIS, WeightsSumToOneWithoutLightTracingBalance) {
+    CheckWeightSumsWithoutLightTracing(MixedScene(), MISHeuristic::Balance, 20);
+}
+TEST(BDPTMIS, WeightsSumToOneWithoutLightTracingPower) {
+    CheckWeightSumsWithoutLightTracing(MixedScene(), MISHeuristic::Power, 20);
+}
+// Infinite and distant lights (directional light vertices) and a thin lens.
+TEST(BDPTMIS, WeightsSumToOneWithoutLightTracingEnvironment) {
+    CheckWeightSumsWithoutLightTracing(EnvScene(), MISHeuristic::Balance, 5);
+}
+
+// n light-tracing samples per camera sample: the weights (n_k p_k)^beta /
+// sum_j (n_j p_j)^beta still sum to one, and the t = 1 weight relates to the
+// single-sample one w_1 by w_n = n^beta w_1 / (1 + (n^beta - 1) w_1).
+void CheckLightTracingSampleCount(MISHeuristic h) {
+    Fixture f(MixedScene(), h);
+    StrategySet four;
+    four.lightTracingSamples = 4;
+    const double nb = h == MISHeuristic::Power ? 16 : 4;
+    int withLT = 0;
+    ForEachConnectedPath(f, 300, [&](const std::vector<PathVertex> &x, const std::vector<BSDF> &b, int s, int t) {
+        int nValid;
+        double w1, w4;
+        WeightSum(f.ctx, four, f.ctx.strategies, x, b, &nValid, &w1);
+        double sum = WeightSum(f.ctx, four, four, x, b, &nValid, &w4);
+        EXPECT_NEAR(sum, 1.0, 1e-9) << "s=" << s << " t=" << t;
+        if (w1 > 0) {
+            EXPECT_NEAR(w4, nb * w1 / (1 + (nb - 1) * w1), 1e-9);
+            ++withLT;
+        }
+        return true;
+    });
+    EXPECT_GE(withLT, 50);
+}
+TEST(BDPTMIS, LightTracingSampleCountBalance) { CheckLightTracingSampleCount(MISHeuristic::Balance); }
+TEST(BDPTMIS, LightTracingSampleCountPower) { CheckLightTracingSampleCount(MISHeuristic::Power); }
+
+// A t = 1 strategy that is not in play has weight 0; vertex merging is not in
+// the sums yet and must stop the program rather than give connection-only weights.
+TEST(BDPTMIS, StrategiesNotInPlay) {
+    Fixture f(MixedScene());
+    int lt = 0;
+    StrategySet noLT, merging;
+    noLT.lightTracing = false;
+    merging.merging = true;
+    merging.mergeFactor = 1;
+    ForEachConnectedPath(f, 100, [&](const std::vector<PathVertex> &x, const std::vector<BSDF> &b, int s, int t) {
+        const int k = int(x.size());
+        if (k < 3 || x[k - 2].delta()) return true;
+        // (k - 1, 1): light vertices x[0..k-2] and the lens vertex.
+        std::vector<PathVertex> L(x.begin(), x.end() - 1), C{x.back()};
+        std::vector<BSDF> LB(b.begin(), b.end() - 1), CB{b.back()};
+        EXPECT_EQ(MISWeight(f.ctx, noLT, {L.data(), LB.data(), k - 1}, {C.data(), CB.data(), 1}, k - 1, 1, nullptr), 0);
+        if (++lt == 1) {
+            GTEST_FLAG_SET(death_test_style, "threadsafe");
+            EXPECT_DEATH(MISWeight(f.ctx, merging, {L.data(), LB.data(), k - 1}, {C.data(), CB.data(), 1}, k - 1, 1,
+                                   nullptr),
+                         "merging");
+        }
+        return true;
+    });
+    EXPECT_GT(lt, 10);
+}
 
 // The random walks store pdfFwd/pdfRev; the connection code recomputes the
 // same quantities with PdfArea. They must agree, and agree with a direct

@@ -1,5 +1,6 @@
 #include "integrators/common/bidir.h"
 
+#include "core/error.h"
 #include "core/stats.h"
 #include "render/render_loop.h"
 #include "shapes/sphere.h"
@@ -352,8 +353,13 @@ bool EdgeConnectible(const BidirContext &ctx, const PathVertex &a, const PathVer
     return DistanceSquared(a.p, b.p) >= ctx.minConnectDist * ctx.minConnectDist;
 }
 
-Float MISWeight(const BidirContext &ctx, SubpathView light, SubpathView camera, int s, int t,
+Float MISWeight(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s, int t,
                 const PathVertex *sampled) {
+    // Vertex merging terms (G-VCM Eq. 12) are not in the sums below yet: fail
+    // loudly instead of returning connection-only weights for a VCM.
+    GRADUS_CHECK(!set.merging);
+    GRADUS_CHECK(!set.lightTracing || set.lightTracingSamples > 0);
+    if (t == 1 && !set.lightTracing) return 0;  // not in play
     if (s + t == 2) return 1;
     auto Lv = [&](int i) -> const PathVertex & { return (s == 1 && i == 0 && sampled) ? *sampled : light.v[i]; };
     auto Cv = [&](int i) -> const PathVertex & { return (t == 1 && i == 0 && sampled) ? *sampled : camera.v[i]; };
@@ -387,7 +393,13 @@ Float MISWeight(const BidirContext &ctx, SubpathView light, SubpathView camera, 
     auto lightDelta = [&](int i) { return i != s - 1 && Lv(i).delta(); };
     auto remap = [](Float f) { return f != 0 ? f : Float(1); };
     const bool power = ctx.heuristic == MISHeuristic::Power;
+    // Sample counts relative to this strategy's, n_k / n_s (Veach 1997 Sec. 9.2):
+    // ri = p_k / p_s becomes n_k p_k / (n_s p_s). Exactly 1 with one sample each.
+    const Float nOwn = t == 1 ? set.lightTracingSamples : Float(1);
+    const Float relLT = set.lightTracingSamples / nOwn, relOther = 1 / nOwn;
 
+    // w = 1 / sum_k (n_k p_k / n_s p_s)^beta with p_k / p_{k+1} = pdfRev / pdfFwd
+    // of the vertex that changes sides (Veach 1997 Eq. 10.9).
     Float sumRi = 0;
     // Strategies with fewer camera vertices: (s + t - i, i), connection edge C[i] -- C[i-1].
     Float ri = 1;
@@ -395,9 +407,11 @@ Float MISWeight(const BidirContext &ctx, SubpathView light, SubpathView camera, 
         ri *= remap(camRev(i)) / remap(Cv(i).pdfFwd);
         int sp = s + t - i;
         if (sp == 1 && i == 1) continue;  // (1,1) is not evaluated
+        if (i == 1 && !set.lightTracing) continue;  // (s + t - 1, 1) not in play
         if (camDelta(i) || Cv(i - 1).delta()) continue;
         if (!EdgeConnectible(ctx, Cv(i), Cv(i - 1))) continue;
-        sumRi += power ? ri * ri : ri;
+        Float r = ri * (i == 1 ? relLT : relOther);
+        sumRi += power ? r * r : r;
     }
     // Strategies with fewer light vertices: (i, s + t - i), connection edge L[i-1] -- L[i].
     ri = 1;
@@ -408,7 +422,8 @@ Float MISWeight(const BidirContext &ctx, SubpathView light, SubpathView camera, 
         bool deltaPrev = i > 0 ? Lv(i - 1).delta() : Lv(0).isDeltaLight();
         if (lightDelta(i) || deltaPrev) continue;
         if (i > 0 && !EdgeConnectible(ctx, Lv(i - 1), Lv(i))) continue;
-        sumRi += power ? ri * ri : ri;
+        Float r = ri * relOther;  // t' = s + t - i >= 2
+        sumRi += power ? r * r : r;
     }
     return 1 / (1 + sumRi);
 }
@@ -417,6 +432,7 @@ bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera,
                  const ConnectSamples &u, ConnectResult *res) {
     *res = ConnectResult();
     if (t < 1 || (s == 1 && t == 1)) return false;
+    if (t == 1 && !ctx.strategies.lightTracing) return false;
     const Scene &scene = *ctx.scene;
     // An infinite-light vertex ends the camera path: only s = 0 uses it.
     if (s > 0 && camera.v[t - 1].type == VertexType::Light) return false;

@@ -23,7 +23,9 @@
 // ((1,1), t = 0) and connections across near-coincident vertices (edge length
 // below BidirContext::minConnectDist) are left out both from the estimate and
 // from the MIS sums of all strategies of that path, so the weights of the
-// evaluated strategies sum to one.
+// evaluated strategies sum to one. Which strategies are in play at all (light
+// tracing on or off, several light-tracing samples per camera sample, vertex
+// merging) is a StrategySet: the MIS sums count exactly those.
 #pragma once
 #include <vector>
 
@@ -36,6 +38,31 @@
 namespace gradus {
 
 enum class MISHeuristic { Balance, Power };
+
+// The strategies in play for one integrator, so that the MIS sums contain
+// exactly the strategies it evaluates (leaving a strategy out of the
+// estimate but not out of the sums loses its share of the energy). With n_k
+// samples of strategy k per camera sample the weights are the multi-sample
+// heuristics w_s = (n_s p_s)^beta / sum_k (n_k p_k)^beta (Veach 1997 Sec. 9.2,
+// in the ratio form of Eq. 10.9); the caller divides each of its n_s samples'
+// contributions by n_s.
+struct StrategySet {
+    // t = 1 strategies (light tracing: a lens point sampled from light vertex
+    // s-1, splatted) in play; off, their terms leave every weight's sum and
+    // MISWeight of a t = 1 strategy is 0 (G-BDPT Table 1 "w/o LTP").
+    bool lightTracing = true;
+    // n_LT: light-tracing samples per camera sample (1 for BDPT: one light
+    // subpath per camera sample; a VCM pass with N_light light paths for N_pixel
+    // camera samples has N_light / N_pixel). Scales the t = 1 terms.
+    Float lightTracingSamples = 1;
+    // Vertex merging (VCM, Georgiev et al. 2012; G-VCM gradient-domain-vcm.md
+    // Eq. 12): each interior vertex adds a merging term eta_VCM p_VC,i with
+    // mergeFactor = eta_VCM = pi r^2 N_light. Not implemented yet: MISWeight
+    // stops with a failed CHECK when merging is requested, so that no
+    // integrator silently gets connection-only weights for merged paths.
+    bool merging = false;
+    Float mergeFactor = 0;
+};
 
 // Everything the connection code needs besides the subpaths (read-only, shared by threads).
 struct BidirContext {
@@ -50,6 +77,8 @@ struct BidirContext {
     // The MIS weights (which ignore it) still sum to one, so every strategy stays
     // unbiased: the continuation is an unbiased random weighting of the suffix.
     int rrDepth = -1;
+    // The strategies in play (ConnectBDPT and MISWeight without a set use it).
+    StrategySet strategies;
     // Sets scene/camera/light sampler and the near-coincidence threshold
     // (1e-5 of the scene's bounding-sphere diameter).
     void init(const Scene &s, const LightSampler &ls, MISHeuristic h);
@@ -111,18 +140,25 @@ struct ConnectResult {
     bool shadowRayTraced = false;
 };
 
-// Connects light vertex s-1 with camera vertex t-1 (strategy (s, t)); s = 1 and
-// t = 1 sample a fresh light/lens vertex with `u`. Works on any pair of
+// Connects light vertex s-1 with camera vertex t-1 (strategy (s, t)) and
+// weights it over ctx.strategies; s = 1 and t = 1 sample a fresh light/lens
+// vertex with `u`. Works on any pair of
 // subpaths with BSDFs (stored subpaths: rebuild them first). Returns false when
 // the strategy contributes nothing.
 bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera, int s, int t,
                  const ConnectSamples &u, ConnectResult *res);
 
 // MIS weight of strategy (s, t) for the path formed by light[0..s-1] and
-// camera[t-1..0]. `sampled` replaces light[s-1] (s = 1) or camera[t-1] (t = 1)
-// when the connection sampled a new endpoint (nullptr: use the subpath's).
-Float MISWeight(const BidirContext &ctx, SubpathView light, SubpathView camera, int s, int t,
+// camera[t-1..0], over the strategies of `set`. `sampled` replaces light[s-1]
+// (s = 1) or camera[t-1] (t = 1) when the connection sampled a new endpoint
+// (nullptr: use the subpath's).
+Float MISWeight(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s, int t,
                 const PathVertex *sampled);
+// The same over the context's strategies.
+inline Float MISWeight(const BidirContext &ctx, SubpathView light, SubpathView camera, int s, int t,
+                       const PathVertex *sampled) {
+    return MISWeight(ctx, ctx.strategies, light, camera, s, t, sampled);
+}
 
 // True when strategy (s, t) of the full path could produce it: both endpoints
 // connectible and the connection edge not degenerate (used by MISWeight and tests).

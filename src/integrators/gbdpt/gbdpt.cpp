@@ -12,20 +12,15 @@ namespace gradus {
 std::unique_ptr<Integrator> CreateGBDPTIntegrator(const EntityDesc &d) { return std::make_unique<GBDPTIntegrator>(d); }
 
 namespace {
-Spectrum SafeRatio(const Spectrum &a, const Spectrum &b) {
-    return Spectrum(b.r != 0 ? a.r / b.r : 0, b.g != 0 ? a.g / b.g : 0, b.b != 0 ? a.b / b.b : 0);
-}
-// Layers of the light-tracing buffer (same meaning as GradientFilm's).
-enum { LPrimal, LPrimalSq, LDxF, LDxFSq, LDxB, LDxBSq, LDyF, LDyFSq, LDyB, LDyBSq, LNum };
 }  // namespace
 
 struct GBDPTIntegrator::ThreadState {
-    GBDPTLocalStats stats;
-    uint64_t cases[3] = {};  // base connections by case
+    SubpathShiftStats shift;
+    // By case (i), (ii), (iii): base connections, gradient samples, shifted ones.
+    uint64_t cases[3] = {}, caseAttempts[3] = {}, caseSuccesses[3] = {};
 };
 struct GBDPTIntegrator::Store {
     tbb::enumerable_thread_specific<ThreadState> threads;
-    size_t pixels = 0;
 };
 
 GBDPTIntegrator::~GBDPTIntegrator() = default;
@@ -52,7 +47,7 @@ ParamTable<GBDPTSettings> Table() {
                         "camera subpath shift: manifold walk (Sec. 3.1) or half-vector copy (Kettunen et al. 2015)");
     t.boolean("lighttracing", &S::lightTracing, true,
               "false: no light-tracing paths, in no MIS weight either (Table 1 \"w/o LTP\")");
-    t.enumeration<S::MIS>("mis", &S::mis, "combined", {{"combined", S::MIS::Combined}, {"simple", S::MIS::Simple}},
+    t.enumeration<S::MIS>("mis", &S::mis, "combined", {{"combined", S::GBDPTSettings::MIS::Combined}, {"simple", S::MIS::Simple}},
                           "gradient MIS: combined (Eq. 8) or simple (Eq. 9)");
     return t;
 }
@@ -67,6 +62,8 @@ void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     scene_ = &scene;
     lightSampler_ = LightSampler(scene.lights, set_.lightStrategy, loc_);
     bctx_.init(scene, lightSampler_, MISHeuristic::Balance);  // Eq. 8 uses the balance heuristic
+    // "lighttracing false": the t = 1 strategies are neither sampled nor in any MIS sum.
+    bctx_.strategies.lightTracing = set_.lightTracing;
     bctx_.rrDepth = set_.rrDepth;  // -1 (the table allows no other)
     mscene_ = std::make_unique<EmbreeManifoldScene>(scene);
     sctx_.bidir = &bctx_;
@@ -78,55 +75,29 @@ void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     // Triangle hits come from Embree in single precision: positions are good to
     // ~1e-7 relative, so the double-precision walk tolerance (1e-7) is loosened.
     sctx_.walk.relativeTolerance = 1e-5;
-    gfilm_.init(film, set_.filmFilter);  // box (the table allows no other)
-    filmBounds_ = film.pixelBounds();
+    // Light-tracing (case iii) primal and gradients are GradientFilm splats:
+    // merged in tile order, so images do not depend on the thread count.
+    initGradients(film, false, true);
     splatScale_ = LightTracingSplatScale(film);
     store_->threads.clear();
-    store_->pixels = size_t(filmBounds_.area());
-    // Light-tracing (case iii) primal and gradients are film splats on hidden
-    // layers: merged in tile order, so images do not depend on the thread count.
-    static const char *names[LNum] = {"primal", "primal_sq", "dxf", "dxf_sq", "dxb",
-                                      "dxb_sq", "dyf", "dyf_sq", "dyb", "dyb_sq"};
-    for (int l = 0; l < LNum; ++l) ltLayer_[l] = film.addLayer(std::string("gbdpt_lighttracing_") + names[l]);
 }
 
 void GBDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const {
     bool inside[kNumNeighbours];
     Point2i p = rec.pixel();
-    for (int k = 0; k < kNumNeighbours; ++k)
-        inside[k] = filmBounds_.inside(p) &&
-                    filmBounds_.inside({p.x + kNeighbourOffsets[k].x, p.y + kNeighbourOffsets[k].y});
-    std::vector<Splat> splats;
+    for (int k = 0; k < kNumNeighbours; ++k) inside[k] = pairInside(p, k);
+    std::vector<GradientSplat> splats;
     GradientSample s = sample(cs, sampler, arena, inside, &splats);
     gfilm_.record(rec, s);
-    if (splats.empty()) return;
-    auto add = [&](Point2i px, int layer, const Spectrum &v) {
-        if (!filmBounds_.inside(px)) return;
-        rec.splat(Point2(px.x + 0.5, px.y + 0.5), v, ltLayer_[layer]);
-    };
-    const int lay[kNumNeighbours][2] = {{LDxF, LDxFSq}, {LDxB, LDxBSq}, {LDyF, LDyFSq}, {LDyB, LDyBSq}};
-    for (const Splat &sp : splats) {
-        if (!sp.primal.isFinite()) continue;
-        Spectrum v = sp.primal * splatScale_;
-        add(sp.pixel, LPrimal, v);
-        add(sp.pixel, LPrimalSq, v * v);
-        for (int k = 0; k < kNumNeighbours; ++k) {
-            if (!sp.active[k]) continue;
-            Point2i off = kNeighbourOffsets[k];
-            bool forward = off.x + off.y > 0;
-            Spectrum d = sp.diff[k] * (forward ? splatScale_ : -splatScale_);
-            Point2i at = forward ? sp.pixel : Point2i{sp.pixel.x + off.x, sp.pixel.y + off.y};
-            add(at, lay[k][0], d);
-            add(at, lay[k][1], d * d);
-        }
-    }
+    // Light-tracing values are normalised like BDPT's splats (line 16).
+    for (const GradientSplat &sp : splats) gfilm_.splatLightTracing(rec, sp, splatScale_);
 }
 
 GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler, Arena &arena,
-                                       const bool inside[kNumNeighbours], std::vector<Splat> *splats) const {
+                                       const bool inside[kNumNeighbours], std::vector<GradientSplat> *splats) const {
     GradientSample out;
     ThreadState &ts = local();
-    GBDPTLocalStats &st = ts.stats;
+    SubpathShiftStats &st = ts.shift;
     const Scene &scene = *scene_;
     Ray ray;
     Float w = scene.camera->generateRay(cs, &ray);
@@ -205,47 +176,32 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
             }
             if (!ok) continue;  // blocked or black base path: nothing to shift (Sec. 4)
             const Spectrum fx = r.unweighted * w;
-            Float wx = r.weight;
-            // Without light-tracing paths every weight leaves the t = 1 strategy
-            // out: w' = p_st / sum_{k != LT} p_k = w / (1 - w p_LT / p_st).
-            PathVertex lpv;
-            if (useLp) {
-                lpv = lp.v;
-                lpv.pdfFwd = PdfLightOrigin(bctx_, lpv, cam.v[t - 1]);
-            }
-            auto noLT = [&](Float wb, SubpathView cv) {
-                if (set_.lightTracing || t < 2 || !(wb > 0)) return wb;
-                SubpathView lv = useLp ? SubpathView{&lpv, nullptr, 1} : lightView;
-                Float q = 1 - wb * LightTracingRatio(sctx_, lv, cv, s, t, useLp ? &lpv : nullptr);
-                return q > 1e-6 ? wb / q : Float(0);
-            };
-            wx = noLT(wx, camView);
+            // BDPT weight over the strategies in play (bctx_.strategies: without
+            // light tracing the t = 1 terms are left out of every sum).
+            const Float wx = r.weight;
 
             if (t == 1) {
                 // [8-11] light-tracing path (case (iii)): shifted one by one.
                 ++ts.cases[2];
-                Splat sp;
+                GradientSplat sp;
+                GradientSample &g = sp.value;
                 sp.pixel = Point2i{int(std::floor(r.pRaster.x)), int(std::floor(r.pRaster.y))};
-                sp.primal = r.L;
+                g.primal = r.L;
                 for (int k = 0; k < kNumNeighbours; ++k) {
+                    if (!pairInside(sp.pixel, k)) continue;
                     Point2i off = kNeighbourOffsets[k];
-                    Point2i pj{sp.pixel.x + off.x, sp.pixel.y + off.y};
-                    if (!filmBounds_.inside(sp.pixel) || !filmBounds_.inside(pj)) continue;
-                    sp.active[k] = true;
+                    g.active[k] = true;
                     Spectrum fy;
                     Float wy = 0, rho = 0;
-                    bool shifted = false;
-                    if (set_.lightTracing) {
-                        ++st.caseAttempts[2];
-                        shifted = ShiftLightTracingPath(sctx_, light, s, lens, r.pRaster, r.unweighted, off, arena,
-                                                        &fy, &wy, &rho, &st);
-                        if (shifted) ++st.caseSuccesses[2];
-                    }
+                    ++ts.caseAttempts[2];
+                    bool shifted = ShiftLightTracingPath(sctx_, light, s, lens, r.pRaster, r.unweighted, off, arena,
+                                                         &fy, &wy, &rho, &st);
                     if (shifted) {
-                        Float wg = set_.mis == MIS::Combined ? CombinedWeight(wx, wy, rho) : 0.5 * wx;  // Eq. 8 / Eq. 9
-                        sp.diff[k] = (fy - r.unweighted) * wg;
+                        ++ts.caseSuccesses[2];
+                        Float wg = set_.mis == GBDPTSettings::MIS::Combined ? CombinedWeight(wx, wy, rho) : 0.5 * wx;  // Eq. 8 / Eq. 9
+                        g.diff[k] = (fy - r.unweighted) * wg;
                     } else {
-                        sp.diff[k] = r.unweighted * -wx;  // fallback: zero offset, BDPT weight
+                        g.diff[k] = r.unweighted * -wx;  // fallback: zero offset, BDPT weight
                     }
                 }
                 splats->push_back(sp);
@@ -261,7 +217,7 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
             for (int k = 0; k < kNumNeighbours; ++k) {
                 if (!inside[k]) continue;
                 const CameraShift &sh = shifts[k];
-                ++st.caseAttempts[cas];
+                ++ts.caseAttempts[cas];
                 ConnectResult ry;
                 bool oky = false;
                 if (kc <= sh.validUpTo && sh.r >= 0 && kc > sh.r && !(s == 1 && !useLp)) {
@@ -269,7 +225,7 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                     // (same vertices, same shadow ray): only the camera-side
                     // throughput and the offset's MIS densities differ.
                     SubpathView yv = sh.y.view();
-                    ry.unweighted = r.unweighted * SafeRatio(sh.y.v[kc].throughput(), cam.v[kc].throughput());
+                    ry.unweighted = r.unweighted * SafeDiv(sh.y.v[kc].throughput(), cam.v[kc].throughput());
                     if (useLp) {
                         PathVertex sv = lp.v;
                         sv.pdfFwd = PdfLightOrigin(bctx_, sv, sh.y.v[kc]);
@@ -286,16 +242,10 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                         oky = ConnectBDPT(bctx_, lightView, yv, s, t, u, &ry);
                     oky = oky && !ry.unweighted.isBlack() && ry.weight > 0;
                 }
-                if (oky && !set_.lightTracing) {
-                    if (useLp) lpv.pdfFwd = PdfLightOrigin(bctx_, lp.v, sh.y.v[kc]);
-                    ry.weight = noLT(ry.weight, sh.y.view());
-                    if (useLp) lpv.pdfFwd = PdfLightOrigin(bctx_, lp.v, cam.v[kc]);
-                    oky = ry.weight > 0;
-                }
                 if (oky) {
-                    ++st.caseSuccesses[cas];
+                    ++ts.caseSuccesses[cas];
                     Spectrum fy = ry.unweighted * w;
-                    Float wg = set_.mis == MIS::Combined ? CombinedWeight(wx, ry.weight, sh.rho[kc]) : 0.5 * wx;
+                    Float wg = set_.mis == GBDPTSettings::MIS::Combined ? CombinedWeight(wx, ry.weight, sh.rho[kc]) : 0.5 * wx;
                     out.diff[k] += (fy - fx) * wg;
                 } else {
                     out.diff[k] += fx * -wx;
@@ -308,45 +258,22 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
 }
 
 void GBDPTIntegrator::finish(const Film &film, const RenderStats &stats, Image *out) {
-    const double spp = stats.spp;
-    GradientImages g = gfilm_.images(film, spp);
-    // Light-tracing splats: the film normalises them by the number of
-    // bidirectional samples (spp per pixel; the splat scale is already applied), line 16.
-    Image lt[LNum];
-    for (int l = 0; l < LNum; ++l) lt[l] = film.layerImage(ltLayer_[l]);
-    double invN = spp > 0 ? 1 / spp : 0;
-    for (int y = 0; y < g.height; ++y)
-        for (int x = 0; x < g.width; ++x)
-            for (int ch = 0; ch < 3; ++ch) {
-                auto at = [&](int layer) { return double(lt[layer].at(x, y, ch)); };
-                size_t i = (size_t(y) * g.width + x) * 3 + ch;
-                g.primal[i] += float(at(LPrimal));
-                g.dx[i] += float(at(LDxF) + at(LDxB));
-                g.dy[i] += float(at(LDyF) + at(LDyB));
-                // Variance of the splatted part approximated by its second moment / N.
-                g.primalVar[i] += float(at(LPrimalSq) * invN);
-                g.dxVar[i] += float((at(LDxFSq) + at(LDxBSq)) * invN);
-                g.dyVar[i] += float((at(LDyFSq) + at(LDyBSq)) * invN);
-            }
-    WriteGradientOutput(g, set_.norm, set_.alpha, out, &reconReport_);
+    finishGradients(film, stats, set_.norm, set_.alpha, out);
 }
 
 std::string GBDPTIntegrator::statistics() const {
-    GBDPTLocalStats tot;
-    uint64_t cases[3] = {};
-    ShiftStats ss;
+    SubpathShiftStats tot;
+    uint64_t cases[3] = {}, attempts[3] = {}, successes[3] = {};
     for (const ThreadState &t : store_->threads) {
-        ss.add(t.stats.shift);
+        tot.add(t.shift);
         for (int i = 0; i < 3; ++i) {
-            tot.caseAttempts[i] += t.stats.caseAttempts[i];
-            tot.caseSuccesses[i] += t.stats.caseSuccesses[i];
             cases[i] += t.cases[i];
+            attempts[i] += t.caseAttempts[i];
+            successes[i] += t.caseSuccesses[i];
         }
-        tot.walks += t.stats.walks;
-        tot.walkFailures += t.stats.walkFailures;
-        tot.unsupportedChains += t.stats.unsupportedChains;
-        for (size_t i = 0; i < size_t(ManifoldStatus::Count); ++i) tot.walkStatus[i] += t.stats.walkStatus[i];
     }
+    ShiftStats ss;
+    ss.add(tot.shift);
     std::string s = ss.format(std::string("G-BDPT shifts (") + (set_.manifold ? "manifold" : "halfvector") +
                               ", threshold " + std::to_string(set_.shiftThreshold) + ")");
     char buf[256];
@@ -354,25 +281,13 @@ std::string GBDPTIntegrator::statistics() const {
                             "(iii) light-tracing path"};
     for (int i = 0; i < 3; ++i) {
         std::snprintf(buf, sizeof buf, "  case %s: base paths %llu, gradient samples %llu, shifted %llu (%.2f%%)\n",
-                      names[i], (unsigned long long)cases[i], (unsigned long long)tot.caseAttempts[i],
-                      (unsigned long long)tot.caseSuccesses[i],
-                      tot.caseAttempts[i] ? 100.0 * tot.caseSuccesses[i] / tot.caseAttempts[i] : 0.0);
+                      names[i], (unsigned long long)cases[i], (unsigned long long)attempts[i],
+                      (unsigned long long)successes[i], attempts[i] ? 100.0 * successes[i] / attempts[i] : 0.0);
         s += buf;
     }
-    if (!sctx_.trySpecular) s += "  manifold walks: skipped (no specular or near-specular surfaces)\n";
-    std::snprintf(buf, sizeof buf, "  manifold walks %llu, failures %llu; second chains with glossy vertices "
-                                   "(fallback) %llu\n",
-                  (unsigned long long)tot.walks, (unsigned long long)tot.walkFailures,
-                  (unsigned long long)tot.unsupportedChains);
-    s += buf;
-    for (size_t i = 1; i < size_t(ManifoldStatus::Count); ++i)
-        if (tot.walkStatus[i]) {
-            std::snprintf(buf, sizeof buf, "    walk failure %-26s %llu\n", ToString(ManifoldStatus(i)),
-                          (unsigned long long)tot.walkStatus[i]);
-            s += buf;
-        }
+    s += tot.formatWalks(sctx_.trySpecular);
     if (!set_.lightTracing) s += "  light-tracing paths not shifted (lighttracing false)\n";
-    return s + reconReport_;
+    return withReconstructionReport(s);
 }
 
 }  // namespace gradus

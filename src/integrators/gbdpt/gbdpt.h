@@ -45,6 +45,7 @@
 #include "integrators/gbdpt/gbdpt_shift.h"
 #include "integrators/gradient/gradient_film.h"
 #include "integrators/gradient/gradient_params.h"
+#include "integrators/gradient/gradient_family.h"
 #include "integrators/integrator.h"
 #include "lights/light_sampler.h"
 
@@ -58,7 +59,7 @@ struct GBDPTSettings : BidirSettings, GradientSettings {
     MIS mis;
 };
 
-class GBDPTIntegrator : public PixelSampleIntegrator {
+class GBDPTIntegrator : public PixelSampleIntegrator, public GradientFamily {
   public:
     using MIS = GBDPTSettings::MIS;
     explicit GBDPTIntegrator(const EntityDesc &desc);
@@ -69,18 +70,11 @@ class GBDPTIntegrator : public PixelSampleIntegrator {
     void finish(const Film &film, const RenderStats &stats, Image *out) override;
     std::string statistics() const override;
 
-    // Light-tracing contributions of one sample (raster pixel, primal, four differences).
-    struct Splat {
-        Point2i pixel;
-        Spectrum primal{0};
-        Spectrum diff[kNumNeighbours] = {Spectrum(0), Spectrum(0), Spectrum(0), Spectrum(0)};
-        bool active[kNumNeighbours] = {false, false, false, false};
-    };
     // One camera sample without a film (tests): camera-side primal and
     // differences, and the light-tracing splats (values before the splat scale).
     GradientSample sample(const CameraSample &cs, Sampler &sampler, Arena &arena, const bool inside[kNumNeighbours],
-                          std::vector<Splat> *splats) const;
-    const GBDPTShiftContext &shiftContext() const { return sctx_; }
+                          std::vector<GradientSplat> *splats) const;
+    const SubpathShiftContext &shiftContext() const { return sctx_; }
     const BidirContext &bidirContext() const { return bctx_; }
     Float splatScale() const { return splatScale_; }
     int maxDepth() const { return set_.maxDepth; }
@@ -91,13 +85,9 @@ class GBDPTIntegrator : public PixelSampleIntegrator {
     LightSampler lightSampler_;
     BidirContext bctx_;
     std::unique_ptr<EmbreeManifoldScene> mscene_;
-    GBDPTShiftContext sctx_;
-    GradientFilm gfilm_;
-    Bounds2i filmBounds_;
-    int ltLayer_[10] = {};  // hidden film layers of the light-tracing splats (gbdpt.cpp)
+    SubpathShiftContext sctx_;
     Float splatScale_ = 1;
-    std::string reconReport_;
-    // Per-thread light-tracing accumulation and statistics (merged at the end).
+    // Per-thread statistics (summed by statistics()).
     struct ThreadState;
     struct Store;
     std::unique_ptr<Store> store_;

@@ -30,6 +30,7 @@
 
 #include "integrators/gradient/gradient_film.h"
 #include "integrators/gradient/gradient_params.h"
+#include "integrators/gradient/gradient_family.h"
 #include "integrators/gradient/shift.h"
 #include "integrators/integrator.h"
 #include "integrators/path/path.h"
@@ -43,7 +44,7 @@ struct GPTSettings : PathSettings, GradientSettings {
     ShiftMode mode;
 };
 
-class GPTIntegrator : public PixelSampleIntegrator {
+class GPTIntegrator : public PixelSampleIntegrator, public GradientFamily {
   public:
     using ShiftMode = GPTSettings::ShiftMode;
     explicit GPTIntegrator(const EntityDesc &desc);
@@ -63,9 +64,6 @@ class GPTIntegrator : public PixelSampleIntegrator {
     GPTSettings set_;
     FileLoc loc_;
     LightSampler lightSampler_;
-    GradientFilm gfilm_;
-    Bounds2i filmBounds_;
-    std::string reconReport_;
     mutable ShiftStats stats_;
 };
 

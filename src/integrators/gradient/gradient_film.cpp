@@ -4,11 +4,14 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/error.h"
+
 namespace gradus {
 
 const Point2i kNeighbourOffsets[kNumNeighbours] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
 
-void GradientFilm::init(Film &film, bool useFilmFilter) {
+void GradientFilm::init(Film &film, bool useFilmFilter, bool lightTracing) {
+    bounds_ = film.pixelBounds();
     filter_ = useFilmFilter ? &film.filter() : nullptr;
     filterNorm_ = footprint_ = 1;
     if (filter_) {
@@ -26,9 +29,12 @@ void GradientFilm::init(Film &film, bool useFilmFilter) {
     static const char *names[NumLayers] = {"gd.primal", "gd.primal2", "gd.dxf", "gd.dxf2", "gd.dxb",
                                            "gd.dxb2",   "gd.dyf",     "gd.dyf2", "gd.dyb", "gd.dyb2"};
     for (int i = 0; i < NumLayers; ++i) layer_[i] = film.addLayer(names[i]);
+    lightTracing_ = lightTracing;
+    if (lightTracing)
+        for (int i = 0; i < NumLayers; ++i) splatLayer_[i] = film.addLayer(std::string("gd.lt.") + (names[i] + 3));
 }
 
-void GradientFilm::splat(SampleRecorder &rec, int layer, int layerSq, const Spectrum &v, Point2i offset) const {
+void GradientFilm::add(SampleRecorder &rec, int layer, int layerSq, const Spectrum &v, Point2i offset) const {
     if (!filter_) {
         rec.addLayer(layer_[layer], v, offset);
         rec.addLayer(layer_[layerSq], v * v, offset);
@@ -53,16 +59,36 @@ void GradientFilm::splat(SampleRecorder &rec, int layer, int layerSq, const Spec
 
 void GradientFilm::record(SampleRecorder &rec, const GradientSample &s) const {
     if (!s.primal.isFinite()) return;
-    splat(rec, Primal, PrimalSq, s.primal, {0, 0});
-    // +x: dx at p; -x: dx at p-(1,0) with the sign flipped (I(p) - I(p-1)). Same for y.
-    const int lay[kNumNeighbours][2] = {{DxF, DxFSq}, {DxB, DxBSq}, {DyF, DyFSq}, {DyB, DyBSq}};
+    add(rec, Primal, PrimalSq, s.primal, {0, 0});
     for (int k = 0; k < kNumNeighbours; ++k) {
         if (!s.active[k] || !s.diff[k].isFinite()) continue;
         Point2i off = kNeighbourOffsets[k];
         bool forward = off.x + off.y > 0;
         Spectrum v = forward ? s.diff[k] : s.diff[k] * -1.0;
         Point2i at = forward ? Point2i{0, 0} : off;
-        splat(rec, lay[k][0], lay[k][1], v, at);
+        add(rec, kDiffLayers_[k][0], kDiffLayers_[k][1], v, at);
+    }
+}
+
+void GradientFilm::splatLightTracing(SampleRecorder &rec, const GradientSplat &s, Float scale) const {
+    GRADUS_CHECK(lightTracing_);
+    const GradientSample &g = s.value;
+    if (!g.primal.isFinite()) return;
+    auto put = [&](Point2i px, int layer, const Spectrum &v) {
+        if (!bounds_.inside(px)) return;
+        rec.splat(Point2(px.x + 0.5, px.y + 0.5), v, splatLayer_[layer]);
+    };
+    Spectrum v = g.primal * scale;
+    put(s.pixel, Primal, v);
+    put(s.pixel, PrimalSq, v * v);
+    for (int k = 0; k < kNumNeighbours; ++k) {
+        if (!g.active[k]) continue;
+        Point2i off = kNeighbourOffsets[k];
+        bool forward = off.x + off.y > 0;
+        Spectrum d = g.diff[k] * (forward ? scale : -scale);
+        Point2i at = forward ? s.pixel : Point2i{s.pixel.x + off.x, s.pixel.y + off.y};
+        put(at, kDiffLayers_[k][0], d);
+        put(at, kDiffLayers_[k][1], d * d);
     }
 }
 
@@ -93,12 +119,25 @@ GradientImages GradientFilm::images(const Film &film, double spp) const {
         g.dxVar[i] = float(var(DxF, DxFSq, i) + var(DxB, DxBSq, i));
         g.dyVar[i] = float(var(DyF, DyFSq, i) + var(DyB, DyBSq, i));
     }
+    if (lightTracing_) addSplats(film, spp, &g);
     return g;
 }
 
-void GradientFilm::finish(const Film &film, double spp, ReconstructionNorm norm, double alpha, Image *out,
-                          std::string *report) const {
-    WriteGradientOutput(images(film, spp), norm, alpha, out, report);
+void GradientFilm::addSplats(const Film &film, double spp, GradientImages *g) const {
+    // The film has normalised the splats by the samples per pixel; their
+    // variance is approximated by the second moment / N.
+    Image L[NumLayers];
+    for (int i = 0; i < NumLayers; ++i) L[i] = film.layerImage(splatLayer_[i]);
+    double invN = spp > 0 ? 1 / spp : 0;
+    for (size_t i = 0; i < g->primal.size(); ++i) {
+        auto at = [&](int layer) { return double(L[layer].data()[i]); };
+        g->primal[i] += float(at(Primal));
+        g->dx[i] += float(at(DxF) + at(DxB));
+        g->dy[i] += float(at(DyF) + at(DyB));
+        g->primalVar[i] += float(at(PrimalSq) * invN);
+        g->dxVar[i] += float((at(DxFSq) + at(DxBSq)) * invN);
+        g->dyVar[i] += float((at(DyFSq) + at(DyBSq)) * invN);
+    }
 }
 
 void WriteGradientOutput(const GradientImages &g, ReconstructionNorm norm, double alpha, Image *out,

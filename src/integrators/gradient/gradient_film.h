@@ -12,7 +12,12 @@
 // splats it with the film's filter h normalised to unit integral: the offset
 // sample at s+e reaches pixel q+e with the same weight h(q - s) as the base
 // reaches q, so h(q - s) (f(y) - f(x)) estimates the filtered gradient at q.
-// finish() writes primal, dx, dy, primal_var, dx_var, dy_var,
+// Light-tracing samples (t = 1 strategies of the bidirectional integrators)
+// reach arbitrary pixels: splatLightTracing() records their primal and
+// differences through the film's splat path (normalised by the samples per
+// pixel like every splat) on layers of their own, whose variance is
+// approximated by the second moment / N; images() adds both parts.
+// WriteGradientOutput writes primal, dx, dy, primal_var, dx_var, dy_var,
 // reconstructed_l1, reconstructed_l2 (and reconstructed_weighted when chosen)
 // and sets the unprefixed R, G, B to the chosen reconstruction.
 #pragma once
@@ -37,24 +42,39 @@ struct GradientSample {
     bool active[kNumNeighbours] = {false, false, false, false};
 };
 
+// A light-tracing sample's primal and differences, at raster pixel `pixel`.
+struct GradientSplat {
+    Point2i pixel;
+    GradientSample value;
+};
+
 class GradientFilm {
   public:
     // Adds the internal accumulation layers to the film; useFilmFilter selects
-    // the film's pixel filter instead of the box.
-    void init(Film &film, bool useFilmFilter = false);
+    // the film's pixel filter instead of the box; lightTracing adds the layers
+    // of splatLightTracing().
+    void init(Film &film, bool useFilmFilter = false, bool lightTracing = false);
     // Records one camera sample's primal value and neighbour differences.
     void record(SampleRecorder &rec, const GradientSample &s) const;
-    // Builds the output image from the film (replaces *out, keeping its metadata).
-    // `samplesPerPixel` is the N of the variance of the mean.
-    void finish(const Film &film, double samplesPerPixel, ReconstructionNorm norm, double alpha, Image *out,
-                std::string *report = nullptr) const;
+    // Records a light-tracing sample (values times `scale`) at its pixel
+    // (differences: forward at the pixel, backward at the neighbour, as in
+    // record()); pixels outside the film are dropped. Needs init(.., true).
+    void splatLightTracing(SampleRecorder &rec, const GradientSplat &s, Float scale) const;
     // Extracts the gradient images (with variances) from the film.
+    // `samplesPerPixel` is the N of the variance of the mean.
     GradientImages images(const Film &film, double samplesPerPixel) const;
 
   private:
     enum { Primal, PrimalSq, DxF, DxFSq, DxB, DxBSq, DyF, DyFSq, DyB, DyBSq, NumLayers };
-    void splat(SampleRecorder &rec, int layer, int layerSq, const Spectrum &v, Point2i offset) const;
+    // Layers (value, square) of each neighbour's difference: +x is dx at p; -x
+    // is dx at p-(1,0) with the sign flipped (I(p) - I(p-1)). Same for y.
+    static constexpr int kDiffLayers_[kNumNeighbours][2] = {{DxF, DxFSq}, {DxB, DxBSq}, {DyF, DyFSq}, {DyB, DyBSq}};
+    void add(SampleRecorder &rec, int layer, int layerSq, const Spectrum &v, Point2i offset) const;
+    void addSplats(const Film &film, double samplesPerPixel, GradientImages *g) const;
     int layer_[NumLayers] = {};
+    int splatLayer_[NumLayers] = {};  // light-tracing splats (same meaning as layer_)
+    bool lightTracing_ = false;
+    Bounds2i bounds_;
     const Filter *filter_ = nullptr;  // null: box
     Float filterNorm_ = 1;            // 1 / integral of the filter
     Float footprint_ = 1;             // K: pixels reached by one sample

@@ -13,6 +13,7 @@
 // are shifted by half-vector copy (or replay), rough ones may be reconnected.
 #pragma once
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <string>
 
@@ -98,6 +99,16 @@ bool ShiftReplay(const BSDF &offsetBsdf, const Vec3 &woY, Float uc, Point2 u, Fl
 inline Float GradientMISWeight(Float pTechX, Float pOtherX, Float pTechY, Float pOtherY, Float ratio) {
     Float den = Sqr(pTechX) + Sqr(pOtherX) + Sqr(ratio) * (Sqr(pTechY) + Sqr(pOtherY));
     return den > 0 ? Sqr(pTechX) / den : 0;
+}
+
+// Combined gradient/BDPT weight of G-BDPT Eq. 8 with the balance heuristic,
+//   w_ij,st(x) = p_st(x) / sum_k [p_k(x) + p_k(y) |T'|] = 1 / (1 / w_st(x) + rho / w_st(y)),
+// from the BDPT weights wx, wy of base and offset and rho = |T'| p_st(y) / p_st(x).
+// A failed or blocked offset (wy or rho not positive) falls back to wx (Sec. 4).
+inline Float CombinedWeight(Float wx, Float wy, Float rho) {
+    if (!(wx > 0)) return 0;
+    if (!(wy > 0) || !(rho > 0) || !std::isfinite(rho)) return wx;
+    return 1 / (1 / wx + rho / wy);
 }
 
 // ---- Statistics ------------------------------------------------------------

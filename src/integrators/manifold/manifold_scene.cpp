@@ -1,4 +1,4 @@
-#include "integrators/gbdpt/manifold_scene.h"
+#include "integrators/manifold/manifold_scene.h"
 
 namespace gradus {
 

@@ -1,4 +1,6 @@
 // ManifoldScene adapter over the renderer's Embree scene (manifold/manifold.h).
+// Compiled into gradus_render (it needs the Scene); the gradus_manifold
+// library (constraints, walk) stays scene-free.
 //
 // primitiveId is the Embree geometry id (one id per shape/mesh, not per
 // triangle): a walk may slide a vertex across triangle edges of one mesh.

@@ -1,0 +1,361 @@
+#include "integrators/gradient/camera_shift.h"
+
+namespace gradus {
+
+namespace {
+
+// Where the offset follows the base: the half-vector chain is re-traced up to
+// vertex traceEnd, then the offset reconnects to the base at rec (-1: never).
+struct CameraShiftPlan {
+    int traceEnd = 0, rec = -1;
+};
+
+CameraShiftPlan PlanCameraShift(const SubpathShiftContext &ctx, const ShiftSubpath &x) {
+    const int n = x.n;
+    auto diffuse = [&](int i) { return IsDiffuseVertex(ctx, x.v[i], &x.b[i]); };
+    int b = -1, c = -1;
+    for (int i = 1; i < n; ++i)
+        if (diffuse(i)) {
+            if (b < 0) {
+                b = i;
+            } else {
+                c = i;
+                break;
+            }
+        }
+    CameraShiftPlan plan;
+    if (ctx.manifold) {
+        plan.rec = c;
+    } else {
+        for (int k = 2; k < n; ++k)
+            if (diffuse(k - 1) && diffuse(k)) {
+                plan.rec = k;
+                break;
+            }
+    }
+    plan.traceEnd = ctx.manifold ? (b >= 0 ? b : n - 1) : (plan.rec >= 0 ? plan.rec - 1 : n - 1);
+    if (!ctx.manifold && b >= 0) {
+        // Half-vector shift: a specular vertex between b and the reconnection
+        // makes the shift of the whole path a fallback, as for its light-tracing
+        // strategy (not shifted across specular chains): a path's strategies must
+        // all use Eq. 8 or all fall back, or the weights do not sum to one.
+        for (int k = b + 1; k < (plan.rec >= 0 ? plan.rec : n); ++k)
+            if (!diffuse(k)) {
+                plan.traceEnd = b;
+                plan.rec = -1;
+                break;
+            }
+    }
+    return plan;
+}
+
+// The offset while it is built: throughput f(y)|T'|/p(x) (Eq. 5), the
+// gradient-MIS ratio rho (Eq. 8) and the direction towards its previous vertex.
+struct OffsetState {
+    Spectrum beta;
+    Float R = 1;
+    Vec3 woY;
+};
+
+// Direction of the offset at a half-vector-chain vertex (Sec. 3.1: the first
+// chain is re-traced with the base's half vectors). Returns the throughput
+// factor f_y |cos| J / p_x and the MIS ratio factor J p_y / p_x.
+bool PropagateHalfVector(const BSDF &bx, const Vec3 &woX, const Vec3 &wiX, bool deltaX, const BSDF &by,
+                         const Vec3 &woY, Vec3 *wiY, Spectrum *factor, Float *ratio, LocalShiftStats *st) {
+    st->attempt(ShiftType::HalfVector);
+    if (deltaX) {
+        bool tr = Transmits(woX, wiX, Vec3(bx.ns()));
+        BSDFSample sx, sy;
+        if (!DeltaLobe(bx, woX, tr, TransportMode::Radiance, &sx) || Dot(sx.wi, wiX) < 1 - kShiftDirTol ||
+            !DeltaLobe(by, woY, tr, TransportMode::Radiance, &sy)) {
+            st->fail(ShiftFailure::Geometry);
+            return false;
+        }
+        *wiY = sy.wi;
+        *factor = sy.f * (AbsDot(sy.wi, Vec3(by.ns())) / sx.pdf);
+        *ratio = sy.pdf / sx.pdf;
+    } else {
+        if (Transmits(woX, wiX, Vec3(bx.ns()))) {  // glossy refraction: not supported by the copy
+            st->fail(ShiftFailure::Geometry);
+            return false;
+        }
+        HalfVectorShift hv;
+        if (!ShiftHalfVector(bx.toLocal(woX), bx.toLocal(wiX), by.toLocal(woY), 1, &hv)) {
+            st->fail(ShiftFailure::Geometry);
+            return false;
+        }
+        *wiY = Normalize(by.toWorld(hv.wi));
+        Spectrum fy = by.f(woY, *wiY);
+        Float py = by.pdf(woY, *wiY), px = bx.pdf(woX, wiX);
+        if (fy.isBlack() || !(py > 0) || !(px > 0)) {
+            st->fail(ShiftFailure::Geometry);
+            return false;
+        }
+        *factor = fy * (AbsDot(*wiY, Vec3(by.ns())) * hv.jacobian / px);
+        *ratio = hv.jacobian * py / px;
+    }
+    st->success(ShiftType::HalfVector);
+    return true;
+}
+
+// Offset surface vertex from a hit, with the base vertex's flags.
+void SetSurfaceVertex(const SurfaceInteraction &si, const BSDF &bsdf, const PathVertex &xv, const Spectrum &beta,
+                      PathVertex *v) {
+    *v = PathVertex();
+    v->type = VertexType::Surface;
+    v->material = si.material;
+    v->p = si.p;
+    v->ng = si.n;
+    v->ns = bsdf.ns();
+    v->wo = si.wo;
+    v->geomId = si.geomId;
+    v->primId = si.primId;
+    v->flags = xv.flags;
+    v->setThroughput(beta);
+}
+
+// Offset vertices 0..traceEnd: the camera ray through the shifted image-plane
+// point, then the first chain re-traced with the base's half vectors.
+void TraceFirstChain(const SubpathShiftContext &ctx, const ShiftSubpath &x, const CameraSample &cs, Point2i off,
+                     int traceEnd, Arena &arena, CameraShift *out, OffsetState *o, LocalShiftStats *st) {
+    const BidirContext &bc = *ctx.bidir;
+    const int n = x.n;
+    ShiftSubpath &y = out->y;
+    ++st->offsetPaths;
+    Ray rx, ray;
+    CameraSample c2 = cs;
+    c2.pFilm = Point2(cs.pFilm.x + off.x, cs.pFilm.y + off.y);
+    Float wx = bc.camera->generateRay(cs, &rx), wy = bc.camera->generateRay(c2, &ray);
+    if (!(wx > 0) || !(wy > 0)) {
+        st->fail(ShiftFailure::Geometry);
+        return;
+    }
+    y.v[0] = x.v[0];
+    y.v[0].p = ray.o;
+    y.deltaSample[0] = 0;
+    out->rho[0] = 1;
+    out->validUpTo = 0;
+    // The image-plane shift has |T'| = 1 and equal pdfs: the offset starts with
+    // the camera weight ratio.
+    o->beta = Spectrum(wy / wx);
+    o->R = 1;
+    SurfaceInteraction isect;
+    for (int i = 1; i <= traceEnd; ++i) {
+        const PathVertex &xv = x.v[i];
+        bool hit = TraceSurface(*bc.scene, ray, &isect);
+        if (!hit) {
+            if (xv.isInfiniteLight() && i == n - 1) {
+                PathVertex &v = y.v[i];
+                v = xv;
+                Vec3 d = Normalize(ray.d);
+                v.p = ray.o + d;
+                v.ng = -d;
+                v.wo = -d;
+                v.setThroughput(o->beta);
+                out->rho[i] = o->R;
+                out->validUpTo = i;
+            } else {
+                st->fail(ShiftFailure::Escaped);
+            }
+            break;
+        }
+        if (xv.type != VertexType::Surface) {
+            st->fail(ShiftFailure::Escaped);
+            break;
+        }
+        BSDF by = isect.material->getBSDF(isect, arena, TransportMode::Radiance);
+        bool dy = by && ClassifyBSDF(&by, ctx.threshold) == ShiftVertexClass::Rough;
+        if (!by || dy != IsDiffuseVertex(ctx, xv, &x.b[i])) {
+            st->fail(ShiftFailure::ClassMismatch);
+            break;
+        }
+        SetSurfaceVertex(isect, by, xv, o->beta, &y.v[i]);
+        y.b[i] = by;
+        y.deltaSample[i] = x.deltaSample[i];
+        out->rho[i] = o->R;
+        out->validUpTo = i;
+        o->woY = isect.wo;
+        if (i == traceEnd || i == n - 1) break;
+        Vec3 wiX = Normalize(x.v[i + 1].p - xv.p), wiY;
+        Spectrum factor;
+        Float ratio;
+        if (!PropagateHalfVector(x.b[i], xv.wo, wiX, x.deltaSample[i], by, o->woY, &wiY, &factor, &ratio, st)) break;
+        o->beta *= factor;
+        o->R *= ratio;
+        ray = isect.spawnRay(wiY);
+    }
+}
+
+// The offset's direction from its vertex i towards the base's x_rec: a direct
+// reconnection (empty second chain) or a manifold walk through the chain's
+// ideal specular vertices i+1..rec-1. J = |d omega_y,i / d omega_x,i|.
+bool ShiftToReconnection(const SubpathShiftContext &ctx, const ShiftSubpath &x, const PathVertex &yi, int i, int rec,
+                         Arena &arena, SubpathShiftStats *st, Vec3 *wiY, Float *J, WalkedInterior *walked) {
+    const Scene &scene = *ctx.bidir->scene;
+    const PathVertex &xi = x.v[i], &xr = x.v[rec];
+    const int k = rec - i - 1;  // interior vertices of the second chain
+    bool ok = true;
+    for (int j = i + 1; j < rec; ++j)
+        if (!x.deltaSample[j]) ok = false;
+    if (!ok) ++st->unsupportedChains;
+    if (xr.isInfiniteLight()) ok = false;
+    if (!ok) return false;
+    if (k == 0) {
+        ReconnectionShift rc;
+        if (!ReconnectToVertex(scene, xi.p, VertexIt(yi), xr, &st->shift, &rc)) return false;
+        *J = rc.jacobian;
+        *wiY = rc.wi;
+        return true;
+    }
+    // Manifold walk from offset b to base c with the base's half vectors.
+    ChainInterior in;
+    ok = ctx.trySpecular && k + 2 <= kMaxManifoldVertices;
+    for (int j = 0; ok && j < k; ++j) {
+        const PathVertex &xv = x.v[i + 1 + j];
+        ok = VertexInteraction(scene, xv, x.v[i + j].p, &in.si[j]);
+        in.bsdf[j] = &x.b[i + 1 + j];
+        in.wo[j] = xv.wo;
+        in.wi[j] = Normalize(x.v[i + 2 + j].p - xv.p);
+        in.transmit[j] = Transmits(in.wo[j], in.wi[j], Vec3(x.b[i + 1 + j].ns()));
+        in.geomId[j] = xv.geomId;
+    }
+    ManifoldChain base, offChain;
+    if (ok)
+        ok = BuildChain(ctx, EndpointSP(xi.p, xi.ng, xi.geomId), in, k, EndpointSP(xr.p, xr.ng, xr.geomId), &base);
+    if (!ok) {
+        st->shift.fail(ShiftFailure::Geometry);
+        return false;
+    }
+    if (!WalkSecondChain(ctx, base, EndpointSP(yi.p, yi.ng, yi.geomId), in, arena, st, &offChain, walked, J))
+        return false;
+    *wiY = Normalize(offChain.v[1].sp.p - yi.p);
+    return true;
+}
+
+// Offset vertices i+1..rec-1 of a walked second chain (ideal specular: the
+// Dirac coefficient of the offset over the base's lobe probability).
+bool AppendWalkedInterior(const ShiftSubpath &x, int i, int rec, const WalkedInterior &walked, CameraShift *out,
+                          OffsetState *o) {
+    ShiftSubpath &y = out->y;
+    for (int j = 0; j < rec - i - 1; ++j) {
+        const PathVertex &xv = x.v[i + 1 + j];
+        BSDFSample sx;
+        bool trj = Transmits(xv.wo, Normalize(x.v[i + 2 + j].p - xv.p), Vec3(x.b[i + 1 + j].ns()));
+        if (!DeltaLobe(x.b[i + 1 + j], xv.wo, trj, TransportMode::Radiance, &sx)) return false;
+        const SurfaceInteraction &si = walked.si[j];
+        SetSurfaceVertex(si, walked.bsdf[j], xv, o->beta, &y.v[i + 1 + j]);
+        y.b[i + 1 + j] = walked.bsdf[j];
+        y.deltaSample[i + 1 + j] = 1;
+        out->rho[i + 1 + j] = o->R;
+        BSDFSample sy;
+        DeltaLobe(walked.bsdf[j], si.wo, trj, TransportMode::Radiance, &sy);
+        o->beta *= sy.f * (AbsDot(sy.wi, Vec3(walked.bsdf[j].ns())) / sx.pdf);
+        o->R *= sy.pdf / sx.pdf;
+    }
+    return true;
+}
+
+// y_rec = x_rec with the offset's incoming direction; later vertices are the
+// base's, their throughputs rescaled by the offset's ratio at rec.
+void CopyBaseTail(const ShiftSubpath &x, int rec, const OffsetState &o, CameraShift *out) {
+    ShiftSubpath &y = out->y;
+    const int n = x.n;
+    const PathVertex &xr = x.v[rec];
+    PathVertex &v = y.v[rec];
+    v = xr;
+    Point3 prevP = y.v[rec - 1].p;
+    v.wo = Normalize(prevP - xr.p);
+    v.setThroughput(o.beta);
+    y.b[rec] = x.b[rec];
+    y.deltaSample[rec] = x.deltaSample[rec];
+    out->rho[rec] = o.R;
+    Float Rn = o.R;
+    Spectrum scale(0);
+    if (rec + 1 < n && x.b[rec]) {
+        Vec3 wi = Normalize(x.v[rec + 1].p - xr.p);
+        Spectrum fyr = x.b[rec].f(v.wo, wi);
+        Float pyr = x.b[rec].pdf(v.wo, wi), pxr = x.b[rec].pdf(xr.wo, wi);
+        if (pxr > 0) {
+            Spectrum betaN = o.beta * fyr * (AbsDot(wi, Vec3(xr.ns)) / pxr);
+            scale = SafeDiv(betaN, x.v[rec + 1].throughput());
+            Rn = o.R * pyr / pxr;
+        }
+    }
+    for (int j = rec + 1; j < n; ++j) {
+        y.v[j] = x.v[j];
+        y.v[j].setThroughput(x.v[j].throughput() * scale);
+        y.b[j] = x.b[j];
+        y.deltaSample[j] = x.deltaSample[j];
+        out->rho[j] = Rn;
+    }
+    out->r = rec;
+    out->validUpTo = n - 1;
+}
+
+// Reconnection of the traced offset (ending at vertex i = traceEnd) to the
+// base at rec through the second chain.
+void ReconnectSecondChain(const SubpathShiftContext &ctx, const ShiftSubpath &x, int i, int rec, Arena &arena,
+                          CameraShift *out, OffsetState *o, SubpathShiftStats *st) {
+    const ShiftSubpath &y = out->y;
+    const PathVertex &xi = x.v[i];
+    Vec3 wiX = Normalize(x.v[i + 1].p - xi.p), wiY;
+    Float J = 0;
+    WalkedInterior walked;
+    if (!ShiftToReconnection(ctx, x, y.v[i], i, rec, arena, st, &wiY, &J, &walked)) return;
+    Spectrum fy = y.b[i].f(o->woY, wiY);
+    Float py = y.b[i].pdf(o->woY, wiY), px = x.b[i].pdf(xi.wo, wiX);
+    if (fy.isBlack() || !(py > 0) || !(px > 0) || !(J > 0) || !std::isfinite(J)) {
+        st->shift.fail(ShiftFailure::Geometry);
+        return;
+    }
+    if (rec - i - 1 == 0) st->shift.success(ShiftType::Reconnection);
+    // Eq. 5 factor of vertex i and its gradient-MIS ratio J p_y / p_x.
+    o->beta *= fy * (AbsDot(wiY, Vec3(y.b[i].ns())) * J / px);
+    o->R *= J * py / px;
+    if (!AppendWalkedInterior(x, i, rec, walked, out, o)) return;
+    CopyBaseTail(x, rec, *o, out);
+}
+
+// Area densities of the offset in both directions (for its own BDPT weights).
+void SetOffsetDensities(const BidirContext &bc, CameraShift *out) {
+    ShiftSubpath &y = out->y;
+    const int last = out->validUpTo;
+    const int fwdEnd = out->r >= 0 ? std::min(out->r + 1, last) : last;
+    for (int k = 1; k <= fwdEnd; ++k) {
+        const PathVertex &p = y.v[k - 1];
+        y.v[k].pdfFwd = y.deltaSample[k - 1]
+                            ? 0
+                            : PdfArea(bc, p, k - 1 > 0 ? &y.b[k - 1] : nullptr, k - 1 > 0 ? &y.v[k - 2] : nullptr,
+                                      y.v[k], TransportMode::Radiance);
+    }
+    const int revEnd = out->r >= 0 ? out->r - 1 : last;
+    for (int k = 1; k <= revEnd; ++k) {
+        y.v[k].pdfRev = 0;
+        if (k + 2 <= last && !y.deltaSample[k + 1] && y.v[k + 1].type == VertexType::Surface)
+            y.v[k].pdfRev = PdfArea(bc, y.v[k + 1], &y.b[k + 1], &y.v[k + 2], y.v[k], TransportMode::Importance);
+    }
+}
+
+}  // namespace
+
+void ShiftCameraSubpath(const SubpathShiftContext &ctx, const ShiftSubpath &x, const CameraSample &cs, Point2i off,
+                        Arena &arena, CameraShift *out, SubpathShiftStats *st) {
+    const int n = x.n;
+    out->validUpTo = -1;
+    out->r = -1;
+    out->y.n = n;
+    out->y.v = ArenaArray<PathVertex>(arena, n);
+    out->y.b = ArenaArray<BSDF>(arena, n);
+    out->y.deltaSample = ArenaArray<uint8_t>(arena, n);
+    out->rho = ArenaArray<Float>(arena, n + 1);
+    if (n < 2) return;
+    const CameraShiftPlan plan = PlanCameraShift(ctx, x);
+    OffsetState o;
+    TraceFirstChain(ctx, x, cs, off, plan.traceEnd, arena, out, &o, &st->shift);
+    const int i = plan.traceEnd;
+    if (plan.rec >= 0 && out->validUpTo == i && i >= 1 && plan.rec > i && out->y.v[i].type == VertexType::Surface)
+        ReconnectSecondChain(ctx, x, i, plan.rec, arena, out, &o, st);
+    SetOffsetDensities(*ctx.bidir, out);
+}
+
+}  // namespace gradus

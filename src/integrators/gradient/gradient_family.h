@@ -1,0 +1,42 @@
+// The gradient-domain family (gpt, gbdpt; later gvcm, gmlt): its runtime
+// state - the GradientFilm, the film's pixel bounds, the reconstruction
+// report - and the common end of a render. A mix-in beside the integrator's
+// render-loop base (PixelSampleIntegrator, PassIntegrator):
+//   preprocess:  initGradients(film, ...)
+//   finish:      finishGradients(film, stats, norm, alpha, out): the gradient
+//                images with N = stats.spp, then WriteGradientOutput (primal,
+//                dx, dy, variances, reconstructions)
+//   statistics:  withReconstructionReport(the integrator's own lines)
+// The settings (reconstruction norm, alpha, pixel filter, ...) stay with each
+// integrator's parameters and are passed in.
+#pragma once
+#include <string>
+
+#include "integrators/gradient/gradient_film.h"
+
+namespace gradus {
+
+class GradientFamily {
+  protected:
+    // Adds the gradient layers to the film (lightTracing: also the layers of
+    // light-tracing splats) and records its bounds.
+    void initGradients(Film &film, bool useFilmFilter, bool lightTracing = false);
+    // Both pixel p and its neighbour k lie on the film (a gradient between them is kept).
+    bool pairInside(Point2i p, int k) const {
+        return filmBounds_.inside(p) &&
+               filmBounds_.inside({p.x + kNeighbourOffsets[k].x, p.y + kNeighbourOffsets[k].y});
+    }
+    // The integrator's finish(): replaces *out by the gradient output (keeping its metadata).
+    void finishGradients(const Film &film, const RenderStats &stats, ReconstructionNorm norm, Float alpha,
+                         Image *out);
+    // The statistics tail: the integrator's lines followed by the reconstruction's.
+    std::string withReconstructionReport(const std::string &lines) const { return lines + reconReport_; }
+
+    GradientFilm gfilm_;
+    Bounds2i filmBounds_;
+
+  private:
+    std::string reconReport_;
+};
+
+}  // namespace gradus

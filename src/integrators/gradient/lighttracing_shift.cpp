@@ -1,0 +1,258 @@
+#include "integrators/gradient/lighttracing_shift.h"
+
+#include "lights/light.h"
+
+namespace gradus {
+
+namespace {
+
+// c: the first diffuse vertex after b = x_1 going towards the light (-1: none,
+// or a glossy vertex in between, counted as an unsupported chain).
+int FindChainEnd(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s, SubpathShiftStats *st) {
+    for (int j = s - 2; j >= 0; --j) {
+        const PathVertex &v = light.v[j];
+        if (v.type == VertexType::Light || IsDiffuseVertex(ctx, v, &light.b[j])) return j;
+        if (!light.deltaSample[j]) {
+            ++st->unsupportedChains;
+            return -1;
+        }
+    }
+    return -1;
+}
+
+// The second chain b .. c of base and offset.
+struct LightChain {
+    Float J = 0;                  // |d omega_y,b / d omega_x,b|
+    Float discX = 1, discY = 1;   // discrete lobe probabilities of the interiors
+    Spectrum chainX{1}, chainY{1};  // Dirac coefficients f |cos| of the interiors
+    Vec3 wiY1;                    // offset direction at b towards c
+    Vec3 towardCamX, towardCamY;  // at c, towards the camera side
+    ManifoldChain offChain;
+    WalkedInterior walked;
+};
+
+// Offset b (`yHit`, with direction woY1 towards the camera) connected to c:
+// reconnection for an empty chain (k = 0), else a manifold walk.
+bool ShiftChain(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s, int c,
+                const SurfaceInteraction &yHit, const Vec3 &woY1, const Vec3 &wiX1, Arena &arena, LightChain *ch,
+                SubpathShiftStats *st) {
+    const Scene &scene = *ctx.bidir->scene;
+    const PathVertex &x1 = light.v[s - 1], &xc = light.v[c];
+    const int k = s - 2 - c;
+    if (k == 0) {
+        ReconnectionShift rc;
+        if (!ReconnectToVertex(scene, x1.p, Interaction(yHit.p, yHit.n, woY1), xc, &st->shift, &rc)) return false;
+        st->shift.success(ShiftType::Reconnection);
+        ch->J = rc.jacobian;
+        ch->wiY1 = rc.wi;
+        ch->towardCamX = -wiX1;
+        ch->towardCamY = -ch->wiY1;
+        return true;
+    }
+    ChainInterior in;
+    if (k + 2 > kMaxManifoldVertices) return false;
+    // Chain from b = x1 (camera side) to c; interior j is light vertex s-2-j.
+    for (int j = 0; j < k; ++j) {
+        const PathVertex &v = light.v[s - 2 - j];
+        if (!VertexInteraction(scene, v, light.v[s - 1 - j].p, &in.si[j])) {
+            st->shift.fail(ShiftFailure::Geometry);
+            return false;
+        }
+        const BSDF &b = light.b[s - 2 - j];
+        in.bsdf[j] = &b;
+        in.wo[j] = Normalize(light.v[s - 1 - j].p - v.p);  // towards the camera side
+        in.wi[j] = Normalize(light.v[s - 3 - j].p - v.p);
+        in.transmit[j] = Transmits(in.wo[j], in.wi[j], Vec3(b.ns()));
+        in.geomId[j] = v.geomId;
+        BSDFSample sx;
+        if (!DeltaLobe(b, in.wo[j], in.transmit[j], TransportMode::Radiance, &sx) ||
+            Dot(sx.wi, in.wi[j]) < 1 - kShiftDirTol) {
+            st->shift.fail(ShiftFailure::Geometry);
+            return false;
+        }
+        ch->chainX *= sx.f * AbsDot(sx.wi, Vec3(b.ns()));
+        ch->discX *= sx.pdf;
+    }
+    ManifoldChain base;
+    // The walk ends on c's shape (an area light's emitting shape for a light vertex).
+    int gidc = xc.type == VertexType::Surface ? xc.geomId : ctx.mscene->geomOfLight(xc.light);
+    if (gidc < 0 ||
+        !BuildChain(ctx, EndpointSP(x1.p, x1.ng, x1.geomId), in, k, EndpointSP(xc.p, xc.ng, gidc), &base)) {
+        st->shift.fail(ShiftFailure::Geometry);
+        return false;
+    }
+    if (!WalkSecondChain(ctx, base, EndpointSP(yHit.p, yHit.n, yHit.geomId), in, arena, st, &ch->offChain,
+                         &ch->walked, &ch->J))
+        return false;
+    ch->chainY = ch->walked.factor;
+    ch->discY = ch->walked.prob;
+    ch->wiY1 = Normalize(ch->offChain.v[1].sp.p - yHit.p);
+    ch->towardCamX = Normalize(light.v[c + 1].p - xc.p);
+    ch->towardCamY = Normalize(ch->offChain.v[k].sp.p - xc.p);
+    return true;
+}
+
+// Emission (c a light vertex) or BSDF value at c towards the camera side, and
+// the solid-angle density of the light path's direction there.
+void EvalAtChainEnd(const ShiftSubpath &light, int c, const Vec3 &towardCam, Spectrum *f, Float *pdf) {
+    const PathVertex &xc = light.v[c];
+    if (xc.type == VertexType::Light) {
+        const AreaLight *al = static_cast<const AreaLight *>(xc.light);
+        *f = al->L(Interaction(xc.p, xc.ng, towardCam), towardCam);
+        Float pp;
+        xc.light->pdfLe(Ray(xc.p, towardCam), xc.ng, &pp, pdf);
+    } else {
+        const BSDF &bcv = light.b[c];
+        Vec3 wl = xc.wo;  // towards the light side
+        *f = bcv.f(towardCam, wl, TransportMode::Radiance);
+        *pdf = bcv.pdf(wl, towardCam, TransportMode::Importance);
+    }
+}
+
+// |cos at b2| / d^2 of the edge a -> b2 (no cosine off surfaces).
+Float EdgeGeometry(const Point3 &a, const Point3 &b2, const Vec3 &nb, bool surf) {
+    Vec3 d = b2 - a;
+    Float d2 = d.lengthSquared();
+    return (surf ? AbsDot(nb, d / std::sqrt(d2)) : Float(1)) / d2;
+}
+
+// BDPT weight of the offset light-tracing path: only light vertices c-1 .. s-1
+// differ from the base, so they are swapped in place and restored (copying
+// whole subpaths per light-tracing strategy made long paths O(n^2)).
+Float OffsetWeight(const BidirContext &bc, const ShiftSubpath &light, int s, int c, const SurfaceInteraction &yHit,
+                   const LightChain &ch, const PathVertex &lens, Arena &arena, bool *ok) {
+    const int k = s - 2 - c;
+    const PathVertex &xc = light.v[c];
+    const int lo = std::max(c - 1, 0), m = s - lo;
+    PathVertex saveV[kMaxManifoldVertices + 3];
+    BSDF saveB[kMaxManifoldVertices + 3];
+    *ok = m <= kMaxManifoldVertices + 3;
+    if (!*ok) return 0;
+    for (int j = 0; j < m; ++j) {
+        saveV[j] = light.v[lo + j];
+        saveB[j] = light.b[lo + j];
+    }
+    PathVertex *yv = light.v;
+    BSDF *yb = light.b;
+    for (int j = 0; j < k; ++j) {
+        PathVertex &v = yv[s - 2 - j];
+        const SurfaceInteraction &si = ch.walked.si[j];
+        v.p = si.p;
+        v.ng = si.n;
+        v.ns = ch.walked.bsdf[j].ns();
+        v.wo = Normalize(ch.offChain.v[j + 2].sp.p - si.p);
+        v.pdfFwd = v.pdfRev = 0;
+        yb[s - 2 - j] = ch.walked.bsdf[j];
+    }
+    {
+        PathVertex &v = yv[s - 1];
+        v.p = yHit.p;
+        v.ng = yHit.n;
+        v.wo = ch.wiY1;
+        v.material = yHit.material;
+        v.geomId = yHit.geomId;
+        v.primId = yHit.primId;
+        SurfaceInteraction si2 = yHit;
+        si2.wo = ch.wiY1;
+        yb[s - 1] = yHit.material->getBSDF(si2, arena, TransportMode::Importance);
+        v.ns = yb[s - 1].ns();
+        v.pdfRev = 0;
+        v.pdfFwd = 0;
+    }
+    yv[c + 1].pdfFwd = PdfArea(bc, xc, c > 0 ? &yb[c] : nullptr, c > 0 ? &yv[c - 1] : nullptr, yv[c + 1],
+                               TransportMode::Importance);
+    if (k > 0) yv[c].pdfRev = 0;
+    if (c >= 1 && xc.type == VertexType::Surface)
+        yv[c - 1].pdfRev = PdfArea(bc, xc, &yb[c], &yv[c + 1], yv[c - 1], TransportMode::Radiance);
+    PathVertex lensY = lens;
+    Float wy = MISWeight(bc, SubpathView{yv, yb, s}, SubpathView{&lensY, nullptr, 1}, s, 1, &lensY);
+    for (int j = 0; j < m; ++j) {
+        light.v[lo + j] = saveV[j];
+        light.b[lo + j] = saveB[j];
+    }
+    return wy;
+}
+
+}  // namespace
+
+bool ShiftLightTracingPath(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s, const PathVertex &lens,
+                           Point2 pRaster, const Spectrum &fx, Point2i off, Arena &arena, Spectrum *fy, Float *wy,
+                           Float *rho, SubpathShiftStats *st) {
+    const BidirContext &bc = *ctx.bidir;
+    if (s < 2) return false;
+    const PathVertex &x1 = light.v[s - 1];
+    const int c = FindChainEnd(ctx, light, s, st);
+    if (c < 0) return false;
+    const int k = s - 2 - c;  // interior (ideal specular) vertices
+    if (k > 0 && (!ctx.manifold || !ctx.trySpecular)) return false;
+    const PathVertex &xc = light.v[c];
+    if (xc.isInfiniteLight()) return false;
+    if (xc.type == VertexType::Light && !(xc.light && (xc.light->flags & LIGHT_AREA))) return false;
+
+    ++st->shift.offsetPaths;
+    Ray r1, ray;
+    CameraSample c1{pRaster, Point2(0.5, 0.5)}, c2{Point2(pRaster.x + off.x, pRaster.y + off.y), Point2(0.5, 0.5)};
+    Float w1 = bc.camera->generateRay(c1, &r1), w2 = bc.camera->generateRay(c2, &ray);
+    if (!(w1 > 0) || !(w2 > 0)) {
+        st->shift.fail(ShiftFailure::Geometry);
+        return false;
+    }
+    SurfaceInteraction isect;
+    if (!TraceSurface(*bc.scene, ray, &isect)) {
+        st->shift.fail(ShiftFailure::Escaped);
+        return false;
+    }
+    BSDF by = isect.material->getBSDF(isect, arena, TransportMode::Radiance);
+    if (!by || ClassifyBSDF(&by, ctx.threshold) != ShiftVertexClass::Rough) {
+        st->shift.fail(ShiftFailure::ClassMismatch);
+        return false;
+    }
+    const BSDF &bx = light.b[s - 1];
+    const Vec3 woX1 = Normalize(lens.p - x1.p), woY1 = isect.wo;
+    const Vec3 wiX1 = Normalize(light.v[s - 2].p - x1.p);
+    LightChain ch;
+    if (!ShiftChain(ctx, light, s, c, isect, woY1, wiX1, arena, &ch, st)) return false;
+    // Eq. 5 in the camera-side parameterisation: f(y)|T'| / f(x).
+    const Vec3 &wiY1 = ch.wiY1;
+    Spectrum fX1 = bx.f(woX1, wiX1, TransportMode::Radiance) * AbsDot(wiX1, Vec3(bx.ns()));
+    Spectrum fY1 = by.f(woY1, wiY1, TransportMode::Radiance) * AbsDot(wiY1, Vec3(by.ns())) * ch.J;
+    Spectrum fXc, fYc;
+    Float pcX, pcY;  // solid-angle density of the light path's direction at c
+    EvalAtChainEnd(light, c, ch.towardCamX, &fXc, &pcX);
+    EvalAtChainEnd(light, c, ch.towardCamY, &fYc, &pcY);
+    Spectrum num = fY1 * ch.chainY * fYc * (w2 / w1), den = fX1 * ch.chainX * fXc;
+    *fy = fx * SafeDiv(num, den);
+    if (fy->isBlack() || !fy->isFinite()) {
+        st->shift.fail(ShiftFailure::Geometry);
+        return false;
+    }
+    // rho = |T'| p(y)/p(x) (Eq. 8): image-plane area factor dA_b/ds =
+    // cos^3 D^2 / |cos_b| (ShiftJacobianFactor's cos^4/G for an empty eye
+    // chain) times the light path's density of b through the chain.
+    Vec3 n0 = bc.camera->lensNormal();
+    // The MIS densities of common/ (area measure, Dirac factors remapped to 1)
+    // and the camera-side rho of the same path's other strategies imply the
+    // effective |T'| = (F_y/F_x) J_b (disc_y/disc_x) (G1_x/G1_y), G1 = |cos|/d^2
+    // of the first edge after b; the light-tracing strategy's density ratio is
+    // that of the vertex after c, p_omega,c G1c. (For an empty chain this is
+    // F p_omega,c Q, the exact |T'| p(y)/p(x).)
+    Float Fx = EyeAreaFactor(lens.p, n0, x1.p, x1.ng), Fy = EyeAreaFactor(lens.p, n0, isect.p, isect.n);
+    const PathVertex &xn = light.v[s - 2];  // the vertex after b towards c (base)
+    Point3 ynP = k > 0 ? ch.offChain.v[1].sp.p : xc.p;
+    Vec3 ynN = k > 0 ? Vec3(ch.walked.si[0].n) : Vec3(xc.ng);
+    Float G1x = EdgeGeometry(x1.p, xn.p, Vec3(xn.ng), xn.onSurface());
+    Float G1y = EdgeGeometry(isect.p, ynP, ynN, xn.onSurface());
+    // Vertex after c towards b: base light.v[c + 1], offset the last walked vertex or y1.
+    const PathVertex &xa = light.v[c + 1];
+    Point3 yaP = k > 0 ? ch.offChain.v[k].sp.p : isect.p;
+    Vec3 yaN = k > 0 ? Vec3(ch.walked.si[k - 1].n) : Vec3(isect.n);
+    Float Gcx = EdgeGeometry(xc.p, xa.p, Vec3(xa.ng), true), Gcy = EdgeGeometry(xc.p, yaP, yaN, true);
+    Float denR = Fx * ch.discX * G1y * pcX * Gcx;
+    *rho = denR > 0 ? Fy * ch.J * ch.discY * G1x * pcY * Gcy / denR : 0;
+
+    bool ok;
+    *wy = OffsetWeight(bc, light, s, c, isect, ch, lens, arena, &ok);
+    return ok && *wy > 0;
+}
+
+}  // namespace gradus

@@ -1,0 +1,154 @@
+// Shifts of bidirectional subpaths (the G-BDPT shift mapping of
+// gradient-domain-bdpt.md Sec. 3.1) on the shared path vertices of common/:
+// the context, statistics and vertex/chain building blocks shared by the
+// camera-subpath shift (camera_shift.h, cases (i) and (ii) of Sec. 3.2) and
+// the light-tracing-path shift (lighttracing_shift.h, case (iii)), for G-BDPT,
+// G-VCM and G-MLT.
+//
+// Vertex classes: a surface vertex is "diffuse" (Rough) when the lowest
+// roughness of its BSDF is >= shiftthreshold, otherwise "specular"; camera and
+// light vertices are diffuse. a = 0 (the eye), b and c are the next two
+// diffuse vertices along the path from the eye.
+//
+// Measure. Throughputs are kept in the camera-side direction parameterisation
+// of the base (image-plane point, then the solid angle of every non-delta
+// sampled direction; ideal specular directions are not variables). In it
+//   f(y)|T'|/p(x) = prod_i f_y,i |cos_y,i| J_i / p_x,i                 (Eq. 5)
+// with J_i = |d omega_y,i / d omega_x,i|: 1 for the image-plane shift and at
+// ideal specular vertices, the half-vector Jacobian at copied glossy
+// vertices, the reconnection Jacobian for an empty second chain, and for a
+// walked chain of ideal specular vertices
+//   J_b = (G(y_b<->..<->x_c)/|cos_y,b|) / (G(x_b<->..<->x_c)/|cos_x,b|),
+// the ratio of generalised geometry terms (JM12) per solid angle at b
+// (ChainSolidAnglePerArea). This equals |dy/dx| of Eq. 5 (the
+// reparameterisation Jacobians of LKL13 in the reduced measure); it is checked
+// against finite differences in tests/gbdpt. The prefix product up to b is
+// Eq. 7, up to c Eq. 6.
+//
+// Gradient MIS ratio rho = |T'| p_st(y) / p_st(x) (Eq. 8): the product over
+// the shifted sampled directions of J_i p_y,i / p_x,i (discrete lobe
+// probabilities at ideal specular vertices); CombinedWeight (shift.h) turns it
+// into the weight of Eq. 8. The weights of all strategies of one path sum to
+// one only if every strategy uses the same |T'| in the measure of the MIS
+// densities of common/ (area measure, Dirac factors remapped to 1): the
+// light-tracing shift takes the camera side's effective |T'|, and a path
+// either uses Eq. 8 for all its strategies or falls back for all (failures
+// depend on the path only).
+#pragma once
+#include <algorithm>
+#include <cstdint>
+#include <new>
+#include <string>
+
+#include "integrators/common/bidir.h"
+#include "integrators/gradient/shift.h"
+#include "integrators/manifold/manifold_scene.h"
+
+namespace gradus {
+
+struct SubpathShiftContext {
+    const BidirContext *bidir = nullptr;
+    const EmbreeManifoldScene *mscene = nullptr;
+    Float threshold = 0.001;
+    bool manifold = true;        // manifold walk (else half-vector shift)
+    bool trySpecular = true;     // scene has specular or near-specular surfaces
+    ManifoldWalkOptions walk;
+};
+
+// Counters of one sample's shifts (flushed into an integrator's totals).
+struct SubpathShiftStats {
+    LocalShiftStats shift;
+    uint64_t walks = 0, walkFailures = 0;
+    uint64_t walkStatus[size_t(ManifoldStatus::Count)] = {};
+    uint64_t unsupportedChains = 0;  // glossy vertex in a second chain: fallback
+    void recordWalk(const ManifoldWalkResult &r);
+    void add(const SubpathShiftStats &o);
+    // The manifold-walk lines of the end-of-render report.
+    std::string formatWalks(bool walksTried) const;
+};
+
+// A subpath with the per-vertex data the shift needs.
+struct ShiftSubpath {
+    PathVertex *v = nullptr;
+    BSDF *b = nullptr;
+    uint8_t *deltaSample = nullptr;  // the direction sampled at v[i] came from a Dirac lobe
+    int n = 0;
+    SubpathView view() const { return {v, b, n}; }
+};
+
+// Sets deltaSample and marks specular (class != Rough) surface vertices with
+// VERTEX_DELTA so that MIS and connections leave them out (Sec. 3.2).
+void PrepareSubpath(const SubpathShiftContext &ctx, ShiftSubpath *p);
+// Rough (diffuse) for shift purposes.
+bool IsDiffuseVertex(const SubpathShiftContext &ctx, const PathVertex &v, const BSDF *b);
+
+// Solid angle at a chain's start per unit area at its end, G / |cos_0| (JM12);
+// the ratio offset/base is the Jacobian J_b of the second chain.
+Float ChainSolidAnglePerArea(const ManifoldChain &c);
+// dA_b/ds of a pinhole camera at `lens` with axis n0 (cos^4 / G of
+// ShiftJacobianFactor for an empty eye chain, up to the focal constant).
+Float EyeAreaFactor(const Point3 &lens, const Vec3 &n0, const Point3 &pb, const Vec3 &ngb);
+
+// ---- Building blocks of the subpath shifts -------------------------------
+constexpr Float kShiftDirTol = 1e-4;  // 1 - cos between a recomputed and an expected direction
+
+// n default-constructed Ts in the arena (at least one).
+template <typename T>
+T *ArenaArray(Arena &arena, int n) {
+    T *p = static_cast<T *>(arena.alloc(sizeof(T) * size_t(std::max(n, 1)), alignof(T)));
+    for (int i = 0; i < std::max(n, 1); ++i) new (&p[i]) T();
+    return p;
+}
+// Interaction of a vertex (no ray offset off surfaces).
+Interaction VertexIt(const PathVertex &v);
+// Component-wise a / b (0 where b is 0).
+Spectrum SafeDiv(const Spectrum &a, const Spectrum &b);
+// Closest hit that skips material-less interfaces (as the subpath random walk does).
+bool TraceSurface(const Scene &scene, Ray ray, SurfaceInteraction *si);
+inline bool Transmits(const Vec3 &wo, const Vec3 &wi, const Vec3 &n) { return Dot(wo, n) * Dot(wi, n) < 0; }
+// The Dirac lobe of an ideal specular BSDF for a known event (reflection or
+// refraction): value f |cos| and discrete probability.
+bool DeltaLobe(const BSDF &bsdf, const Vec3 &wo, bool transmit, TransportMode mode, BSDFSample *s);
+// Surface interaction of a stored vertex (mesh: from barycentrics; else by a ray from `from`).
+bool VertexInteraction(const Scene &scene, const PathVertex &v, const Point3 &from, SurfaceInteraction *si);
+// Endpoint of a chain: geometric normal (area measure), no curvature.
+ManifoldSurfacePoint EndpointSP(const Point3 &p, const Vec3 &ng, int geomId);
+// The interior (ideal specular) vertices of a base chain, from its start
+// towards its end: interactions, BSDFs, the directions towards the start (wo)
+// and the end (wi), the event (refraction or reflection) and the geometry.
+struct ChainInterior {
+    SurfaceInteraction si[kMaxManifoldVertices];
+    const BSDF *bsdf[kMaxManifoldVertices];
+    Vec3 wo[kMaxManifoldVertices], wi[kMaxManifoldVertices];
+    bool transmit[kMaxManifoldVertices];
+    int geomId[kMaxManifoldVertices];
+};
+// Builds the base chain start, interior[0..k-1], end; records the index of
+// refraction of refracting interiors.
+bool BuildChain(const SubpathShiftContext &ctx, const ManifoldSurfacePoint &start, const ChainInterior &interior, int k,
+                const ManifoldSurfacePoint &end, ManifoldChain *chain);
+// Empty second chain: the offset vertex yFrom (base: xFrom) reconnects to the
+// base vertex `target` (ShiftReconnect's Jacobian) if it sees it. Counts the
+// attempt and a failure in `st` (the success is the caller's).
+bool ReconnectToVertex(const Scene &scene, const Point3 &xFrom, const Interaction &yFrom, const PathVertex &target,
+                       LocalShiftStats *st, ReconnectionShift *rc);
+// Interactions, BSDFs and the specular factors of a walked offset interior
+// (re-traced from the chain's start, each vertex with the base's event).
+struct WalkedInterior {
+    SurfaceInteraction si[kMaxManifoldVertices];
+    BSDF bsdf[kMaxManifoldVertices];
+    Spectrum factor{1};  // prod f_y |cos| (Dirac coefficients)
+    Float prob = 1;      // prod of discrete lobe probabilities
+};
+// Second chain of an offset: the manifold walk from `start` to the base
+// chain's end, kept only if it is reversible (JM12 Sec. 5: the walk may
+// converge to another solution of the chain; only reversible walks keep the
+// shift a bijection), then the re-traced interior (`walked`) and
+// J = ChainSolidAnglePerArea(offset) / ChainSolidAnglePerArea(base), the
+// Jacobian |d omega_y,b / d omega_x,b| with the chain's end fixed. Records the
+// walk and a failure in `st`.
+bool WalkSecondChain(const SubpathShiftContext &ctx, const ManifoldChain &base, const ManifoldSurfacePoint &start,
+                     const ChainInterior &interior, Arena &arena, SubpathShiftStats *st, ManifoldChain *offset,
+                     WalkedInterior *walked, Float *J);
+
+}  // namespace gradus

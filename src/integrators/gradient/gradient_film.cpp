@@ -1,7 +1,9 @@
 #include "integrators/gradient/gradient_film.h"
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 
 #include "core/error.h"
@@ -92,6 +94,15 @@ void GradientFilm::splatLightTracing(SampleRecorder &rec, const GradientSplat &s
     }
 }
 
+namespace {
+// Sums of film values can exceed the float range (extreme emitters): clamped
+// like the film's own outputs, never Inf (the reconstruction handles the range).
+float ToFloat(double v) {
+    constexpr double big = std::numeric_limits<float>::max();
+    return float(std::clamp(v, -big, big));
+}
+}  // namespace
+
 GradientImages GradientFilm::images(const Film &film, double spp) const {
     Image L[NumLayers];
     for (int i = 0; i < NumLayers; ++i) L[i] = film.layerImage(layer_[i]);
@@ -113,11 +124,11 @@ GradientImages GradientFilm::images(const Film &film, double spp) const {
     };
     for (size_t i = 0; i < n; ++i) {
         g.primal[i] = L[Primal].data()[i];
-        g.dx[i] = L[DxF].data()[i] + L[DxB].data()[i];
-        g.dy[i] = L[DyF].data()[i] + L[DyB].data()[i];
-        g.primalVar[i] = float(var(Primal, PrimalSq, i));
-        g.dxVar[i] = float(var(DxF, DxFSq, i) + var(DxB, DxBSq, i));
-        g.dyVar[i] = float(var(DyF, DyFSq, i) + var(DyB, DyBSq, i));
+        g.dx[i] = ToFloat(double(L[DxF].data()[i]) + L[DxB].data()[i]);
+        g.dy[i] = ToFloat(double(L[DyF].data()[i]) + L[DyB].data()[i]);
+        g.primalVar[i] = ToFloat(var(Primal, PrimalSq, i));
+        g.dxVar[i] = ToFloat(var(DxF, DxFSq, i) + var(DxB, DxBSq, i));
+        g.dyVar[i] = ToFloat(var(DyF, DyFSq, i) + var(DyB, DyBSq, i));
     }
     if (lightTracing_) addSplats(film, spp, &g);
     return g;
@@ -131,12 +142,12 @@ void GradientFilm::addSplats(const Film &film, double spp, GradientImages *g) co
     double invN = spp > 0 ? 1 / spp : 0;
     for (size_t i = 0; i < g->primal.size(); ++i) {
         auto at = [&](int layer) { return double(L[layer].data()[i]); };
-        g->primal[i] += float(at(Primal));
-        g->dx[i] += float(at(DxF) + at(DxB));
-        g->dy[i] += float(at(DyF) + at(DyB));
-        g->primalVar[i] += float(at(PrimalSq) * invN);
-        g->dxVar[i] += float((at(DxFSq) + at(DxBSq)) * invN);
-        g->dyVar[i] += float((at(DyFSq) + at(DyBSq)) * invN);
+        g->primal[i] = ToFloat(g->primal[i] + at(Primal));
+        g->dx[i] = ToFloat(g->dx[i] + at(DxF) + at(DxB));
+        g->dy[i] = ToFloat(g->dy[i] + at(DyF) + at(DyB));
+        g->primalVar[i] = ToFloat(g->primalVar[i] + at(PrimalSq) * invN);
+        g->dxVar[i] = ToFloat(g->dxVar[i] + (at(DxFSq) + at(DxBSq)) * invN);
+        g->dyVar[i] = ToFloat(g->dyVar[i] + (at(DyFSq) + at(DyBSq)) * invN);
     }
 }
 

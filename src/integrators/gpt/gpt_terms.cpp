@@ -183,7 +183,14 @@ void GradientPathTracer::nextEventTerms(Sampler &sampler) {
     Float pmf;
     lc.light = lights_.sample(isect.p, sampler.get1D(), &pmf);
     lc.u = sampler.get2D();
-    if (!lc.light || !(pmf > 0) || !lc.light->sampleLi(isect, lc.u, &lc.ls) || !(lc.ls.pdf > 0)) return;
+    if (!lc.light || !(pmf > 0)) return;
+    // sampleLi says false also for zero radiance towards the base (the back of a
+    // one-sided emitter, outside a spot cone), with the sample filled in. An
+    // offset may still see the light: its term must be evaluated, or the
+    // symmetric estimator (G-BDPT Eq. 3) loses w_ij(x) f(y) for f(x) = 0 while
+    // the reverse shift weights the pair by w_ji(y) < 1 -- a biased gradient.
+    lc.light->sampleLi(isect, lc.u, &lc.ls);
+    if (!(lc.ls.pdf > 0)) return;
     const LightLiSample &ls = lc.ls;
     const Vec3 wo = isect.wo;
     lc.delta = IsDeltaLight(lc.light->flags);

@@ -10,39 +10,14 @@
 #include <string>
 
 #include "image/image.h"
+#include "render/cli_fixture.h"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct RunResult {
-    int status;
-    std::string err;
-};
-
-class CliTest : public ::testing::Test {
-  protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() / ("gradus_cli_" + std::to_string(::getpid()) + "_" +
-                                            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-    std::string write(const std::string &name, const std::string &text) {
-        std::ofstream(dir_ / name) << text;
-        return (dir_ / name).string();
-    }
-    RunResult run(const std::string &args) {
-        std::string errFile = (dir_ / "stderr.txt").string();
-        std::string cmd = "cd '" + dir_.string() + "' && '" + GRADUS_BIN + "' " + args + " 2> '" + errFile + "' > /dev/null";
-        int st = std::system(cmd.c_str());
-        std::ifstream in(errFile);
-        std::stringstream ss;
-        ss << in.rdbuf();
-        return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, ss.str()};
-    }
-    fs::path dir_;
-};
+using gradus::test::RunResult;
+using CliTest = gradus::test::GradusCliTest;
 
 const char *kTiny =
     "LookAt 0 0 -3  0 0 0  0 1 0\n"

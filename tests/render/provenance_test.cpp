@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "image/image.h"
+#include "render/cli_fixture.h"
 
 namespace fs = std::filesystem;
 using gradus::Image;
@@ -20,36 +21,10 @@ using gradus::ReadImage;
 
 namespace {
 
-class Provenance : public ::testing::Test {
+class Provenance : public gradus::test::GradusCliTest {
   protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() / ("gradus_prov_" + std::to_string(::getpid()) + "_" +
-                                            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-    std::string write(const std::string &name, const std::string &text) {
-        std::ofstream(dir_ / name) << text;
-        return (dir_ / name).string();
-    }
-    struct Run {
-        int status;
-        std::string err;
-        double wall;
-    };
-    Run run(const std::string &args) {
-        std::string errFile = (dir_ / "stderr.txt").string();
-        std::string cmd = "cd '" + dir_.string() + "' && '" + GRADUS_BIN + "' " + args + " 2> '" + errFile + "' > /dev/null";
-        auto t0 = std::chrono::steady_clock::now();
-        int st = std::system(cmd.c_str());
-        double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        std::ifstream in(errFile);
-        std::stringstream ss;
-        ss << in.rdbuf();
-        return {WIFEXITED(st) ? WEXITSTATUS(st) : -1, ss.str(), wall};
-    }
+    using Run = gradus::test::RunResult;
     Image image(const std::string &name) { return ReadImage((dir_ / name).string()); }
-    fs::path dir_;
 };
 
 const char *kScene =

@@ -202,3 +202,26 @@ TEST_F(ToolTest, ErrorsExitOneWithMessage) {
     EXPECT_NE(err.find("missing.exr"), std::string::npos) << err;
     EXPECT_EQ(run("--help", nullptr, &err), 0);
 }
+
+// The render's provenance and crop placement survive a reconstruction.
+TEST_F(ToolTest, MetadataAndCropPlacementCarriedThrough) {
+    GradientImages g = ExactInputs(truth_, W, H);
+    Image film = MakeFilm(g, false);
+    film.metadata["integrator"] = "gpt";
+    film.metadata["seed"] = "17";
+    film.metadata["spp"] = MetaValue::Int(32);
+    film.originX = 3, film.originY = 4, film.displayWidth = W + 10, film.displayHeight = H + 8;
+    WriteImage(path("film.exr"), film);
+    std::string err;
+    ASSERT_EQ(run("'" + path("film.exr") + "' --norm l2 --outfile '" + path("out.exr") + "' --no-png", nullptr, &err), 0)
+        << err;
+    Image res = ReadImage(path("out.exr"));
+    EXPECT_EQ(res.metadata.at("integrator"), "gpt");
+    EXPECT_EQ(res.metadata.at("seed"), "17");
+    EXPECT_EQ(res.metadata.at("spp").type(), MetaValue::Type::Int);
+    EXPECT_EQ(res.metadata.at("reconstruction_norm"), "l2");
+    EXPECT_NE(res.metadata.at("reconstruct_command_line").str().find("--norm l2"), std::string::npos);
+    EXPECT_EQ(res.originX, 3);
+    EXPECT_EQ(res.originY, 4);
+    EXPECT_EQ(res.displayWidth, W + 10);
+}

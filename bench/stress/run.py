@@ -44,7 +44,7 @@ import fnmatch
 import json
 import math
 import os
-import struct
+import signal
 import subprocess
 import sys
 import tempfile
@@ -262,8 +262,10 @@ def render_cell(args, gradus, scene, integ, outdir, twin=False):
     cell = dict(scene=name, integrator=integ, pbrt=pbrt, exr=exr, spp=spp)
     try:
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=args.timeout)
-        cell["exit"] = proc.returncode
-        cell["error"] = proc.stderr.strip().splitlines()[-1] if proc.returncode != 0 and proc.stderr.strip() else ""
+        rc = proc.returncode
+        cell["exit"] = rc if rc >= 0 else signal.Signals(-rc).name  # killed by a signal: its name
+        err = proc.stderr.strip().splitlines()[-1] if rc != 0 and proc.stderr.strip() else ""
+        cell["error"] = err if len(err) <= 200 else err[:100] + " ... " + err[-95:]
     except subprocess.TimeoutExpired:  # subprocess.run has killed it
         cell["exit"] = "timeout"
         cell["error"] = "no result after %g s" % args.timeout
@@ -351,7 +353,7 @@ def short_reasons(c):
             verdict, layer = f.split()[1], f.split("(")[1].split(")")[0]
             out.append("%s %s" % (verdict, {"reconstructed_l2": "l2"}.get(layer, layer)))
         else:
-            out.append(f.split(":")[0].split(" after")[0].split(" in ")[0].lower().replace("nan/inf", "NaN/Inf"))
+            out.append(f.split(":")[0].split(" after")[0].split(" in ")[0].replace("TIMEOUT", "timeout"))
     return ", ".join(out)
 
 

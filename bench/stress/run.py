@@ -31,7 +31,7 @@ integrators also `primal` and `reconstructed_l2`):
     a floor of 1e-5 of the reference level in quadrature for float32 output and
     the float reconstruction solver;
   * z = (mean(v) - target) / SE. "Energy gain" is z > 5 (5 sigma: about 3e-7
-    false alarms per check under the normal approximation); Exact, Map, Same and
+    false alarms per side and check under the normal approximation); Exact, Map, Same and
     Sum also fail on "loss", z < -5; Bound fails only on gain. Zero fails on any
     non-zero pixel.
 The checks always use the same seeds (--seed), so a run is reproducible.

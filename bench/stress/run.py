@@ -29,7 +29,9 @@ integrators also `primal` and `reconstructed_l2`):
     sd(pixels)/sqrt(n) and sd(8x8 block means)/sqrt(blocks) (the block form
     covers correlation between nearby pixels, e.g. light-tracing splats), with
     a floor of 1e-5 of the reference level in quadrature for float32 output and
-    the float reconstruction solver;
+    the float reconstruction solver; for Bound scenes, whose expectation varies
+    over the image, from the difference to an independent second render
+    ("~twin") divided by sqrt(2);
   * z = (mean(v) - target) / SE. "Energy gain" is z > 5 (5 sigma: about 3e-7
     false alarms per side and check under the normal approximation); Exact, Map, Same and
     Sum also fail on "loss", z < -5; Bound fails only on gain. Zero fails on any

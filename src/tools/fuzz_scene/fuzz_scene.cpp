@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <initializer_list>
 #include <iterator>
 #include <sstream>
 #include <string>
@@ -177,10 +178,16 @@ class Generator {
         }
     }
 
+    void reflectances(std::initializer_list<const char *> names) {
+        for (const char *n : names) spectrumParam(n, 0, 1);
+    }
+    void uvRoughness() {
+        floatParam("uroughness", 0, 1);
+        floatParam("vroughness", 0, 1);
+    }
     void roughness(bool aniso) {
         if (aniso && coin()) {
-            floatParam("uroughness", 0, 1);
-            floatParam("vroughness", 0, 1);
+            uvRoughness();
         } else if (!aniso || coin()) {
             floatParam("roughness", 0, 1);
         }
@@ -194,44 +201,30 @@ class Generator {
         if (t == "mix" && i < 2) t = "matte";
         os_ << "MakeNamedMaterial \"m" << i << "\" \"string type\" [ \"" << t << "\" ]";
         if (t == "matte") {
-            spectrumParam("Kd", 0, 1);
+            reflectances({"Kd"});
             if (coin()) floatParam("sigma", 0, 90);
         } else if (t == "plastic") {
-            spectrumParam("Kd", 0, 1);
-            spectrumParam("Ks", 0, 1);
+            reflectances({"Kd", "Ks"});
             roughness(false);
         } else if (t == "metal") {
             if (coin()) spectrumParam("eta", 0, 4);
             if (coin()) spectrumParam("k", 0, 6);
             if (coin()) roughness(true);
         } else if (t == "mirror") {
-            spectrumParam("Kr", 0, 1);
+            reflectances({"Kr"});
         } else if (t == "glass") {
-            spectrumParam("Kr", 0, 1);
-            spectrumParam("Kt", 0, 1);
+            reflectances({"Kr", "Kt"});
             flt("index", 1, 3);
-            if (coin()) {
-                floatParam("uroughness", 0, 1);
-                floatParam("vroughness", 0, 1);
-            }
+            if (coin()) uvRoughness();
         } else if (t == "uber") {
-            spectrumParam("Kd", 0, 1);
-            spectrumParam("Ks", 0, 1);
-            spectrumParam("Kr", 0, 1);
-            spectrumParam("Kt", 0, 1);
-            spectrumParam("opacity", 0, 1);
+            reflectances({"Kd", "Ks", "Kr", "Kt", "opacity"});
             flt("index", 1, 3);
             roughness(true);
         } else if (t == "substrate") {
-            spectrumParam("Kd", 0, 1);
-            spectrumParam("Ks", 0, 1);
-            floatParam("uroughness", 0, 1);
-            floatParam("vroughness", 0, 1);
+            reflectances({"Kd", "Ks"});
+            uvRoughness();
         } else if (t == "translucent") {
-            spectrumParam("Kd", 0, 1);
-            spectrumParam("Ks", 0, 1);
-            spectrumParam("reflect", 0, 1);
-            spectrumParam("transmit", 0, 1);
+            reflectances({"Kd", "Ks", "reflect", "transmit"});
             roughness(false);
         } else if (t == "mix") {
             os_ << " \"string materials\" [ \"m0\" \"m1\" ]";

@@ -352,6 +352,10 @@ def all_scenes():
               sphere_on_ground(), Exact(1, wf), maxdepth=100, lens=(1e-12, 3.2), **SPHERE_VIEW),
         Scene("lens_huge", "thin lens, lensradius 1e3, focaldistance 3.2",
               sphere_on_ground(), Exact(1, wf), maxdepth=100, lens=(1e3, 3.2), **SPHERE_VIEW),
+        Scene("lens_focus_near", "thin lens, lensradius 0.5, focaldistance 1e-6",
+              sphere_on_ground(), Exact(1, wf), maxdepth=100, lens=(0.5, 1e-6), **SPHERE_VIEW),
+        Scene("lens_focus_far", "thin lens, lensradius 0.5, focaldistance 1e200",
+              sphere_on_ground(), Exact(1, wf), maxdepth=100, lens=(0.5, 1e200), **SPHERE_VIEW),
     ]
     for label, index in (("1", 1.0), ("1.0001", 1.0001), ("1.5", 1.5), ("3", 3.0)):
         scenes.append(Scene("glass_ior%s" % label, "smooth glass sphere of index %s over the ground" % label,

@@ -72,8 +72,9 @@ class Generator {
     double unit() { return fdp_.ConsumeIntegral<uint16_t>() / 65535.0; }  // 2 bytes a value
 
     // A number: mostly in [lo, hi], sometimes an extreme or special value, at most `cap`
-    // in magnitude (positions, lengths and scales are capped: coordinates beyond ~1.8e18
-    // abort Embree, a known finding).
+    // in magnitude (positions, lengths, scales and the focal distance are capped: ray
+    // origins beyond ~1.8e18 and the NaN directions of a focal distance of 1e200 abort
+    // Embree, known findings).
     double value(double lo, double hi, double cap = HUGE_VAL) {
         static const double specials[] = {0, -0.0, 1, -1, 1e-30, -1e-30, 1e-8, 1e8, 1e30, -1e30,
                                           1e-300, 1e300, 0.5, 1.0000001, 3.0e38, 1e-45};
@@ -109,7 +110,7 @@ class Generator {
         flt("fov", 1, 179);
         if (coin()) {
             flt("lensradius", 0, 2, kPos);
-            flt("focaldistance", 0.01, 10);
+            flt("focaldistance", 0.01, 10, kPos);
         }
         if (fdp_.ConsumeIntegralInRange(0, 7) == 0)
             os_ << " \"float screenwindow\" [ " << value(-2, 0) << " " << value(0, 2) << " " << value(-2, 0) << " "

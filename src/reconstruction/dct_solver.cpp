@@ -31,7 +31,8 @@ struct DctPlans {
 std::mutex gPlanMutex;  // the FFTW planner is not thread-safe
 
 DctPlans GetPlans(int W, int H) {
-    static std::map<std::pair<int, int>, DctPlans> cache;
+    // Never destroyed: the plans live as long as the process (no leak at exit).
+    static auto &cache = *new std::map<std::pair<int, int>, DctPlans>;
     std::lock_guard<std::mutex> lock(gPlanMutex);
     auto it = cache.find({W, H});
     if (it != cache.end()) return it->second;

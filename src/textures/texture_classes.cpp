@@ -160,8 +160,13 @@ Spectrum TexelGrid::bilerp(Point2 st, WrapMode wrap) const {
     Float x = st.x * w_ - 0.5, y = (1 - st.y) * h_ - 0.5;
     if (!std::isfinite(x) || !std::isfinite(y)) return Spectrum(0);
     Float fx = std::floor(x), fy = std::floor(y);
-    int x0 = int(fx), y0 = int(fy);
     Float ax = x - fx, ay = y - fy;
+    // Into int range before the cast (huge st from texture mappings): repeat reduces
+    // modulo the size; clamp and black give the same texels two or more texels outside.
+    auto toIndex = [wrap](Float f, int n) {
+        return int(wrap == WrapMode::Repeat ? f - n * std::floor(f / n) : Clamp(f, Float(-2), Float(n + 1)));
+    };
+    int x0 = toIndex(fx, w_), y0 = toIndex(fy, h_);
     return texel(x0, y0, wrap) * ((1 - ax) * (1 - ay)) + texel(x0 + 1, y0, wrap) * (ax * (1 - ay)) +
            texel(x0, y0 + 1, wrap) * ((1 - ax) * ay) + texel(x0 + 1, y0 + 1, wrap) * (ax * ay);
 }
@@ -193,22 +198,25 @@ std::shared_ptr<const TexelGrid> LoadTexelGrid(const std::string &filename, bool
     } catch (const Error &e) {
         throw Error(loc, std::string("cannot read image texture: ") + e.what());
     }
+    // ReadImage decodes 8-bit files to linear; "gamma" false keeps the stored values.
+    auto grid = MakeTexelGrid(img, IsEightBitFormat(filename) && !gamma);
+    cache[key] = grid;
+    return grid;
+}
+
+std::shared_ptr<const TexelGrid> MakeTexelGrid(const Image &img, bool storedValues) {
     Image rgb = img.layerRGB(DefaultRGBLayer(img));
-    bool eightBit = IsEightBitFormat(filename);
     std::vector<Spectrum> texels(size_t(rgb.width()) * rgb.height());
     for (int y = 0; y < rgb.height(); ++y)
         for (int x = 0; x < rgb.width(); ++x) {
             Spectrum &t = texels[size_t(y) * rgb.width() + x];
             for (int c = 0; c < 3; ++c) {
                 float v = rgb.at(x, y, c);
-                // ReadImage decodes 8-bit files to linear; "gamma" false keeps the stored values.
-                if (eightBit && !gamma) v = LinearToSRGB(v);
+                if (storedValues) v = LinearToSRGB(v);
                 t[c] = v;
             }
         }
-    auto grid = std::make_shared<const TexelGrid>(rgb.width(), rgb.height(), std::move(texels));
-    cache[key] = grid;
-    return grid;
+    return std::make_shared<const TexelGrid>(rgb.width(), rgb.height(), std::move(texels));
 }
 
 // ---------------------------------------------------------------- texture classes

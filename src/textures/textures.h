@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "core/transform.h"
+#include "image/image.h"
 #include "parser/scene_desc.h"
 #include "textures/texture.h"
 
@@ -71,6 +72,9 @@ class TexelGrid {
 // sRGB-decoded to linear when `gamma` is true and taken as stored (value / 255)
 // when false; float formats are always linear. Results are cached per (file, gamma).
 std::shared_ptr<const TexelGrid> LoadTexelGrid(const std::string &filename, bool gamma, const FileLoc &loc);
+// The texels of a loaded image's default RGB layer, as LoadTexelGrid makes them;
+// `storedValues` re-encodes sRGB-decoded 8-bit values to what the file stores.
+std::shared_ptr<const TexelGrid> MakeTexelGrid(const Image &img, bool storedValues);
 
 // Factories for the Texture directive ("constant", "scale", "mix", "bilerp",
 // "imagemap", "uv", "checkerboard", "dots", "fbm", "wrinkled", "windy", "marble").

@@ -138,6 +138,24 @@ TEST(Texture, ImageMapBilinearAndWrap) {
     EXPECT_NEAR(t.floats.at("f")->evaluate(At(0.25, 0.25)), px.y(), 1e-5);
 }
 
+TEST(Texture, TexelGridFarOutside) {
+    // Lookups far outside [0,1] (huge texture-mapping scales) keep the wrap mode's
+    // answer instead of casting out-of-range floats to int (fuzz_image).
+    Image img = Image::RGB(2, 1);
+    img.at(0, 0, 0) = 1;
+    img.at(1, 0, 0) = 2;
+    auto grid = MakeTexelGrid(img, false);
+    for (double s : {1e300, 3e9, -3e9, -1e300}) {
+        double edge = s > 0 ? 2 : 1;
+        EXPECT_EQ(grid->bilerp(Point2(s, 0.5), WrapMode::Clamp).r, edge) << s;
+        EXPECT_EQ(grid->bilerp(Point2(s, 0.5), WrapMode::Black).r, 0) << s;
+        double r = grid->bilerp(Point2(s, 0.5), WrapMode::Repeat).r;
+        EXPECT_TRUE(r >= 1 && r <= 2) << s << " -> " << r;
+    }
+    // Repeat keeps the position within the period for large but exact coordinates.
+    EXPECT_NEAR(grid->bilerp(Point2(1e6 + 0.25, 0.5), WrapMode::Repeat).r, 1, 1e-6);
+}
+
 TEST(Texture, EightBitGamma) {
     TempDir tmp;
     Image img = Image::RGB(1, 1);

@@ -97,10 +97,12 @@ void GradientFilm::splatLightTracing(SampleRecorder &rec, const GradientSplat &s
 namespace {
 // Sums of film values can exceed the float range (extreme emitters): clamped
 // like the film's own outputs, never Inf (the reconstruction handles the range).
+// Float sums stay float sums (same rounding as always), then are clamped.
 float ToFloat(double v) {
     constexpr double big = std::numeric_limits<float>::max();
     return float(std::clamp(v, -big, big));
 }
+float SumF(float a, float b) { return ToFloat(double(a + b)); }
 }  // namespace
 
 GradientImages GradientFilm::images(const Film &film, double spp) const {
@@ -124,8 +126,8 @@ GradientImages GradientFilm::images(const Film &film, double spp) const {
     };
     for (size_t i = 0; i < n; ++i) {
         g.primal[i] = L[Primal].data()[i];
-        g.dx[i] = ToFloat(double(L[DxF].data()[i]) + L[DxB].data()[i]);
-        g.dy[i] = ToFloat(double(L[DyF].data()[i]) + L[DyB].data()[i]);
+        g.dx[i] = SumF(L[DxF].data()[i], L[DxB].data()[i]);
+        g.dy[i] = SumF(L[DyF].data()[i], L[DyB].data()[i]);
         g.primalVar[i] = ToFloat(var(Primal, PrimalSq, i));
         g.dxVar[i] = ToFloat(var(DxF, DxFSq, i) + var(DxB, DxBSq, i));
         g.dyVar[i] = ToFloat(var(DyF, DyFSq, i) + var(DyB, DyBSq, i));
@@ -142,12 +144,12 @@ void GradientFilm::addSplats(const Film &film, double spp, GradientImages *g) co
     double invN = spp > 0 ? 1 / spp : 0;
     for (size_t i = 0; i < g->primal.size(); ++i) {
         auto at = [&](int layer) { return double(L[layer].data()[i]); };
-        g->primal[i] = ToFloat(g->primal[i] + at(Primal));
-        g->dx[i] = ToFloat(g->dx[i] + at(DxF) + at(DxB));
-        g->dy[i] = ToFloat(g->dy[i] + at(DyF) + at(DyB));
-        g->primalVar[i] = ToFloat(g->primalVar[i] + at(PrimalSq) * invN);
-        g->dxVar[i] = ToFloat(g->dxVar[i] + (at(DxFSq) + at(DxBSq)) * invN);
-        g->dyVar[i] = ToFloat(g->dyVar[i] + (at(DyFSq) + at(DyBSq)) * invN);
+        g->primal[i] = SumF(g->primal[i], ToFloat(at(Primal)));
+        g->dx[i] = SumF(g->dx[i], ToFloat(at(DxF) + at(DxB)));
+        g->dy[i] = SumF(g->dy[i], ToFloat(at(DyF) + at(DyB)));
+        g->primalVar[i] = SumF(g->primalVar[i], ToFloat(at(PrimalSq) * invN));
+        g->dxVar[i] = SumF(g->dxVar[i], ToFloat((at(DxFSq) + at(DxBSq)) * invN));
+        g->dyVar[i] = SumF(g->dyVar[i], ToFloat((at(DyFSq) + at(DyBSq)) * invN));
     }
 }
 

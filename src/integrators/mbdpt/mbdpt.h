@@ -8,7 +8,7 @@
 //      at connection time with RebuildBSDF);
 //   2. reordering: for every camera prefix length t and light prefix length
 //      s the eligible subpaths (enough vertices, connectible end vertex) are
-//      sorted by the Sec. 4.2 metric with tbb::parallel_sort;
+//      sorted by the Sec. 4.2 metric (a parallel sort with a total order);
 //   3. connection: the image is split into tiles of camera subpaths; each
 //      camera subpath connects, for every strategy (s >= 2, t >= 2), to m
 //      light subpaths chosen by a stratified 2D point set over the reordered

@@ -46,6 +46,7 @@ import fnmatch
 import json
 import math
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -288,6 +289,14 @@ def evaluate(cells, scenes_by_name, imgtool, tmpdir):
         if sname.endswith(TWIN):
             continue
         fails, notes = [], []
+        check = scenes_by_name[sname].check if sname in scenes_by_name else None
+        if isinstance(check, stress_scenes.Refused):
+            # Hostile input: a clear located error is the right answer, a render or a crash is not.
+            err = c.get("error", "")
+            if not (c["exit"] == 1 and re.search(r"\.pbrt:\d+:\d+: ", err) and check.reason in err):
+                fails.append("expected a located error mentioning %r, got exit %s: %s" % (check.reason, c["exit"], err))
+            c["fails"], c["notes"], c["energy"] = fails, notes, {}
+            continue
         if c["exit"] == "timeout":
             fails.append("TIMEOUT after %.0f s" % c["seconds"])
         elif c["exit"] != 0:

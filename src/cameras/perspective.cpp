@@ -113,7 +113,16 @@ std::unique_ptr<Camera> CreateCamera(const CameraDesc &desc, Point2i res) {
     if (halffov > 0) fov = 2 * halffov;
     if (!(fov > 0 && fov < 180)) throw Error(ps.locOf("fov", desc.loc), "\"fov\" must be in (0, 180) degrees");
     if (lensRadius < 0) throw Error(ps.locOf("lensradius", desc.loc), "\"lensradius\" must be >= 0");
-    if (!(focalDistance > 0)) throw Error(ps.locOf("focaldistance", desc.loc), "\"focaldistance\" must be > 0");
+    // Lengths beyond 1e15 scene units leave the range the ray tracer (Embree,
+    // single precision, origins below ~1.8e18) can trace: refused, not aborted on.
+    constexpr Float kMaxLength = 1e15;
+    if (!(focalDistance > 0 && focalDistance <= kMaxLength))
+        throw Error(ps.locOf("focaldistance", desc.loc), "\"focaldistance\" must be in (0, 1e15]");
+    if (lensRadius > kMaxLength) throw Error(ps.locOf("lensradius", desc.loc), "\"lensradius\" must be <= 1e15");
+    Point3 eye = desc.cameraFromWorld.inverse().applyPoint(Point3(0, 0, 0));
+    if (!(std::abs(eye.x) <= kMaxLength && std::abs(eye.y) <= kMaxLength && std::abs(eye.z) <= kMaxLength))
+        throw Error(desc.loc, "the camera lies more than 1e15 scene units from the origin, beyond the range the ray "
+                              "tracer handles");
     ps.checkUnused("Camera \"perspective\"");
     return std::make_unique<PerspectiveCamera>(desc.cameraFromWorld.inverse(), res, sw, fov, lensRadius,
                                                focalDistance);

@@ -78,8 +78,14 @@ std::unique_ptr<Filter> CreateFilter(const EntityDesc &desc) {
     const ParamSet &ps = desc.params;
     auto radius = [&](Float def) {
         Vec2 r(ps.getFloat("xwidth", def), ps.getFloat("ywidth", def));
-        if (!(r.x > 0 && r.y > 0))
-            throw Error(desc.loc, "PixelFilter \"" + type + "\": xwidth and ywidth must be > 0");
+        // Upper bound: the film samples every pixel within the radius of the image (a
+        // width of 1e6 would allocate the whole plane; pbrt-v3's filters use <= 4).
+        constexpr Float kMaxWidth = 64;
+        for (const char *n : {"xwidth", "ywidth"}) {
+            Float v = n[0] == 'x' ? r.x : r.y;
+            if (!(v > 0 && v <= kMaxWidth))
+                throw Error(ps.locOf(n, desc.loc), "PixelFilter \"" + type + "\": \"" + n + "\" must be in (0, 64] pixels");
+        }
         return r;
     };
     std::unique_ptr<Filter> f;

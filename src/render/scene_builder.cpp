@@ -156,6 +156,15 @@ double CpuSeconds() {
     getrusage(RUSAGE_SELF, &u);
     return u.ru_utime.tv_sec + u.ru_stime.tv_sec + 1e-6 * (u.ru_utime.tv_usec + u.ru_stime.tv_usec);
 }
+// Embree traces in single precision and rejects ray origins beyond ~1.8e18:
+// geometry (and anything rays would start from) must stay within 1e15 of the
+// origin, or the renderer would abort inside Embree.
+void CheckTraceableBounds(const Bounds3 &b, const FileLoc &loc) {
+    constexpr Float kMax = 1e15;
+    for (int i = 0; i < 3; ++i)
+        if (!(std::abs(b.pMin[i]) <= kMax && std::abs(b.pMax[i]) <= kMax))
+            throw Error(loc, "shape extends beyond 1e15 scene units from the origin (the range the ray tracer handles)");
+}
 double PeakRSSMegabytes() {
     rusage u;
     getrusage(RUSAGE_SELF, &u);
@@ -225,12 +234,16 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
             rec.mesh = b.mesh;
             feat.numTriangles += b.mesh->numTriangles();
             if (b.subdivision) feat.subdivisionSurfaces = true;
-            for (const auto &p : b.mesh->p) scene->bounds.expand(p);
+            Bounds3 sb;
+            for (const auto &p : b.mesh->p) sb.expand(p);
+            CheckTraceableBounds(sb, sd.loc);
+            scene->bounds.expand(sb);
         } else {
             rec.analytic = b.analytic;
             rec.sphere = b.analytic;
             if (dynamic_cast<const Sphere *>(b.analytic.get())) feat.numSpheres++;
             else feat.numAnalytic++;
+            CheckTraceableBounds(b.analytic->worldBound(), sd.loc);
             scene->bounds.expand(b.analytic->worldBound());
         }
         if (sd.areaLight >= 0) {

@@ -199,6 +199,22 @@ TEST_F(CliTest, HostileNumbersAreLocatedErrors) {
     EXPECT_EQ(r.status, 1);
     EXPECT_NE(r.err.find("bad.pbrt:3:"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("GiB"), std::string::npos) << r.err;
+    // Beyond the ray tracer's range (Embree aborted on these before): refused with a location.
+    r = with("\"float fov\" [40]", "\"float fov\" [40] \"float lensradius\" [0.5] \"float focaldistance\" [1e200]");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("bad.pbrt:2:"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("focaldistance"), std::string::npos) << r.err;
+    r = with("LookAt 0 0 -3", "LookAt 0 0 -1e19");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("bad.pbrt:2:1"), std::string::npos) << r.err;
+    r = with("\"float radius\" [1]", "\"float radius\" [1e16]");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("bad.pbrt:6:1"), std::string::npos) << r.err;
+    // A pixel filter a million pixels wide would sample the whole plane.
+    r = with("WorldBegin", "PixelFilter \"box\" \"float ywidth\" [1e6]\nWorldBegin");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("bad.pbrt:4:"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("ywidth"), std::string::npos) << r.err;
 }
 
 // pbrt-v3 features Gradus lacks are located errors, never dropped silently.

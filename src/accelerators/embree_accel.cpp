@@ -1,7 +1,10 @@
 #include "accelerators/embree_accel.h"
 
+#include "core/stats.h"
+
 #include <embree3/rtcore.h>
 
+#include <cmath>
 #include <cstring>
 
 #include "core/error.h"
@@ -95,6 +98,18 @@ void ToRTCRay(const Ray &r, RTCRay *ray) {
     ray->flags = 0;
 }
 
+// Embree asserts (and aborts) on rays it cannot trace: non-finite origins or
+// directions, origins beyond ~1.8e18, a NaN or negative tfar. Such rays come
+// only from degenerate input (near-singular transforms, overflowing geometry):
+// they are dropped - a miss for closest hits, blocked for shadow rays - and counted.
+bool Traceable(const RTCRay &r) {
+    constexpr float kMaxOrigin = 1e18f;
+    auto ok = [](float v, float lim) { return std::abs(v) < lim; };  // false for NaN and Inf
+    return ok(r.org_x, kMaxOrigin) && ok(r.org_y, kMaxOrigin) && ok(r.org_z, kMaxOrigin) &&
+           ok(r.dir_x, INFINITY) && ok(r.dir_y, INFINITY) && ok(r.dir_z, INFINITY) &&
+           (r.dir_x != 0 || r.dir_y != 0 || r.dir_z != 0) && r.tfar >= r.tnear;
+}
+
 }  // namespace
 
 EmbreeAccel::EmbreeAccel() {
@@ -157,6 +172,11 @@ bool EmbreeAccel::intersect(const Ray &r, RayHit *hit) const {
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh;
     ToRTCRay(r, &rh.ray);
+    if (!Traceable(rh.ray)) {
+        GRADUS_STAT_COUNTER("Embree/Untraceable rays dropped", nBad);
+        ++nBad;
+        return false;
+    }
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
@@ -175,6 +195,11 @@ bool EmbreeAccel::occluded(const Ray &r) const {
     rtcInitIntersectContext(&ctx);
     RTCRay ray;
     ToRTCRay(r, &ray);
+    if (!Traceable(ray)) {
+        GRADUS_STAT_COUNTER("Embree/Untraceable rays dropped", nBad);
+        ++nBad;
+        return true;
+    }
     rtcOccluded1(scene_, &ctx, &ray);
     return ray.tfar < 0;
 }

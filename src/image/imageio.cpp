@@ -63,6 +63,20 @@ std::vector<unsigned char> ReadFileBytes(const std::string &filename) {
     return bytes;
 }
 
+// A header that claims more pixels than this machine could hold fails with a
+// message before anything is allocated (a 22-byte TGA may claim 62 Mpx, a
+// damaged EXR 58 GB).
+void CheckImageSize(const std::string &filename, double width, double height, double channels) {
+    static const double physical = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
+    const double bytes = width * height * channels * sizeof(float);
+    if (!(width > 0 && height > 0) || width > (1 << 20) || height > (1 << 20) || (physical > 0 && bytes > physical / 2)) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf, ": image of %.0fx%.0f pixels x %.0f channels (%.3g GiB) is larger than this "
+                      "reader accepts", width, height, channels, bytes / (1 << 30));
+        throw Error(filename + buf);
+    }
+}
+
 bool LittleEndianHost() {
     uint32_t one = 1;
     unsigned char b;
@@ -161,6 +175,8 @@ Image ReadEXR(const std::string &filename) {
         names.push_back(s.name);
     }
     int width = window.max.x - window.min.x + 1, height = window.max.y - window.min.y + 1;
+    CheckImageSize(filename, double(window.max.x) - window.min.x + 1, double(window.max.y) - window.min.y + 1,
+                   double(names.size()));
     Image image(width, height, names);
     image.metadata = std::move(metadata);
     // A data window inside a larger display window (a crop) keeps its placement.
@@ -319,6 +335,7 @@ Image ReadSTB(const std::string &filename, const std::vector<unsigned char> &byt
                     std::string(stbi_failure_reason()) + ")");
     std::vector<std::string> names = {"R", "G", "B"};  // grey is replicated
     if (n == 2 || n == 4) names.push_back("A");
+    CheckImageSize(filename, w, h, double(names.size()));
     Image image;
     auto fill = [&](auto *pix, auto decodeColor, auto decodeAlpha) {
         image = Image(w, h, names);

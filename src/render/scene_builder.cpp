@@ -357,8 +357,9 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
     fp.checkUnused("Film \"image\"");
     if (!opts.outfileOverride.empty()) filename = opts.outfileOverride;
     CheckWritableImagePath(filename);  // before any geometry is loaded or a sample rendered
+    std::unique_ptr<Filter> filter = CreateFilter(desc.filter);
     try {
-        job.film = std::make_unique<Film>(res, crop, CreateFilter(desc.filter), filename, scale);
+        job.film = std::make_unique<Film>(res, crop, std::move(filter), filename, scale);
     } catch (const Error &e) {  // a film too large for this machine: located at the resolution
         throw Error(fp.locOf("xresolution", fd.loc), e.what());
     }

@@ -47,7 +47,7 @@ std::unique_ptr<Integrator> CreateIntegrator(const EntityDesc &desc) {
     std::string valid;
     for (const auto &info : IntegratorRegistry()) valid += (valid.empty() ? "" : ", ") + info.name;
     // pbrt-v3 integrators Gradus lacks are named as such, not reported like typos.
-    for (const char *pbrt : {"whitted", "directlighting", "volpath", "sppm", "ambientocclusion", "mlt", "bdpt", "path"})
+    for (const char *pbrt : {"whitted", "directlighting", "volpath", "sppm", "ambientocclusion", "mlt"})
         if (desc.type == pbrt)
             throw UnsupportedError(desc.loc, "Integrator \"" + desc.type + "\" (available: " + valid + ")");
     throw Error(desc.loc, "unknown integrator \"" + desc.type + "\" (available: " + valid + ")");

@@ -83,7 +83,7 @@ int ParamSet::getInt(const std::string &name, int def) const {
 
 Float ParamSet::getFloat(const std::string &name, Float def) const {
     Float v = getFloatRaw(name, def);
-    note("float", name, Num(v));
+    if (std::isfinite(v)) note("float", name, Num(v));  // an infinite default means "none" and is not scene syntax
     return v;
 }
 

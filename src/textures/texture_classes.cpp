@@ -277,6 +277,10 @@ class UVTexture : public SpectrumTexture {
     TextureMapping2D m_;
 };
 
+// Parity of a sum of cell indices, in floating point: an integer cast of huge
+// coordinates would be undefined (fuzz finding); every double beyond 2^53 is even.
+inline bool EvenCell(double k) { return !(std::fabs(std::fmod(k, 2.0)) == 1.0); }
+
 // Point-sampled checkerboard (pbrt-v3's closed-form box filter needs ray
 // differentials, which Gradus does not track; with zero footprint it reduces to this).
 template <typename T>
@@ -286,8 +290,7 @@ class Checkerboard2D : public Texture<T> {
         : m_(m), a_(a), b_(b) {}
     T evaluate(const SurfaceInteraction &si) const override {
         Point2 st = m_.map(si);
-        int64_t k = int64_t(std::floor(st.x)) + int64_t(std::floor(st.y));
-        return (k & 1) == 0 ? a_->evaluate(si) : b_->evaluate(si);
+        return EvenCell(std::floor(st.x) + std::floor(st.y)) ? a_->evaluate(si) : b_->evaluate(si);
     }
 
   private:
@@ -302,8 +305,7 @@ class Checkerboard3D : public Texture<T> {
         : m_(m), a_(a), b_(b) {}
     T evaluate(const SurfaceInteraction &si) const override {
         Point3 p = m_.map(si);
-        int64_t k = int64_t(std::floor(p.x)) + int64_t(std::floor(p.y)) + int64_t(std::floor(p.z));
-        return (k & 1) == 0 ? a_->evaluate(si) : b_->evaluate(si);
+        return EvenCell(std::floor(p.x) + std::floor(p.y) + std::floor(p.z)) ? a_->evaluate(si) : b_->evaluate(si);
     }
 
   private:

@@ -161,7 +161,9 @@ inline Float MISWeight(const BidirContext &ctx, SubpathView light, SubpathView c
 }
 
 // True when strategy (s, t) of the full path could produce it: both endpoints
-// connectible and the connection edge not degenerate (used by MISWeight and tests).
+// connectible and the connection edge not degenerate - not shorter than
+// minConnectDist, not in the tangent plane of a surface end (|cos| < 1e-6)
+// (used by the connections, MISWeight and tests).
 bool EdgeConnectible(const BidirContext &ctx, const PathVertex &a, const PathVertex &b);
 
 }  // namespace gradus

@@ -129,42 +129,29 @@ Spectrum ParamSet::getSpectrum(const std::string &name, Spectrum def, SpectrumKi
     return v;
 }
 
+// Lists are recorded when given, at most 16 values.
+template <typename T, typename Fmt>
+std::string ListText(const std::vector<T> &v, Fmt fmt) {
+    std::string t = "[";
+    for (size_t i = 0; i < v.size() && i < 16; ++i) t += std::string(i ? " " : "") + fmt(v[i]);
+    return t + (v.size() > 16 ? " ...]" : "]");
+}
+
 std::vector<int> ParamSet::getInts(const std::string &name) const {
     std::vector<int> v = getIntsRaw(name);
-    if (!v.empty()) {  // lists: recorded when given (at most 16 values)
-        std::string t = "[";
-        for (size_t i = 0; i < v.size() && i < 16; ++i) {
-            const auto &x = v[i];
-            t += std::string(i ? " " : "") + std::to_string(x);
-        }
-        note("integer", name, t + (v.size() > 16 ? " ...]" : "]"));
-    }
+    if (!v.empty()) note("integer", name, ListText(v, [](int x) { return std::to_string(x); }));
     return v;
 }
 
 std::vector<Float> ParamSet::getFloats(const std::string &name) const {
     std::vector<Float> v = getFloatsRaw(name);
-    if (!v.empty()) {  // lists: recorded when given (at most 16 values)
-        std::string t = "[";
-        for (size_t i = 0; i < v.size() && i < 16; ++i) {
-            const auto &x = v[i];
-            t += std::string(i ? " " : "") + Num(x);
-        }
-        note("float", name, t + (v.size() > 16 ? " ...]" : "]"));
-    }
+    if (!v.empty()) note("float", name, ListText(v, [](Float x) { return Num(x); }));
     return v;
 }
 
 std::vector<std::string> ParamSet::getStrings(const std::string &name) const {
     std::vector<std::string> v = getStringsRaw(name);
-    if (!v.empty()) {  // lists: recorded when given (at most 16 values)
-        std::string t = "[";
-        for (size_t i = 0; i < v.size() && i < 16; ++i) {
-            const auto &x = v[i];
-            t += std::string(i ? " " : "") + "\"" + x + "\"";
-        }
-        note("string", name, t + (v.size() > 16 ? " ...]" : "]"));
-    }
+    if (!v.empty()) note("string", name, ListText(v, [](const std::string &x) { return "\"" + x + "\""; }));
     return v;
 }
 

@@ -78,7 +78,6 @@ void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     // Light-tracing (case iii) primal and gradients are GradientFilm splats:
     // merged in tile order, so images do not depend on the thread count.
     initGradients(film, false, true);
-    calibrateReconstruction(set_.norm, set_.alpha);
     splatScale_ = LightTracingSplatScale(film);
     store_->threads.clear();
 }

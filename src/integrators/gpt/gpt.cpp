@@ -30,7 +30,6 @@ GPTIntegrator::GPTIntegrator(const EntityDesc &desc) : set_(Table().parse(desc))
 void GPTIntegrator::preprocess(const Scene &scene, Film &film) {
     lightSampler_ = LightSampler(scene.lights, set_.lightStrategy, loc_, scene.bounds);
     initGradients(film, set_.filmFilter);
-    calibrateReconstruction(set_.norm, set_.alpha);
     scene_ = &scene;
     stats_.reset();
 }

@@ -52,7 +52,7 @@ class GPTIntegrator : public PixelSampleIntegrator, public GradientFamily {
     void preprocess(const Scene &scene, Film &film) override;
     void estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const override;
     void finish(const Film &film, const RenderStats &stats, Image *out) override;
-    double finishEstimate() const override { return reconstructionEstimate(); }
+    double finishEstimate() const override { return reconstructionEstimate(set_.norm, set_.alpha); }
     std::string statistics() const override;
 
     // One camera sample without a film (for tests): primal and the four neighbour

@@ -9,7 +9,8 @@ void GradientFamily::initGradients(Film &film, bool useFilmFilter, bool lightTra
     filmBounds_ = film.pixelBounds();
 }
 
-void GradientFamily::calibrateReconstruction(ReconstructionNorm norm, Float alpha) {
+double GradientFamily::reconstructionEstimate(ReconstructionNorm norm, Float alpha) const {
+    if (reconEstimate_ >= 0) return reconEstimate_;
     constexpr int n = 64;
     GradientImages g;
     g.width = g.height = n;
@@ -34,6 +35,7 @@ void GradientFamily::calibrateReconstruction(ReconstructionNorm norm, Float alph
     WriteGradientOutput(g, norm, alpha, &scratch, &report);
     const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     reconEstimate_ = 1.5 * sec * double(filmBounds_.area()) / double(n * n);
+    return reconEstimate_;
 }
 
 void GradientFamily::finishGradients(const Film &film, const RenderStats &stats, ReconstructionNorm norm,

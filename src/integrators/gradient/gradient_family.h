@@ -29,13 +29,12 @@ class GradientFamily {
     // The integrator's finish(): replaces *out by the gradient output (keeping its metadata).
     void finishGradients(const Film &film, const RenderStats &stats, ReconstructionNorm norm, Float alpha,
                          Image *out);
-    // Times the reconstruction path on a small problem (sets reconstructionEstimate()).
-    void calibrateReconstruction(ReconstructionNorm norm, Float alpha);
+
     // Seconds the reconstructions of finishGradients will take at this film's
-    // size, from a timed reconstruction of a 64x64 problem in initGradients
-    // (scaled by the pixel count with a 1.5 safety factor): the render loop
-    // reserves it from the --time budget.
-    double reconstructionEstimate() const { return reconEstimate_; }
+    // size: a reconstruction of a 64x64 problem, timed on first use (only a
+    // render with a --time budget asks), scaled by the pixel count with a 1.5
+    // safety factor. The render loop reserves it from the budget.
+    double reconstructionEstimate(ReconstructionNorm norm, Float alpha) const;
     // The statistics tail: the integrator's lines followed by the reconstruction's.
     std::string withReconstructionReport(const std::string &lines) const { return lines + reconReport_; }
 
@@ -44,7 +43,7 @@ class GradientFamily {
 
   private:
     std::string reconReport_;
-    double reconEstimate_ = 0;
+    mutable double reconEstimate_ = -1;  // not yet timed
 };
 
 }  // namespace gradus

@@ -88,6 +88,11 @@ float LinearToSRGB(float v);
 // PFM (either endianness); other formats stb_image knows (JPEG, TGA, BMP, HDR) too.
 // Format is chosen by the file's magic bytes. Throws gradus::Error naming the file on failure.
 Image ReadImage(const std::string &filename);
+
+// Throws Error if an EXR file's headers claim attribute sizes beyond the file
+// (run by ReadImage before OpenEXR reads the headers).
+void CheckEXRHeaders(const std::string &filename);
+
 // Writes atomically (a temporary file in the same directory, renamed into
 // place), by extension: .exr (float32, every channel, metadata as typed
 // attributes), .png (R,G,B clamped, sRGB-encoded, 8-bit), .pfm (R,G,B float).

@@ -113,7 +113,99 @@ bool IsStandardAttribute(const std::string &n) {
 
 // ---------------------------------------------------------------- EXR
 
+// Size in bytes of the EXR attribute types OpenEXR reads with a fixed layout, -1 otherwise.
+int FixedEXRAttributeSize(const std::string &type) {
+    static const std::pair<const char *, int> sizes[] = {
+        {"box2i", 16}, {"box2f", 16}, {"chromaticities", 32}, {"compression", 1}, {"double", 8}, {"envmap", 1},
+        {"float", 4}, {"int", 4}, {"keycode", 28}, {"lineOrder", 1}, {"m33f", 36}, {"m33d", 72}, {"m44f", 64},
+        {"m44d", 128}, {"rational", 8}, {"tiledesc", 9}, {"timecode", 8}, {"v2i", 8}, {"v2f", 8}, {"v2d", 16},
+        {"v3i", 12}, {"v3f", 12}, {"v3d", 24}, {"deepImageState", 1}};
+    for (const auto &[name, size] : sizes)
+        if (type == name) return size;
+    return -1;
+}
+
+}  // namespace
+
+// OpenEXR allocates the size an attribute claims before reading it (a 1.3 KB file
+// whose string attribute claims 1.9 GB allocates 1.9 GB). The attribute list of
+// every header is walked here first: each size must fit in what is left of the
+// file and agree with the layout OpenEXR will read for the type (fixed sizes,
+// channel lists, string vectors, a preview's pixel count).
+void CheckEXRHeaders(const std::string &filename) {
+    std::ifstream in(filename, std::ios::binary | std::ios::ate);
+    if (!in) throw Error(filename + ": cannot open file for reading");
+    const int64_t fileSize = int64_t(in.tellg());
+    in.seekg(0);
+    auto fail = [&](const std::string &what) { throw Error(filename + ": corrupt EXR header: " + what); };
+    unsigned char head[8];
+    if (!in.read(reinterpret_cast<char *>(head), 8)) fail("file ends inside the magic number and version");
+    const bool longNames = head[5] & 0x04, multipart = head[5] & 0x10;
+    const size_t maxName = longNames ? 255 : 31;
+    auto readString = [&](const char *what) {
+        std::string s;
+        for (char c; in.get(c) && c != '\0';) {
+            if (s.size() >= maxName) fail(std::string(what) + " longer than " + std::to_string(maxName) + " characters");
+            s.push_back(c);
+        }
+        if (!in) fail(std::string("file ends inside an attribute ") + what);
+        return s;
+    };
+    auto readInt = [&](const char *what) {
+        unsigned char b[4];
+        if (!in.read(reinterpret_cast<char *>(b), 4)) fail(std::string("file ends inside ") + what);
+        return int32_t(uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24);
+    };
+    for (int part = 0;; ++part) {
+        int attributes = 0;
+        for (;; ++attributes) {
+            std::string name = readString("name");
+            if (name.empty()) break;
+            std::string type = readString("type");
+            const int32_t size = readInt("an attribute size");
+            const int64_t left = fileSize - int64_t(in.tellg());
+            if (size < 0 || size > left)
+                fail("attribute \"" + name + "\" claims " + std::to_string(size) + " bytes, " +
+                     std::to_string(left) + " are left in the file");
+            // OpenEXR reads known types by their structure, not by the size field: a
+            // fixed-size type must have its size, a channel list and a string vector must
+            // end exactly where the size says, or its reading drifts into other bytes.
+            const int64_t end = int64_t(in.tellg()) + size;
+            auto mismatch = [&] { fail("attribute \"" + name + "\" of type " + type + " has " + std::to_string(size) + " bytes"); };
+            const int fixed = FixedEXRAttributeSize(type);
+            if (fixed >= 0 && size != fixed) mismatch();
+            if (type == "preview") {
+                if (size < 8) mismatch();
+                const int64_t w = uint32_t(readInt("a preview size")), h = uint32_t(readInt("a preview size"));
+                if (w * h * 4 != int64_t(size) - 8)
+                    fail("preview of " + std::to_string(w) + "x" + std::to_string(h) + " pixels in " +
+                         std::to_string(size) + " bytes");
+            } else if (type == "chlist") {
+                // Entries: name, then 16 bytes (type, pLinear + reserved, x and y sampling); an empty name ends it.
+                while (!readString("channel name").empty()) {
+                    in.seekg(16, std::ios::cur);
+                    if (int64_t(in.tellg()) > end - 1) mismatch();
+                }
+                if (int64_t(in.tellg()) != end) mismatch();
+            } else if (type == "stringvector") {
+                while (int64_t(in.tellg()) < end) {
+                    const int32_t len = readInt("a string vector");
+                    if (len < 0 || len > end - int64_t(in.tellg())) mismatch();
+                    in.seekg(len, std::ios::cur);
+                }
+            }
+            in.seekg(end);
+        }
+        // A single-part file has one header; a multi-part file ends its list with an empty one.
+        if (!multipart || (attributes == 0 && part > 0)) break;
+        if (attributes == 0) fail("multi-part file without a header");
+    }
+}
+
+namespace {
+
 Image ReadEXR(const std::string &filename) {
+    CheckEXRHeaders(filename);
     Imf::MultiPartInputFile file(filename.c_str());
     int nparts = file.parts();
     struct Src {

@@ -339,6 +339,34 @@ TEST(ImageIO, ReadersRejectDamagedFiles) {
     ExpectErrorNaming([&] { ReadImage(missing); }, missing);
 }
 
+// OpenEXR allocates what an attribute size claims before reading it: a string
+// attribute claiming 2 GB in a file of a few hundred bytes must be refused by
+// the header walk (message "claims"), not allocated (fuzz_image finding).
+TEST(ImageIO, ExrAttributeSizeBeyondFileIsRefused) {
+    TempDir dir;
+    Image img = Image::RGB(4, 4);
+    img.metadata["note"] = std::string("hello");
+    WriteImage(dir.file("ok.exr"), img);
+    std::string bytes = ReadBytes(dir.file("ok.exr"));
+    const std::string key = std::string("note\0string\0", 12);
+    size_t at = bytes.find(key);
+    ASSERT_NE(at, std::string::npos);
+    ASSERT_EQ(bytes.substr(at + key.size() + 4, 5), "hello");
+    std::string bomb = bytes;
+    bomb.replace(at + key.size(), 4, std::string("\xff\xff\xff\x7f", 4));
+    std::string f = dir.file("bomb.exr");
+    WriteBytes(f, bomb);
+    try {
+        ReadImage(f);
+        ADD_FAILURE() << "no error for an attribute claiming 2 GB";
+    } catch (const Error &e) {
+        EXPECT_NE(std::string(e.what()).find("\"note\" claims 2147483647 bytes"), std::string::npos) << e.what();
+    }
+    // The unmodified file passes the same walk.
+    EXPECT_NO_THROW(CheckEXRHeaders(dir.file("ok.exr")));
+    EXPECT_EQ(ReadImage(dir.file("ok.exr")).metadata.at("note").str(), "hello");
+}
+
 TEST(ImageIO, WriterErrors) {
     TempDir dir;
     Image img = Image::RGB(2, 2);

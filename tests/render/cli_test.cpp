@@ -161,8 +161,9 @@ TEST_F(CliTest, DebugPixelReproducesThePixelOfTheFullRender) {
         EXPECT_EQ(samples, 8) << integrator;
         EXPECT_EQ(radiance, 8) << integrator;
         EXPECT_GT(vertices, 0) << integrator;
-        if (std::string(integrator) == "path")
+        if (std::string(integrator) == "path") {
             for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum[c] / 8, full.at(9, 6, c), 1e-6 * (1 + full.at(9, 6, c))) << c;
+        }
     }
     // A single sample; a pixel outside the image and malformed values are errors.
     std::string cmd = "cd '" + dir_.string() + "' && '" + GRADUS_BIN +

@@ -37,6 +37,7 @@ bool Finite(const gradus::Spectrum &s) { return std::isfinite(s.r) && std::isfin
 size_t ClaimedPixels(const std::string &path, const uint8_t *bytes, size_t n) {
     if (n >= 4 && bytes[0] == 0x76 && bytes[1] == 0x2f && bytes[2] == 0x31 && bytes[3] == 0x01) {
         try {
+            gradus::CheckEXRHeaders(path);
             Imf::MultiPartInputFile file(path.c_str());
             size_t sum = 0;
             for (int p = 0; p < file.parts(); ++p) {

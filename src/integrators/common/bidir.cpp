@@ -363,14 +363,22 @@ bool EdgeConnectible(const BidirContext &ctx, const PathVertex &a, const PathVer
     return !grazing(a) && !grazing(b);
 }
 
-Float MISWeight(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s, int t,
-                const PathVertex *sampled) {
-    // Vertex merging terms (G-VCM Eq. 12) are not in the sums below yet: fail
-    // loudly instead of returning connection-only weights for a VCM.
-    GRADUS_CHECK(!set.merging);
-    GRADUS_CHECK(!set.lightTracing || set.lightTracingSamples > 0);
-    if (t == 1 && !set.lightTracing) return 0;  // not in play
-    if (s + t == 2) return 1;
+namespace {
+
+// A vertex at which a camera and a light subpath can be merged (VCM): a surface
+// with a non-specular BSDF component.
+bool Mergeable(const PathVertex &v, const BSDF *bsdf) {
+    GRADUS_CHECK(bsdf);  // merging terms need the BSDFs of the subpaths
+    return v.type == VertexType::Surface && *bsdf && bsdf->hasNonSpecular();
+}
+
+// Sum over every strategy in `set` except the connection (s, t) of
+// (n_k p_k / n_st p_st)^beta for the path light[0..s-1] camera[t-1..0]; *ptRevOut
+// gets the light-side density of camera[t-1]. mergeMode: the strategy being
+// weighted is a merge at camera[t-1] (VCM), so light[s-1] is not known to be
+// connectible and its delta flag counts.
+Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s,
+                      int t, const PathVertex *sampled, bool mergeMode, Float *ptRevOut) {
     auto Lv = [&](int i) -> const PathVertex & { return (s == 1 && i == 0 && sampled) ? *sampled : light.v[i]; };
     auto Cv = [&](int i) -> const PathVertex & { return (t == 1 && i == 0 && sampled) ? *sampled : camera.v[i]; };
     auto Lb = [&](int i) -> const BSDF * { return light.bsdf ? &light.bsdf[i] : nullptr; };
@@ -396,17 +404,25 @@ Float MISWeight(const BidirContext &ctx, const StrategySet &set, SubpathView lig
         qsRev = PdfArea(ctx, Cv(t - 1), Cb(t - 1), t > 1 ? &Cv(t - 2) : nullptr, qs, TransportMode::Radiance);
         if (s > 1) qsMinusRev = PdfArea(ctx, qs, Lb(s - 1), &Cv(t - 1), Lv(s - 2), TransportMode::Radiance);
     }
+    *ptRevOut = ptRev;
     auto camRev = [&](int i) { return i == t - 1 ? ptRev : (i == t - 2 ? ptMinusRev : Cv(i).pdfRev); };
     auto lightRev = [&](int i) { return i == s - 1 ? qsRev : (i == s - 2 ? qsMinusRev : Lv(i).pdfRev); };
-    // Endpoints of the current strategy are connectible by construction.
+    // Endpoints of a connection are connectible by construction.
     auto camDelta = [&](int i) { return i != t - 1 && Cv(i).delta(); };
-    auto lightDelta = [&](int i) { return i != s - 1 && Lv(i).delta(); };
+    auto lightDelta = [&](int i) { return (mergeMode || i != s - 1) && Lv(i).delta(); };
     auto remap = [](Float f) { return f != 0 ? f : Float(1); };
     const bool power = ctx.heuristic == MISHeuristic::Power;
+    auto mis = [&](Float r) { return power ? r * r : r; };
     // Sample counts relative to this strategy's, n_k / n_s (Veach 1997 Sec. 9.2):
     // ri = p_k / p_s becomes n_k p_k / (n_s p_s). Exactly 1 with one sample each.
     const Float nOwn = t == 1 ? set.lightTracingSamples : Float(1);
     const Float relLT = set.lightTracingSamples / nOwn, relOther = 1 / nOwn;
+    // Merging at x_j (G-VCM Eq. 12: N p_VM,j = N pi r^2 p_acc p_VC,j): relative to
+    // the connection whose endpoint on x_j's side is x_j, eta_VCM times the
+    // density of x_j from the other side (Georgiev et al. 2012, Sec. 4.2); a
+    // delta density (x_j after a specular vertex: a caustic) counts as 1, as in
+    // every ratio here.
+    const Float eta = set.merging ? set.mergeFactor * relOther : 0;
 
     // w = 1 / sum_k (n_k p_k / n_s p_s)^beta with p_k / p_{k+1} = pdfRev / pdfFwd
     // of the vertex that changes sides (Veach 1997 Eq. 10.9).
@@ -414,28 +430,55 @@ Float MISWeight(const BidirContext &ctx, const StrategySet &set, SubpathView lig
     // Strategies with fewer camera vertices: (s + t - i, i), connection edge C[i] -- C[i-1].
     Float ri = 1;
     for (int i = t - 1; i > 0; --i) {
+        // ri is the ratio of the connection with camera endpoint C[i]: merging at C[i]
+        // (not at the light origin x_0, which C[t-1] is when s = 0).
+        if (eta > 0 && !(s == 0 && i == t - 1) && Mergeable(Cv(i), Cb(i))) sumRi += mis(eta * remap(camRev(i)) * ri);
         ri *= remap(camRev(i)) / remap(Cv(i).pdfFwd);
         int sp = s + t - i;
         if (sp == 1 && i == 1) continue;  // (1,1) is not evaluated
         if (i == 1 && !set.lightTracing) continue;  // (s + t - 1, 1) not in play
         if (camDelta(i) || Cv(i - 1).delta()) continue;
         if (!EdgeConnectible(ctx, Cv(i), Cv(i - 1))) continue;
-        Float r = ri * (i == 1 ? relLT : relOther);
-        sumRi += power ? r * r : r;
+        sumRi += mis(ri * (i == 1 ? relLT : relOther));
     }
     // Strategies with fewer light vertices: (i, s + t - i), connection edge L[i-1] -- L[i].
     ri = 1;
     for (int i = s - 1; i >= 0; --i) {
+        // ri is the ratio of the connection with light endpoint L[i]: merging at L[i] (i >= 1).
+        if (eta > 0 && i >= 1 && Mergeable(Lv(i), Lb(i))) sumRi += mis(eta * remap(lightRev(i)) * ri);
         ri *= remap(lightRev(i)) / remap(Lv(i).pdfFwd);
         int tp = s + t - i;
         if (i == 1 && tp == 1) continue;
         bool deltaPrev = i > 0 ? Lv(i - 1).delta() : Lv(0).isDeltaLight();
         if (lightDelta(i) || deltaPrev) continue;
         if (i > 0 && !EdgeConnectible(ctx, Lv(i - 1), Lv(i))) continue;
-        Float r = ri * relOther;  // t' = s + t - i >= 2
-        sumRi += power ? r * r : r;
+        sumRi += mis(ri * relOther);  // t' = s + t - i >= 2
     }
-    return 1 / (1 + sumRi);
+    return sumRi;
+}
+
+}  // namespace
+
+Float MISWeight(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s, int t,
+                const PathVertex *sampled) {
+    GRADUS_CHECK(!set.lightTracing || set.lightTracingSamples > 0);
+    if (t == 1 && !set.lightTracing) return 0;  // not in play
+    if (s + t == 2) return 1;
+    Float ptRev;
+    return 1 / (1 + OtherStrategies(ctx, set, light, camera, s, t, sampled, false, &ptRev));
+}
+
+Float MergeWeight(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s,
+                  int t) {
+    GRADUS_CHECK(set.merging && s >= 1 && t >= 2);
+    Float ptRev;
+    const Float others = OtherStrategies(ctx, set, light, camera, s, t, nullptr, true, &ptRev);
+    // The connection (s, t) itself is a strategy of this path unless light[s-1]
+    // is specular or the edge is degenerate.
+    const bool vc = (s == 1 || !light.v[s - 1].delta()) && EdgeConnectible(ctx, light.v[s - 1], camera.v[t - 1]);
+    const Float own = set.mergeFactor * (ptRev != 0 ? ptRev : Float(1));  // delta: 1, as in the sums
+    const Float misOwn = ctx.heuristic == MISHeuristic::Power ? own * own : own;
+    return misOwn / ((vc ? 1 : 0) + others);
 }
 
 bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera, int s, int t,

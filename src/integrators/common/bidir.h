@@ -56,10 +56,10 @@ struct StrategySet {
     // camera samples has N_light / N_pixel). Scales the t = 1 terms.
     Float lightTracingSamples = 1;
     // Vertex merging (VCM, Georgiev et al. 2012; G-VCM gradient-domain-vcm.md
-    // Eq. 12): each interior vertex adds a merging term eta_VCM p_VC,i with
-    // mergeFactor = eta_VCM = pi r^2 N_light. Not implemented yet: MISWeight
-    // stops with a failed CHECK when merging is requested, so that no
-    // integrator silently gets connection-only weights for merged paths.
+    // Eq. 12): each interior vertex x_j with a non-specular BSDF adds a merging
+    // term eta_VCM p(x_j from the other side) p_VC,j, with mergeFactor =
+    // eta_VCM = pi r^2 N_light (N_light light subpaths merged per camera
+    // subpath, one connected). The sums then need the subpaths' BSDFs.
     bool merging = false;
     Float mergeFactor = 0;
 };
@@ -154,6 +154,12 @@ bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera,
 // (nullptr: use the subpath's).
 Float MISWeight(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s, int t,
                 const PathVertex *sampled);
+// Weight of merging at camera[t-1] with a light subpath whose vertex after
+// light[s-1] landed there (VCM; s >= 1, t >= 2, set.merging), for the path
+// light[0..s-1] camera[t-1..0]: N p_VM over the connections and merges of that
+// path (G-VCM Eq. 13). The O(n) reference of vcm's recursive weights.
+Float MergeWeight(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s,
+                  int t);
 // The same over the context's strategies.
 inline Float MISWeight(const BidirContext &ctx, SubpathView light, SubpathView camera, int s, int t,
                        const PathVertex *sampled) {

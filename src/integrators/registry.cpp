@@ -47,6 +47,7 @@ std::unique_ptr<Integrator> CreateIntegrator(const EntityDesc &desc) {
     std::string valid;
     for (const auto &info : IntegratorRegistry()) valid += (valid.empty() ? "" : ", ") + info.name;
     // pbrt-v3 integrators Gradus lacks are named as such, not reported like typos.
+    // (pbrt-v3's "sppm" reaches here only without vcm: the scene builder maps it to vcm's mode vm.)
     for (const char *pbrt : {"whitted", "directlighting", "volpath", "sppm", "ambientocclusion", "mlt"})
         if (desc.type == pbrt)
             throw UnsupportedError(desc.loc, "Integrator \"" + desc.type + "\" (available: " + valid + ")");

@@ -33,7 +33,6 @@ void PrintContribution(const char *what, Point2i p, const Spectrum &v, int layer
                 layer >= 0 ? std::to_string(layer).c_str() : "", v.r, v.g, v.b);
 }
 
-constexpr int64_t kItemChunk = 256;  // items per splat buffer (fixed: merge order is thread-count independent)
 }  // namespace
 
 void InstallInterruptHandler() {
@@ -179,7 +178,7 @@ void PassContext::forEachPixelSample(const SampleEstimator &est) {
 }
 
 void PassContext::forEachItem(int64_t n, uint64_t tag, const ItemFn &fn) {
-    const int64_t chunks = (n + kItemChunk - 1) / kItemChunk;
+    const int64_t chunks = (n + PassContext::kItemChunk - 1) / PassContext::kItemChunk;
     std::vector<std::unique_ptr<FilmTile>> out(size_t(std::max<int64_t>(0, chunks)));
     const uint64_t key = seed() ^ tag;
     tbb::parallel_for(int64_t(0), chunks, [&](int64_t c) {
@@ -187,7 +186,7 @@ void PassContext::forEachItem(int64_t n, uint64_t tag, const ItemFn &fn) {
         auto tile = film_.makeSplatTile();
         Worker &w = worker();
         uint64_t bad = 0;
-        for (int64_t i = c * kItemChunk; i < std::min(n, (c + 1) * kItemChunk); ++i) {
+        for (int64_t i = c * PassContext::kItemChunk; i < std::min(n, (c + 1) * PassContext::kItemChunk); ++i) {
             RNG rng(Hash(key, uint64_t(pass_), uint64_t(i)));
             SampleRecorder rec(*tile, Point2i{-1, -1}, Point2(-1, -1));
             fn(i, rng, rec, w);

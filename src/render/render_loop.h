@@ -130,7 +130,9 @@ class PassContext {
     void forEachTile(const TileFn &fn);
     // Per-item work: fn(item, rng, recorder, worker) for items [0, n). The RNG
     // is keyed by (seed, tag, pass, item); the recorder's splats go to the
-    // film, merged in item order (chunks of fixed size).
+    // film, merged in item order (chunks of kItemChunk items; the items of one
+    // chunk run in order on one thread, so per-chunk output needs no locking).
+    static constexpr int64_t kItemChunk = 256;
     using ItemFn = std::function<void(int64_t, RNG &, SampleRecorder &, Worker &)>;
     void forEachItem(int64_t n, uint64_t tag, const ItemFn &fn);
     // Plain parallel loop without film output: fn(begin, end, worker) over

@@ -1,5 +1,6 @@
 #include "render/scene_builder.h"
 
+#include <algorithm>
 #include <map>
 #include <sstream>
 #include <thread>
@@ -364,10 +365,43 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
         throw Error(fp.locOf("xresolution", fd.loc), e.what());
     }
 
+    // Integrator description (created below). pbrt-v3's "sppm" is vcm's merging-only
+    // mode (progressive photon mapping, vcm.h): numiterations become the samples per
+    // pixel, radius keeps pbrt-v3's default of 1.
+    EntityDesc idesc = desc.integrator;
+    if (!idesc.present) idesc.type = "path";
+    bool overridden = !opts.integratorOverride.empty() && opts.integratorOverride != idesc.type;
+    if (!opts.integratorOverride.empty()) idesc.type = opts.integratorOverride;
+    int sppmIterations = 0;
+    if (idesc.type == "sppm" && std::any_of(IntegratorRegistry().begin(), IntegratorRegistry().end(),
+                                            [](const IntegratorInfo &i) { return i.name == "vcm"; })) {
+        sppmIterations = idesc.params.getInt("numiterations", 64);
+        if (sppmIterations < 1) throw Error(idesc.params.locOf("numiterations", idesc.loc), "\"numiterations\" must be >= 1");
+        if (idesc.params.getInt("photonsperiteration", -1) != -1)
+            throw UnsupportedError(idesc.params.locOf("photonsperiteration", idesc.loc),
+                                   "sppm \"photonsperiteration\" other than -1 (one light subpath per pixel)");
+        idesc.params.getInt("imagewritefrequency", 0);  // accepted: intermediate images are not written
+        auto add = [&](const std::string &type, const std::string &name, double number, const std::string &str) {
+            Param p;
+            p.type = type;
+            p.name = name;
+            p.loc = idesc.loc;
+            if (type == "string")
+                p.strings = {str};
+            else
+                p.numbers = {number};
+            idesc.params.add(p);
+        };
+        if (!idesc.params.has("radius")) add("float", "radius", 1, "");
+        add("string", "mode", 0, "vm");
+        idesc.type = "vcm";
+    }
+
     // Sampler.
     EntityDesc sdesc = desc.sampler;
     if (!sdesc.present) sdesc.type = "halton";
-    int sppOverride = opts.sppOverride;
+    int sppOverride = opts.sppOverride > 0 ? opts.sppOverride : sppmIterations;
+    if (opts.quick && opts.sppOverride <= 0 && sppmIterations > 0) sppOverride = std::max(1, sppmIterations / 8);
     job.sampler = CreateSampler(sdesc, opts.seed, sppOverride);
     if (opts.quick && sppOverride <= 0)
         job.sampler = CreateSampler(sdesc, opts.seed, std::max(1, job.sampler->samplesPerPixel() / 8));
@@ -379,10 +413,6 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
     }
 
     // Integrator.
-    EntityDesc idesc = desc.integrator;
-    if (!idesc.present) idesc.type = "path";
-    bool overridden = !opts.integratorOverride.empty() && opts.integratorOverride != idesc.type;
-    if (!opts.integratorOverride.empty()) idesc.type = opts.integratorOverride;
     ApplyParamOverrides(opts.paramOverrides, &idesc);
     job.integrator = CreateIntegrator(idesc);
     if (overridden) {

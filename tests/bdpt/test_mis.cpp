@@ -315,7 +315,9 @@ void CheckWeightSumsWithMerging(const std::string &scene, MISHeuristic h) {
             return sum == sum;
         });
         EXPECT_GE(checked, 200);
-        if (eta >= 100) EXPECT_GE(sizeable, 20) << "eta=" << eta << ": paths where merging has a sizeable weight";
+        if (eta >= 100) {
+            EXPECT_GE(sizeable, 20) << "eta=" << eta << ": paths where merging has a sizeable weight";
+        }
     }
 }
 TEST(BDPTMIS, WeightsSumToOneWithMergingBalance) { CheckWeightSumsWithMerging(MixedScene(), MISHeuristic::Balance); }

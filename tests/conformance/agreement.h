@@ -33,6 +33,7 @@ struct AgreementConfig {
     int runs;            // K per integrator
     int spp;             // S per run
     int seedX, seedRef;  // run k uses seed seedX + k (X) and seedRef + k (bdpt); disjoint ranges
+    std::vector<std::string> extraX = {};  // further gradus arguments of X's runs (e.g. --param mode=vm)
 };
 constexpr double kAgreementAlpha = 1e-4, kPowerScale = 1.05;
 constexpr int kBand = 4;
@@ -140,7 +141,9 @@ inline void CheckAgreement(const std::string &integrator, const std::string &sce
                                         std::to_string(seed)};
     };
     for (int k = 0; k < cfg.runs; ++k) {
-        Output x = Render(dir.path(), scene, integrator, opts(cfg.seedX + k), "x.exr");
+        std::vector<std::string> xOpts = opts(cfg.seedX + k);
+        xOpts.insert(xOpts.end(), cfg.extraX.begin(), cfg.extraX.end());
+        Output x = Render(dir.path(), scene, integrator, xOpts, "x.exr");
         Output b = Render(dir.path(), scene, "bdpt", opts(cfg.seedRef + k), "b.exr");
         ASSERT_TRUE(x.ok && b.ok) << "run " << k;
         if (k == 0) layers = ComparedLayers(x.image);

@@ -145,11 +145,11 @@ TEST_F(Provenance, PbrtIntegratorsWeLackAndRestrictingPixelBoundsAreNamed) {
     write("lights.pbrt", "LightSource \"point\" \"point from\" [0 0 -3] \"rgb I\" [5 5 5]\n");
     std::string s = kScene;
     const std::string line = "Integrator \"bdpt\" \"integer maxdepth\" [3] \"string misheuristic\" \"power\"";
-    s.replace(s.find(line), line.size(), "Integrator \"sppm\"");
-    write("sppm.pbrt", s);
-    Run r = run("sppm.pbrt --spp 1 --quiet");
+    s.replace(s.find(line), line.size(), "Integrator \"volpath\"");
+    write("volpath.pbrt", s);
+    Run r = run("volpath.pbrt --spp 1 --quiet");
     EXPECT_EQ(r.status, 1);
-    EXPECT_NE(r.err.find("sppm.pbrt:4:1"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("volpath.pbrt:4:1"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("pbrt-v3 feature that Gradus does not support"), std::string::npos) << r.err;
     std::string pb = kScene;
     pb.replace(pb.find("\"string misheuristic\" \"power\""), 29, "\"integer pixelbounds\" [0 10 0 16]");
@@ -160,6 +160,35 @@ TEST_F(Provenance, PbrtIntegratorsWeLackAndRestrictingPixelBoundsAreNamed) {
     pb.replace(pb.find("[0 10 0 16]"), 11, "[0 20 0 16]");  // the whole film: accepted
     write("pb.pbrt", pb);
     EXPECT_EQ(run("pb.pbrt --spp 1 --quiet").status, 0);
+}
+
+// pbrt-v3's "sppm" renders as vcm's merging-only mode: numiterations are the
+// samples per pixel, pbrt-v3's parameters are read (a misspelt one is an error),
+// photonsperiteration other than one subpath per pixel is refused at its location.
+TEST_F(Provenance, PbrtSppmRendersAsVcmMerging) {
+    write("lights.pbrt", "LightSource \"point\" \"point from\" [0 0 -3] \"rgb I\" [5 5 5]\n");
+    const std::string line = "Integrator \"bdpt\" \"integer maxdepth\" [3] \"string misheuristic\" \"power\"";
+    auto with = [&](const std::string &integrator) {
+        std::string s = kScene;
+        s.replace(s.find(line), line.size(), integrator);
+        return s;
+    };
+    write("sppm.pbrt", with("Integrator \"sppm\" \"integer numiterations\" [3] \"float radius\" [0.05] "
+                            "\"integer imagewritefrequency\" [1]"));
+    Run r = run("sppm.pbrt --quiet --outfile sppm.exr");
+    ASSERT_EQ(r.status, 0) << r.err;
+    Image img = ReadImage((dir_ / "sppm.exr").string());
+    EXPECT_EQ(img.metadata.at("spp").str(), "3");
+    EXPECT_NE(img.metadata.at("integrator_parameters").str().find("\"string mode\" \"vm\""), std::string::npos)
+        << img.metadata.at("integrator_parameters").str();
+    write("bad.pbrt", with("Integrator \"sppm\" \"integer numiteration\" [3]"));
+    r = run("bad.pbrt --spp 1 --quiet");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("numiteration"), std::string::npos) << r.err;
+    write("photons.pbrt", with("Integrator \"sppm\" \"integer photonsperiteration\" [1000]"));
+    r = run("photons.pbrt --spp 1 --quiet");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("photons.pbrt:4:"), std::string::npos) << r.err;
 }
 
 // --time covers everything after scene loading, reconstruction included: a

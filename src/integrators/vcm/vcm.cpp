@@ -1,0 +1,461 @@
+// VCM estimator and its recursive MIS (derivation in vcm.h; strategy
+// notation of common/bidir.h).
+#include "integrators/vcm/vcm.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "core/error.h"
+#include "core/stats.h"
+#include "integrators/factories.h"
+
+namespace gradus {
+
+std::unique_ptr<Integrator> CreateVCMIntegrator(const EntityDesc &d) { return std::make_unique<VCMIntegrator>(d); }
+
+namespace {
+
+constexpr uint64_t kLightTag = 0x76636d0000000001ULL;
+
+ParamTable<VCMSettings> Table() {
+    using S = VCMSettings;
+    ParamTable<S> t("vcm");
+    t.append(BidirParams());  // rrdepth 3
+    t.enumeration<VCMMode>("mode", &S::mode, "vcm", {{"vcm", VCMMode::VCM}, {"vc", VCMMode::VC}, {"vm", VCMMode::VM}},
+                           "vcm | vc (connections only: BDPT) | vm (merging only: progressive photon mapping)");
+    t.real("radius", &S::radius, 0, "initial merging radius in scene units (0: from the pixel footprint)", AtLeast(0));
+    t.real("radiusscale", &S::radiusScale, 1, "the footprint radius in pixels (radius 0)", Range{1e-3, 1e3});
+    t.real("radiusalpha", &S::radiusAlpha, 0.75, "radius reduction r_i^2 = r_1^2 i^(alpha - 1)", Range{1e-3, 1});
+    return t;
+}
+
+// Draws from a per-item RNG through the Sampler interface (light subpaths).
+class RNGSampler final : public Sampler {
+  public:
+    explicit RNGSampler(RNG &rng) : Sampler(1, 0), rng_(rng) {}
+    void startPixelSample(Point2i, int64_t, int) override {}
+    Float get1D() override { return std::min<Float>(rng_.uniform(), OneMinusEpsilon); }
+    Point2 get2D() override {
+        Float a = get1D();
+        return Point2(a, get1D());
+    }
+    std::unique_ptr<Sampler> clone() const override { GRADUS_CHECK(false); return nullptr; }
+    std::string name() const override { return "rng"; }
+
+  private:
+    RNG &rng_;
+};
+
+Float Remap(Float f) { return f != 0 ? f : Float(1); }
+
+// Solid-angle density at `from` towards `to` -> area density at `to` (Veach 1997 Eq. 8.10).
+Float ToArea(Float pdf, const Point3 &from, const PathVertex &to) {
+    if (to.isInfiniteLight()) return pdf;
+    Vec3 w = to.p - from;
+    Float d2 = w.lengthSquared();
+    if (d2 == 0) return 0;
+    if (to.onSurface()) pdf *= AbsDot(Vec3(to.ng), w) / std::sqrt(d2);
+    return pdf / d2;
+}
+
+bool Mergeable(const PathVertex &v, const BSDF &b) {
+    return v.type == VertexType::Surface && b && b.hasNonSpecular();
+}
+
+PathVertex AsPathVertex(const LightVertex &lv) {
+    PathVertex v;
+    v.type = VertexType::Surface;
+    v.p = lv.p;
+    v.ng = lv.ng;
+    v.ns = lv.ns;
+    v.wo = lv.wo;
+    v.beta[0] = lv.beta[0], v.beta[1] = lv.beta[1], v.beta[2] = lv.beta[2];
+    v.pdfFwd = lv.pdfFwd;
+    v.geomId = lv.geomId;
+    v.primId = lv.primId;
+    v.b1 = lv.b1;
+    v.b2 = lv.b2;
+    return v;
+}
+
+Interaction AsInteraction(const PathVertex &v) {
+    return Interaction(v.p, v.onSurface() ? Vec3(v.ng) : Vec3(0, 0, 0), v.wo);
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------- recursive MIS (vcm.h)
+std::vector<LightVertex> VCMLightVertices(const BidirContext &ctx, const PathVertex *v, const BSDF *b, int n,
+                                          const VCMWeights &w) {
+    std::vector<LightVertex> out;
+    auto mis = [&](Float x) { return w.power ? x * x : x; };
+    // B_0 = 0, B_1 = c_{-1} (s' = 0: the emitter can be hit unless it is a delta light),
+    // B_{m+2} = c_m + eta g_m other(v_m) + R_m B_{m+1}.
+    Float B = n > 0 && !v[0].isDeltaLight() ? 1 : 0;  // B_1
+    for (int i = 1; i < n; ++i) {
+        // Here B = B_i. c_{i-1}: light endpoint y_{i-1}, camera endpoint y_i.
+        const bool prevDelta = i - 1 >= 1 && v[i - 1].delta();
+        const bool edgeOK = EdgeConnectible(ctx, v[i - 1], v[i]);
+        const bool prevMerge = w.merging && i - 1 >= 1 && Mergeable(v[i - 1], b[i - 1]);
+        if (Mergeable(v[i], b[i])) {
+            LightVertex lv;
+            lv.p = v[i].p;
+            lv.ng = v[i].ng;
+            lv.ns = v[i].ns;
+            lv.wo = v[i].wo;
+            for (int c = 0; c < 3; ++c) lv.beta[c] = v[i].beta[c];
+            lv.geomId = v[i].geomId;
+            lv.primId = v[i].primId;
+            lv.b1 = v[i].b1;
+            lv.b2 = v[i].b2;
+            lv.pdfFwd = v[i].pdfFwd;
+            lv.prevPdfFwd = v[i - 1].pdfFwd;
+            lv.prevGeom = ToArea(1, v[i].p, v[i - 1]);
+            lv.B = B;
+            lv.depth = uint16_t(i);
+            lv.flags = uint8_t((prevDelta ? LightVertex::kPrevDelta : 0) | (prevMerge ? LightVertex::kPrevMergeable : 0) |
+                               (edgeOK ? LightVertex::kPrevEdgeOK : 0));
+            out.push_back(lv);
+        }
+        // B_{i+1} = c_{i-1} + eta g_{i-1} other(y_{i-1}) + R_{i-1} B_i, other(y_{i-1}) = pdfRev (exact);
+        // y_i is not an endpoint of c_{i-1} here, so its own lobe counts too.
+        const Float c = !prevDelta && edgeOK && !v[i].delta() ? 1 : 0;
+        B = c + (prevMerge ? mis(w.eta * Remap(v[i - 1].pdfRev)) : 0) +
+            mis(Remap(v[i - 1].pdfRev) / Remap(v[i - 1].pdfFwd)) * B;
+    }
+    return out;
+}
+
+Float VCMLightSum(const LightVertex &lv, Float oi, Float oim1, const VCMWeights &w) {
+    auto mis = [&](Float x) { return w.power ? x * x : x; };
+    // S_L(i) = eta g_i o_i + R_i (c_{i-1} + eta g_{i-1} o_{i-1} + R_{i-1} B_i).
+    const Float cim1 = (lv.flags & LightVertex::kPrevDelta) || !(lv.flags & LightVertex::kPrevEdgeOK) ? 0 : 1;
+    const bool gim1 = lv.flags & LightVertex::kPrevMergeable;
+    return (w.merging ? mis(w.eta * Remap(oi)) : 0) +
+           mis(Remap(oi) / Remap(lv.pdfFwd)) *
+               (cim1 + (gim1 ? mis(w.eta * Remap(oim1)) : 0) + mis(Remap(oim1) / Remap(lv.prevPdfFwd)) * lv.B);
+}
+
+void VCMCameraB(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, int nC, const VCMWeights &w, Float *B) {
+    auto mis = [&](Float x) { return w.power ? x * x : x; };
+    // B_0 = 0, B_1 = 0 (t' = 0 is no strategy), B_{m+2} = c_m + eta g_m other(z_m) + R_m B_{m+1}.
+    for (int u = 0; u < nC; ++u) {
+        if (u < 2) {
+            B[u] = 0;
+            continue;
+        }
+        const int m = u - 2;
+        const bool cm = (m == 0 ? w.connecting : !z[m].delta()) && !z[m + 1].delta() && EdgeConnectible(ctx, z[m], z[m + 1]);
+        const bool gm = w.merging && m >= 1 && Mergeable(z[m], zb[m]);
+        B[u] = (cm ? 1 : 0) + (gm ? mis(w.eta * Remap(z[m].pdfRev)) : 0) +
+               mis(Remap(z[m].pdfRev) / Remap(z[m].pdfFwd)) * B[u - 1];
+    }
+}
+
+Float VCMCameraSum(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, int u, Float Bu, Float oz,
+                   Float oPrev, bool gu, bool emitter, const VCMWeights &w) {
+    auto mis = [&](Float x) { return w.power ? x * x : x; };
+    const PathVertex &zu = z[u], &zp = z[u - 1];
+    // c_{u-1}: camera endpoint z_{u-1}, light endpoint z_u; with z_u as the light
+    // origin, c_0 would be (1, 1), which is not a strategy.
+    const bool c = (u - 1 == 0 ? w.connecting && !emitter : !zp.delta()) && EdgeConnectible(ctx, zp, zu);
+    const bool gPrev = w.merging && u - 1 >= 1 && Mergeable(zp, zb[u - 1]);
+    // S_C(u) = eta g_u o_u + R_u (c_{u-1} + eta g_{u-1} o_{u-1} + R_{u-1} B_u).
+    const Float Ru = mis(Remap(oz) / Remap(zu.pdfFwd)), Rp = mis(Remap(oPrev) / Remap(zp.pdfFwd));
+    return (gu ? mis(w.eta * Remap(oz)) : 0) + Ru * ((c ? 1 : 0) + (gPrev ? mis(w.eta * Remap(oPrev)) : 0) + Rp * Bu);
+}
+
+std::vector<ParamInfo> VCMParameters() { return Table().describe(); }
+
+VCMIntegrator::VCMIntegrator(const EntityDesc &desc) : BidirFamily("vcm", 1), set_(Table().parse(desc)), loc_(desc.loc) {
+    if (set_.visStrategies || set_.visWeights)
+        throw Error(desc.params.locOf(set_.visStrategies ? "visualizestrategies" : "visualizeweights", desc.loc),
+                    "strategy layers are not supported by vcm");
+}
+
+Float VCMIntegrator::radiusAt(int iteration) const {
+    // r_i^2 = r_1^2 i^(alpha - 1) (vcm.h).
+    return radius1_ * std::pow(Float(std::max(iteration, 1)), Float(0.5) * (set_.radiusAlpha - 1));
+}
+
+void VCMIntegrator::preprocess(const Scene &scene, Film &film) {
+    preprocessBidir(scene, film, set_, loc_);
+    bounds_ = film.sampleBounds();
+    const SceneFeatures &f = scene.features;
+    merging_ = set_.mode != VCMMode::VC;
+    connecting_ = set_.mode != VCMMode::VM;
+    if (set_.mode == VCMMode::VCM && !f.specularSurfaces && !f.nearSpecularSurfaces) {
+        merging_ = false;
+        skipped_ = "no specular or near-specular surface: merging left out (no grid)";
+    }
+    radius1_ = set_.radius;
+    if (radius1_ == 0) {
+        // Median pixel footprint at the primary hits of a 16 x 16 grid of pixels.
+        std::vector<Float> fp;
+        const int dx = bounds_.width(), dy = bounds_.height();
+        for (int j = 0; j < 16; ++j)
+            for (int i = 0; i < 16; ++i) {
+                CameraSample cs;
+                cs.pFilm = Point2(bounds_.pMin.x + (i + 0.5) * dx / 16, bounds_.pMin.y + (j + 0.5) * dy / 16);
+                cs.pLens = Point2(0.5, 0.5);
+                Ray r0, r1;
+                if (scene.camera->generateRay(cs, &r0) == 0) continue;
+                cs.pFilm.x += 1;
+                if (scene.camera->generateRay(cs, &r1) == 0) continue;
+                SurfaceInteraction si;
+                if (!scene.intersect(r0, &si)) continue;
+                Float t = (si.p - r0.o).length() / r0.d.length();
+                Float w = ((si.p) - (r1.o + r1.d * t)).length();
+                if (std::isfinite(w) && w > 0) fp.push_back(w);
+            }
+        if (!fp.empty()) {
+            std::nth_element(fp.begin(), fp.begin() + fp.size() / 2, fp.end());
+            radius1_ = fp[fp.size() / 2] * set_.radiusScale;
+        } else {
+            Point3 c;
+            Float rad = 1;
+            scene.bounds.boundingSphere(&c, &rad);
+            radius1_ = std::isfinite(rad) && rad > 0 ? 1e-3 * rad : 1e-3;
+        }
+    }
+    GRADUS_CHECK(radius1_ > 0);
+}
+
+void VCMIntegrator::runPass(PassContext &ctx) {
+    scene_ = &ctx.scene();
+    const int iteration = ctx.firstSample() + 1;
+    radius_ = radiusAt(iteration);
+    const int64_t N = bounds_.area();
+    // eta_VCM = pi r^2 N_light (G-VCM Eq. 12: N p_VM with N light subpaths merged).
+    eta_ = merging_ ? Pi * radius_ * radius_ * Float(N) : 0;
+    lightPass(ctx);
+    if (ctx.interrupted()) return;
+    if (merging_) {
+        std::vector<Point3> pts(vertices_.size());
+        for (size_t i = 0; i < pts.size(); ++i) pts[i] = vertices_[i].p;
+        grid_.build(pts, radius_, [&](int64_t n, int64_t grain, const std::function<void(int64_t, int64_t)> &fn) {
+            ctx.parallelFor(n, grain, [&](int64_t b, int64_t e, Worker &) { fn(b, e); });
+        });
+    }
+    if (ctx.interrupted()) return;
+    ctx.forEachPixelSample(*this);
+    ++passes_;
+}
+
+// ---------------------------------------------------------------- light pass
+void VCMIntegrator::lightPass(PassContext &ctx) {
+    const int64_t N = bounds_.area();
+    const int maxLight = set_.maxDepth + 1;
+    const VCMWeights weights{eta_, merging_, connecting_, ctx_.heuristic == MISHeuristic::Power};
+    const int64_t chunks = (N + PassContext::kItemChunk - 1) / PassContext::kItemChunk;
+    std::vector<std::vector<LightVertex>> out(static_cast<size_t>(chunks));
+    std::vector<uint32_t> count(static_cast<size_t>(N), 0);
+    const Scene &scene = ctx.scene();
+    std::atomic<uint64_t> nLT{0};
+    ctx.forEachItem(N, kLightTag, [&](int64_t item, RNG &rng, SampleRecorder &rec, Worker &wk) {
+        if (scene.lights.empty()) return;
+        PathVertex *v = static_cast<PathVertex *>(wk.arena.alloc(sizeof(PathVertex) * maxLight, alignof(PathVertex)));
+        BSDF *b = static_cast<BSDF *>(wk.arena.alloc(sizeof(BSDF) * maxLight, alignof(BSDF)));
+        for (int i = 0; i < maxLight; ++i) new (&b[i]) BSDF();
+        RNGSampler smp(rng);
+        const int n = GenerateLightSubpath(ctx_, smp, wk.arena, maxLight, v, b);
+        std::vector<LightVertex> &dst = out[size_t(item / PassContext::kItemChunk)];
+        std::vector<LightVertex> recs = VCMLightVertices(ctx_, v, b, n, weights);
+        count[size_t(item)] = uint32_t(recs.size());
+        for (const LightVertex &lv : recs) {
+            dst.push_back(lv);
+            const int i = lv.depth;
+            // Light tracing (t = 1) from y_i, depth i: w = 1 / (1 + S_L(i)), S_C(0) = 0 (vcm.h).
+            if (!connecting_ || i > set_.maxDepth) continue;
+            CameraWiSample cws;
+            Point2 uLens = smp.get2D();
+            if (!scene.camera->sampleWi(AsInteraction(v[i]), uLens, &cws) || cws.pdf == 0) continue;
+            PathVertex lens;
+            lens.type = VertexType::Camera;
+            lens.p = cws.pLens.p;
+            lens.ng = cws.pLens.n;
+            lens.ns = cws.pLens.n;
+            if (!EdgeConnectible(ctx_, v[i], lens)) continue;
+            Spectrum L = v[i].throughput() * EvalBSDF(v[i], b[i], lens, TransportMode::Importance) *
+                         (cws.We / cws.pdf) * AbsDot(cws.wi, Vec3(v[i].ns));
+            if (L.isBlack() || !scene.unoccluded(AsInteraction(v[i]), cws.pLens)) continue;
+            // o_i: camera density of y_i; o_{i-1}: y_i's BSDF from the lens towards y_{i-1}.
+            Float pdfPos, pdfDir;
+            scene.camera->pdfWe(Ray(lens.p, Normalize(v[i].p - lens.p)), &pdfPos, &pdfDir);
+            const Float oi = ToArea(pdfDir, lens.p, v[i]);
+            const Float oim1 = b[i].pdf(cws.wi, Vec3(v[i].wo), TransportMode::Radiance) * lv.prevGeom;
+            rec.splat(cws.pRaster, L * (splatScale_ / (1 + VCMLightSum(lv, oi, oim1, weights))));
+            ++nLT;
+        }
+    });
+    // Concatenate in item order (chunks hold their items in order).
+    pathStart_.assign(size_t(N) + 1, 0);
+    for (int64_t j = 0; j < N; ++j) pathStart_[j + 1] = pathStart_[j] + count[j];
+    vertices_.resize(pathStart_[N]);
+    std::vector<size_t> chunkStart(static_cast<size_t>(chunks) + 1, 0);
+    for (int64_t c = 0; c < chunks; ++c) chunkStart[c + 1] = chunkStart[c] + out[c].size();
+    ctx.parallelFor(chunks, 1, [&](int64_t c0, int64_t c1, Worker &) {
+        for (int64_t c = c0; c < c1; ++c) std::copy(out[c].begin(), out[c].end(), vertices_.begin() + chunkStart[c]);
+    });
+    nLightVertices_ += vertices_.size();
+}
+
+// ---------------------------------------------------------------- camera pass
+void VCMIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const {
+    const Scene &scene = *scene_;
+    Ray ray;
+    const Float w = scene.camera->generateRay(cs, &ray);
+    if (w == 0) return;
+    const int maxCam = set_.maxDepth + 2;
+    PathVertex *z = static_cast<PathVertex *>(arena.alloc(sizeof(PathVertex) * maxCam, alignof(PathVertex)));
+    BSDF *zb = static_cast<BSDF *>(arena.alloc(sizeof(BSDF) * maxCam, alignof(BSDF)));
+    for (int i = 0; i < maxCam; ++i) new (&zb[i]) BSDF();
+    const int nC = GenerateCameraSubpath(ctx_, ray, sampler, arena, maxCam, z, zb);
+    const bool power = ctx_.heuristic == MISHeuristic::Power;
+    auto mis = [power](Float x) { return power ? x * x : x; };
+    const Float eta = eta_;
+    const Point2i pixel = rec.pixel();
+    const int64_t own = int64_t(pixel.y - bounds_.pMin.y) * bounds_.width() + (pixel.x - bounds_.pMin.x);
+    uint64_t merges = 0, connections = 0;
+    Spectrum L(0);
+    const VCMWeights weights{eta, merging_, connecting_, power};
+    Float *Bc = static_cast<Float *>(arena.alloc(sizeof(Float) * maxCam, alignof(Float)));
+    VCMCameraB(ctx_, z, zb, nC, weights, Bc);
+    bool specularChain = true;  // z_1 .. z_{u-1} all specular (vm mode)
+    for (int u = 1; u < nC; ++u) {
+        const PathVertex &zu = z[u], &zp = z[u - 1];
+        const BSDF &bu = zb[u];
+        const int depthHere = u - 1;  // edges from the camera to z_u, minus 1
+        auto SC = [&](Float oz, Float oPrev, bool gu, bool emitter = false) {
+            return VCMCameraSum(ctx_, z, zb, u, Bc[u], oz, oPrev, gu, emitter, weights);
+        };
+
+        // s = 0: z_u is an emitter (or the infinite lights).
+        if (depthHere <= set_.maxDepth) {
+            Spectrum Le = EmittedRadiance(ctx_, zu, zp);
+            if (!Le.isBlack()) {
+                Float weight;
+                if (!connecting_) {
+                    weight = specularChain ? 1 : 0;  // vm: emission only through specular chains
+                } else {
+                    // z_u as the light origin: other(z_u) = PdfLightOrigin, other(z_{u-1}) = PdfLightDirection; no merge at x_0.
+                    weight = 1 / (1 + SC(PdfLightOrigin(ctx_, zu, zp), PdfLightDirection(ctx_, zu, zp), false, true));
+                }
+                L += zu.throughput() * Le * weight;
+            }
+        }
+        if (zu.type != VertexType::Surface || !bu) break;
+        const bool connectible = IsConnectible(zu, &bu);
+        if (connectible && connecting_) {
+            // s = 1: next-event estimation (as ConnectBDPT), depth u.
+            Float uSel = sampler.get1D();
+            Point2 uLight = sampler.get2D();
+            if (u <= set_.maxDepth) {
+                Float pmf;
+                const Light *lt = ctx_.lightSampler->sample(uSel, &pmf);
+                LightLiSample ls;
+                if (lt && pmf > 0 && lt->sampleLi(AsInteraction(zu), uLight, &ls) && ls.pdf > 0 && !ls.L.isBlack()) {
+                    PathVertex y0;
+                    y0.type = VertexType::Light;
+                    y0.light = lt;
+                    if (IsDeltaLight(lt->flags)) y0.flags |= VERTEX_DELTA_LIGHT;
+                    if (lt->flags & (LIGHT_INFINITE | LIGHT_DELTA_DIRECTION)) y0.flags |= VERTEX_INFINITE;
+                    y0.p = ls.pLight.p;
+                    y0.ng = ls.pLight.n;
+                    y0.ns = ls.pLight.n;
+                    y0.pdfFwd = PdfLightOrigin(ctx_, y0, zu);
+                    if (EdgeConnectible(ctx_, y0, zu)) {
+                        Spectrum c = zu.throughput() * EvalBSDF(zu, bu, y0, TransportMode::Radiance) *
+                                     (ls.L / (ls.pdf * pmf)) * AbsDot(ls.wi, Vec3(zu.ns));
+                        if (!c.isBlack() && scene.unoccluded(AsInteraction(zu), ls.pLight)) {
+                            // S_L(0) = R_0 c_{-1}; S_C(u) with other(z_u) = emission density, other(z_{u-1}) from y_0.
+                            const Float o0 = PdfArea(ctx_, zu, &bu, &zp, y0, TransportMode::Radiance);
+                            const Float SL = y0.isDeltaLight() ? 0 : mis(Remap(o0) / Remap(y0.pdfFwd));
+                            const Float oz = PdfLightDirection(ctx_, y0, zu);
+                            const Float oPrev = PdfArea(ctx_, zu, &bu, &y0, zp, TransportMode::Importance);
+                            L += c / (1 + SL + SC(oz, oPrev, merging_));
+                        }
+                    }
+                }
+            }
+            // s >= 2: connections to the own light subpath's vertices y_i (depth i + u).
+            if (own >= 0 && own + 1 < int64_t(pathStart_.size())) {
+                for (uint32_t k = pathStart_[own]; k < pathStart_[own + 1]; ++k) {
+                    const LightVertex &lv = vertices_[k];
+                    if (int(lv.depth) + u > set_.maxDepth) continue;
+                    const PathVertex y = AsPathVertex(lv);
+                    if (!EdgeConnectible(ctx_, y, zu)) continue;
+                    BSDF by = RebuildBSDF(ctx_, y, TransportMode::Importance, arena);
+                    if (!by) continue;
+                    Spectrum c = lv.throughput() * EvalBSDF(y, by, zu, TransportMode::Importance) *
+                                 EvalBSDF(zu, bu, y, TransportMode::Radiance) * zu.throughput();
+                    if (c.isBlack()) continue;
+                    Vec3 d = y.p - zu.p;
+                    const Float d2 = d.lengthSquared();
+                    d = d / std::sqrt(d2);
+                    c *= AbsDot(Vec3(y.ns), d) * AbsDot(Vec3(zu.ns), d) / d2;
+                    if (c.isBlack()) continue;
+                    ++connections;
+                    if (!scene.unoccluded(AsInteraction(y), AsInteraction(zu))) continue;
+                    // Light side: o_i from z_u, o_{i-1} from y_i's BSDF with z_u as its successor.
+                    const Float oi = PdfArea(ctx_, zu, &bu, &zp, y, TransportMode::Radiance);
+                    const Float oim1 = by.pdf(-d, Vec3(y.wo), TransportMode::Radiance) * lv.prevGeom;
+                    const Float SL = VCMLightSum(lv, oi, oim1, weights);
+                    // Camera side: other(z_u) from y_i's BSDF, other(z_{u-1}) from z_u's BSDF with y_i as predecessor.
+                    const Float oz = by.pdf(Vec3(y.wo), -d, TransportMode::Importance) == 0
+                                         ? 0
+                                         : ToArea(by.pdf(Vec3(y.wo), -d, TransportMode::Importance), y.p, zu);
+                    const Float oPrev = PdfArea(ctx_, zu, &bu, &y, zp, TransportMode::Importance);
+                    L += c / (1 + SL + SC(oz, oPrev, merging_));
+                }
+            }
+        }
+        // Merges at z_u with every light vertex within r (Eq. 11).
+        if (merging_ && Mergeable(zu, bu)) {
+            Spectrum Lm(0);
+            grid_.query(zu.p, [&](uint32_t k, Float) {
+                const LightVertex &lv = vertices_[k];
+                if (int(lv.depth) + u - 1 > set_.maxDepth) return;
+                const Vec3 wi = lv.wo;  // towards y_{m-1}
+                const Spectrum f = bu.f(Vec3(zu.wo), wi, TransportMode::Radiance);
+                if (f.isBlack()) return;
+                ++merges;
+                Float weight = 1;
+                if (connecting_) {
+                    // w_VM = eta o(z_u) / (c + S_L(m-1) + S_C(u)), o(z_u) = pdfFwd of y_m (vcm.h).
+                    const Float oz = Remap(lv.pdfFwd);
+                    const Float om1 = bu.pdf(Vec3(zu.wo), wi, TransportMode::Radiance) * lv.prevGeom;
+                    const bool gm1 = lv.flags & LightVertex::kPrevMergeable;
+                    const Float SL = (gm1 ? mis(eta * Remap(om1)) : 0) + mis(Remap(om1) / Remap(lv.prevPdfFwd)) * lv.B;
+                    const Float cRef = (lv.flags & LightVertex::kPrevDelta) || !(lv.flags & LightVertex::kPrevEdgeOK) ? 0 : 1;
+                    const Float oPrev = ToArea(bu.pdf(wi, Vec3(zu.wo), TransportMode::Importance), zu.p, zp);
+                    weight = mis(eta * oz) / (cRef + SL + SC(oz, oPrev, true));
+                }
+                Lm += lv.throughput() * f * weight;
+            });
+            // beta_L f beta_C / (pi r^2 N) (Eq. 5 with the uniform disk kernel).
+            L += zu.throughput() * Lm / eta;
+            if (!connecting_) break;  // vm: merge at the first non-specular vertex only
+        }
+        specularChain = specularChain && zu.delta();
+    }
+    nMerges_ += merges;
+    nConnections_ += connections;
+    rec.addRadiance(L * w);
+}
+
+std::string VCMIntegrator::statistics() const {
+    char buf[512];
+    std::snprintf(buf, sizeof buf,
+                  "vcm: mode %s, initial radius %.4g (last %.4g), %d iterations, %.3g light vertices per iteration "
+                  "(%zu bytes each, grid %.1f MB), %llu merges, %llu connections%s%s",
+                  set_.mode == VCMMode::VCM ? "vcm" : set_.mode == VCMMode::VC ? "vc" : "vm", radius1_, radius_,
+                  passes_, passes_ ? double(nLightVertices_) / passes_ : 0.0, sizeof(LightVertex),
+                  grid_.bytes() / 1e6, (unsigned long long)nMerges_.load(), (unsigned long long)nConnections_.load(),
+                  skipped_.empty() ? "" : "; ", skipped_.c_str());
+    return std::string(buf) + "\n";
+    // (returned above)
+}
+
+}  // namespace gradus

@@ -1,0 +1,155 @@
+// Vertex connection and merging (Georgiev, Krivanek, Davidovic, Slusallek 2012;
+// the G-VCM paper's Sec. 2.3, gradient-domain-vcm.md), on the shared
+// bidirectional core (integrators/common/) and the pass-based render loop.
+//
+// One iteration = one pass = one sample per pixel:
+//   1. light pass: N light subpaths (N = sampled pixels; RNG keyed by
+//      (seed, pass, subpath)), each vertex with a non-specular BSDF stored as a
+//      compact LightVertex (128 bytes: geometry, throughput, what RebuildBSDF
+//      needs, and the recursive MIS quantities below); light tracing (t = 1)
+//      splats from every stored vertex;
+//   2. the photon hash grid over the stored vertices (cell = 2r, counting sort,
+//      integrators/common/photon_grid.h), when merging is in play;
+//   3. camera pass: each pixel's camera subpath (pixel sampler) evaluates at
+//      every vertex z_u: emission (s = 0), next-event estimation (s = 1),
+//      connections to the vertices of its own light subpath (subpath index =
+//      pixel index, Eq. 10), and merges with every light vertex within r
+//      (Eq. 11), estimate beta_L f(z_u) beta_C / (pi r^2 N).
+// MIS (balance or power heuristic, G-VCM Eqs. 12-13) in O(1) per connection and
+// merge by recursive partial sums; the O(n) reference is MISWeight/MergeWeight
+// (common/bidir.h), against which tests/vcm checks them. For a subpath
+// v_0 v_1 ... (own side) and the strategy whose own endpoint is v_m, let
+// S(m) = sum over the strategies that move the junction towards v_0 (fewer own
+// vertices) and the merges at v_1..v_m, relative to the current one. With
+// own(v) the density of v from its own subpath (pdfFwd), other(v) the density
+// from the opposite one (pdfRev), R_m = other(v_m) / own(v_m) (deltas as 1),
+// c_m in {0, 1} whether the connection with own endpoint v_m is a strategy,
+// g_m whether v_m can be merged at, and eta = pi r^2 N (eta_VCM):
+//   S(m) = eta g_m other(v_m) + R_m (c_{m-1} + S(m-1)),   S(-1) = 0,
+// and B_m = c_{m-2} + S(m-2) only involves the subpath itself, so it is stored
+// with each light vertex (and computed along the camera subpath):
+//   B_{m+2} = c_m + eta g_m other(v_m) + R_m B_{m+1},  B_0 = 0, B_1 = c_{-1}.
+// A connection of light endpoint y_i and camera endpoint z_u then costs two
+// steps on each side with the densities that depend on the connection:
+//   w_VC = 1 / (1 + S_L(i) + S_C(u)),  S(m) = eta g_m o_m + R_m (c_{m-1} + eta g_{m-1} o_{m-1} + R_{m-1} B_m);
+// a merge of light vertex y_m at z_u is weighted against the connection of
+// y_{m-1} and z_u: w_VM = eta o(z_u) / (c + S_L(m-1) + S_C(u)), with o(z_u) the
+// light vertex's own density (pdfFwd of y_m). With the power heuristic every
+// ratio and merge term is squared. This is the role of Georgiev's dVCM, dVC,
+// dVM, written with the area densities (pdfFwd/pdfRev) the rest of the
+// bidirectional code stores.
+//
+// Radius: r_1 = `radius` (scene units) or, if 0, `radiusscale` times the
+// median pixel footprint at the primary hits (the G-VCM paper's Sec. 6,
+// "about one pixel"); iteration i (1-based, the global sample index + 1, so
+// partial renders merge exactly) uses r_i^2 = r_1^2 i^(alpha - 1) (alpha =
+// `radiusalpha`; Knaus and Zwicker's schedule, as in Georgiev's reference code;
+// pbrt-v3's SPPM shrinks per pixel instead).
+// Merging is left out (the grid is not built, statistics say so) in mode vcm
+// when the scene has no specular or near-specular surface: without specular
+// chains merging adds no path that connections cannot sample.
+//
+// Parameters (bidirectional family, integrators/common/bidir_family.h):
+//   integer maxdepth 5              maximum path depth (edges - 1)
+//   string lightsamplestrategy "power"  uniform | power | spatial (= power)
+//   string misheuristic "balance"   balance (pbrt-v3) | power (exponent 2)
+//   bool visualizestrategies false  not supported by vcm (must stay false)
+//   bool visualizeweights false     not supported by vcm (must stay false)
+//   integer rrdepth 3               Russian roulette on subpaths after this many bounces (-1: off)
+//   integer pixelbounds []          accepted (use --cropwindow instead)
+// vcm's own:
+//   string mode "vcm"               vcm | vc (connections only: BDPT) | vm (merging only: progressive photon mapping)
+//   float radius 0                  initial merging radius in scene units (0: from the pixel footprint)
+//   float radiusscale 1             the footprint radius in pixels (radius 0)
+//   float radiusalpha 0.75          radius reduction r_i^2 = r_1^2 i^(alpha - 1)
+#pragma once
+#include <atomic>
+#include <string>
+#include <vector>
+
+#include "integrators/common/bidir_family.h"
+#include "integrators/common/photon_grid.h"
+#include "integrators/integrator.h"
+
+namespace gradus {
+
+enum class VCMMode { VCM, VC, VM };
+
+struct VCMSettings : BidirSettings {
+    VCMMode mode;
+    Float radius, radiusScale, radiusAlpha;
+};
+
+// One stored light vertex y_i (i >= 1, non-specular BSDF). 128 bytes.
+struct LightVertex {
+    Point3 p;
+    PackedVec3 ng, ns, wo;  // wo: towards y_{i-1}
+    float beta[3];          // light subpath throughput up to and including y_i
+    int32_t geomId, primId;
+    float b1, b2;
+    double pdfFwd;          // own(y_i)
+    double prevPdfFwd;      // own(y_{i-1})
+    double prevGeom;        // solid angle at y_i -> area at y_{i-1} (|cos| / d^2; 1 for an infinite light)
+    double B;               // B_i = c_{i-2} + S_L(i-2) (vcm.h), with the heuristic's exponent
+    uint16_t depth;         // i (edges from the light)
+    uint8_t flags;          // kPrev* below
+    static constexpr uint8_t kPrevDelta = 1, kPrevMergeable = 2, kPrevEdgeOK = 4;
+    Spectrum throughput() const { return Spectrum(beta[0], beta[1], beta[2]); }
+};
+
+// The recursive MIS quantities of the derivation above (exposed for tests/vcm).
+struct VCMWeights {
+    Float eta;        // eta_VCM = pi r^2 N (0 without merging)
+    bool merging;     // merges are strategies
+    bool connecting;  // connections (and light tracing) are strategies
+    bool power;       // power heuristic (exponent 2)
+};
+// The stored vertices y_i (i >= 1, non-specular BSDF) of a light subpath with their B_i.
+std::vector<LightVertex> VCMLightVertices(const BidirContext &ctx, const PathVertex *v, const BSDF *b, int n,
+                                          const VCMWeights &w);
+// S_L(i) of a connection ending at light vertex y_i, given o_i (density of y_i
+// from the camera side) and o_{i-1} (of y_{i-1} from y_i towards it).
+Float VCMLightSum(const LightVertex &lv, Float oi, Float oim1, const VCMWeights &w);
+// B_u of the camera subpath z[0..nC).
+void VCMCameraB(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, int nC, const VCMWeights &w, Float *B);
+// S_C(u) of a strategy ending at camera vertex z_u, given o_u (density of z_u from
+// the light side) and o_{u-1}; gu: merging at z_u is a strategy; emitter: z_u is the light origin (s = 0).
+Float VCMCameraSum(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, int u, Float Bu, Float oz,
+                   Float oPrev, bool gu, bool emitter, const VCMWeights &w);
+
+class VCMIntegrator : public PixelSampleIntegrator, public BidirFamily {
+  public:
+    explicit VCMIntegrator(const EntityDesc &desc);
+    std::string name() const override { return "vcm"; }
+    void preprocess(const Scene &scene, Film &film) override;
+    int samplesPerPass(const RenderOptions &) const override { return 1; }  // one iteration = 1 spp
+    void runPass(PassContext &ctx) override;
+    std::string statistics() const override;
+    void estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const override;
+
+    const VCMSettings &settings() const { return set_; }
+    Float initialRadius() const { return radius1_; }
+    bool merging() const { return merging_; }
+    // Merging radius of 1-based iteration i.
+    Float radiusAt(int iteration) const;
+    // The last pass's light vertices and their subpath offsets (tests).
+    const std::vector<LightVertex> &lightVertices() const { return vertices_; }
+    const std::vector<uint32_t> &lightPathStart() const { return pathStart_; }
+
+  private:
+    void lightPass(PassContext &ctx);
+    VCMSettings set_;
+    FileLoc loc_;
+    bool merging_ = false, connecting_ = true;
+    Float radius1_ = 0, radius_ = 0, eta_ = 0;
+    Bounds2i bounds_;
+    std::vector<LightVertex> vertices_;
+    std::vector<uint32_t> pathStart_;  // light subpath j: vertices_[pathStart_[j], pathStart_[j+1])
+    PhotonGrid grid_;
+    std::string skipped_;
+    mutable std::atomic<uint64_t> nMerges_{0}, nConnections_{0};
+    uint64_t nLightVertices_ = 0;
+    int passes_ = 0;
+};
+
+}  // namespace gradus

@@ -131,6 +131,10 @@ class PassContext {
     // Per-item work: fn(item, rng, recorder, worker) for items [0, n). The RNG
     // is keyed by (seed, tag, pass, item); the recorder's splats go to the
     // film, merged in item order (chunks of fixed size).
+    // After an interrupt, forEachTile and forEachItem skip the tiles / chunks
+    // not started yet, except in the first pass, which always runs whole: an
+    // interrupted render never ends with an empty image because the interrupt
+    // came during a long first beginPass (mlt's bootstrap).
     using ItemFn = std::function<void(int64_t, RNG &, SampleRecorder &, Worker &)>;
     void forEachItem(int64_t n, uint64_t tag, const ItemFn &fn);
     // Plain parallel loop without film output: fn(begin, end, worker) over
@@ -147,6 +151,7 @@ class PassContext {
                 const TileGrid &tiles, Shared &shared)
         : scene_(scene), film_(film), sampler_(sampler), opts_(opts), tiles_(tiles), shared_(shared) {}
     Worker &worker() const;
+    bool skipOnInterrupt() const;
     const Scene &scene_;
     Film &film_;
     const Sampler &sampler_;

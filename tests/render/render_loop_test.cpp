@@ -37,6 +37,7 @@ class ItemIntegrator : public Integrator {
     void beginPass(PassContext &ctx) override {
         firsts.push_back(ctx.firstSample());
         counts.push_back(ctx.sampleCount());
+        if (interruptInBeginPass >= 0 && ctx.pass() == interruptInBeginPass) std::raise(SIGINT);
     }
     void runPass(PassContext &ctx) override {
         const Point2i res = ctx.film().fullResolution();
@@ -51,7 +52,7 @@ class ItemIntegrator : public Integrator {
         if (interruptAtPass >= 0 && ctx.pass() == interruptAtPass) std::raise(SIGINT);
     }
     void finish(const Film &, const RenderStats &s, Image *) override { finished = s; }
-    int perPass = 1, items = 1000, sleepMs = 0, interruptAtPass = -1;
+    int perPass = 1, items = 1000, sleepMs = 0, interruptAtPass = -1, interruptInBeginPass = -1;
     std::vector<int> firsts, counts;
     std::atomic<int64_t> calls{0};
     RenderStats finished;
@@ -188,4 +189,24 @@ TEST(RenderLoop, InterruptEndsAfterTheCurrentPass) {
     EXPECT_EQ(s.passes, 2);
     EXPECT_EQ(s.spp, 2);
     EXPECT_EQ(job.film->splatSamples(), 2);
+}
+
+// An interrupt before the first pass's items run (a long first beginPass, e.g.
+// mlt's bootstrap) still lets all of them run: the image is never empty. In a
+// later pass the items not started are skipped.
+TEST(RenderLoop, InterruptRunsTheFirstPassWhole) {
+    InstallInterruptHandler();
+    for (int pass : {0, 1}) {
+        SCOPED_TRACE(pass);
+        ResetInterrupt();
+        RenderJob job = Job();
+        ItemIntegrator it;
+        it.interruptInBeginPass = pass;
+        RenderStats s = RunLoop(it, job, 10, 2);
+        ResetInterrupt();
+        EXPECT_TRUE(s.interrupted);
+        EXPECT_EQ(s.passes, pass + 1);
+        // Pass 0's items all run (none would without the rule); pass 1's are all skipped.
+        EXPECT_EQ(it.calls, it.items);
+    }
 }

@@ -28,7 +28,9 @@ TEST(PbrtReference, CornellBoxPathUnbiased) {
         std::printf("cornell-box path %d spp: relMSE %.5g, mean rel diff %.3g%%\n", spp, m.relmse,
                     100 * m.meanRelDiff);
         EXPECT_LT(std::abs(m.meanRelDiff), 0.005);
-        if (prev > 0) EXPECT_LT(m.relmse, prev / 2.5);
+        if (prev > 0) {
+            EXPECT_LT(m.relmse, prev / 2.5);
+        }
         prev = m.relmse;
     }
 }

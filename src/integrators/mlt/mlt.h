@@ -73,6 +73,15 @@ class MLTIntegrator : public Integrator {
     // Set when the bootstrap found no light-carrying path (the image is black).
     const std::string &warning() const { return warning_; }
 
+    // Counts of the render so far (statistics(), tests).
+    struct Counts {
+        int64_t mutations, small, large, smallAccepted, largeAccepted, zeroProposals, nonFinite, startMismatch;
+    };
+    Counts counts() const {
+        return {nMutations_, nSmall_, nLarge_, nSmallAccepted_, nLargeAccepted_, nZeroProposals_, nNonFinite_,
+                nStartMismatch_};
+    }
+
     // Contribution of state `u` at `depth` (the chosen strategy's weighted
     // estimate over its selection probability) and its raster position.
     Spectrum contribution(mlt::PrimarySampler &u, int depth, Arena &arena, Point2 *pRaster) const;

@@ -251,13 +251,15 @@ RenderStats RunRender(Integrator &integ, const Scene &scene, Film &film, const S
         ctx.firstSample_ = done;
         ctx.sampleCount_ = unlimited ? perPass : std::min(perPass, spp - done);
         integ.beginPass(ctx);
+        const double afterBegin = elapsed();
         integ.runPass(ctx);
         integ.endPass(ctx);
         // A pass cut short by an interrupt keeps what it merged and counts.
         done += ctx.sampleCount_;
         ++stats.passes;
         film.setSplatSamples(done);
-        lastPassTime = elapsed() - passStart;
+        // The first beginPass is one-off setup (mlt's bootstrap): not part of the estimate of the next pass.
+        lastPassTime = elapsed() - (stats.passes == 1 ? afterBegin : passStart);
         progress.update(done, elapsed(), opts.timeLimit);
     }
     progress.done(elapsed());

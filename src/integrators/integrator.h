@@ -24,6 +24,9 @@ class Integrator {
     virtual std::string name() const = 0;
     // Called once after the scene is built: build light distributions, add film layers.
     virtual void preprocess(const Scene &scene, Film &film) {}
+    // Samples per pixel of a render without --spp (0: the sampler's). A
+    // positive count replaces the sampler's (mlt: mutationsperpixel).
+    virtual int defaultSamplesPerPixel() const { return 0; }
     // Pixel samples one pass represents (splat normalisation, spp, budget checks).
     virtual int samplesPerPass(const RenderOptions &opts) const { return std::max(1, opts.sppPerPass); }
     virtual void beginPass(PassContext &ctx) {}

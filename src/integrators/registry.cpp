@@ -32,7 +32,8 @@ const std::vector<IntegratorInfo> &IntegratorRegistry() {
         {"gvcm", "gradient-domain vertex connection and merging", CreateGVCMIntegrator, GVCMParameters},
 #endif
 #ifdef GRADUS_HAS_MLT
-        {"mlt", "Metropolis light transport", CreateMLTIntegrator, MLTParameters},
+        {"mlt", "multiplexed primary-sample-space Metropolis light transport (pbrt-v3)", CreateMLTIntegrator,
+         MLTParameters},
 #endif
 #ifdef GRADUS_HAS_GMLT
         {"gmlt", "gradient-domain Metropolis light transport", CreateGMLTIntegrator, GMLTParameters},

@@ -122,13 +122,15 @@ Worker &PassContext::worker() const {
 
 bool PassContext::interrupted() const { return InterruptRequested(); }
 
+bool PassContext::skipOnInterrupt() const { return pass_ > 0 && InterruptRequested(); }
+
 void PassContext::addNonFinite(uint64_t n) { shared_.nonFinite += n; }
 
 void PassContext::forEachTile(const TileFn &fn) {
     const int n = tiles_.count();
     std::vector<std::unique_ptr<FilmTile>> out(n);
     tbb::parallel_for(0, n, [&](int t) {
-        if (InterruptRequested()) return;
+        if (skipOnInterrupt()) return;
         Bounds2i tb = tiles_.tile(t);
         auto tile = film_.makeTile(tb);
         fn(t, tb, *tile, worker());
@@ -182,7 +184,7 @@ void PassContext::forEachItem(int64_t n, uint64_t tag, const ItemFn &fn) {
     std::vector<std::unique_ptr<FilmTile>> out(size_t(std::max<int64_t>(0, chunks)));
     const uint64_t key = seed() ^ tag;
     tbb::parallel_for(int64_t(0), chunks, [&](int64_t c) {
-        if (InterruptRequested()) return;
+        if (skipOnInterrupt()) return;
         auto tile = film_.makeSplatTile();
         Worker &w = worker();
         uint64_t bad = 0;
@@ -248,13 +250,15 @@ RenderStats RunRender(Integrator &integ, const Scene &scene, Film &film, const S
         ctx.firstSample_ = done;
         ctx.sampleCount_ = unlimited ? perPass : std::min(perPass, spp - done);
         integ.beginPass(ctx);
+        const double afterBegin = elapsed();
         integ.runPass(ctx);
         integ.endPass(ctx);
         // A pass cut short by an interrupt keeps what it merged and counts.
         done += ctx.sampleCount_;
         ++stats.passes;
         film.setSplatSamples(done);
-        lastPassTime = elapsed() - passStart;
+        // The first beginPass is one-off setup (mlt's bootstrap): not part of the estimate of the next pass.
+        lastPassTime = elapsed() - (stats.passes == 1 ? afterBegin : passStart);
         progress.update(done, elapsed(), opts.timeLimit);
     }
     progress.done(elapsed());

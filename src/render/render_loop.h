@@ -132,6 +132,10 @@ class PassContext {
     // is keyed by (seed, tag, pass, item); the recorder's splats go to the
     // film, merged in item order (chunks of kItemChunk items; the items of one
     // chunk run in order on one thread, so per-chunk output needs no locking).
+    // After an interrupt, forEachTile and forEachItem skip the tiles / chunks
+    // not started yet, except in the first pass, which always runs whole: an
+    // interrupted render never ends with an empty image because the interrupt
+    // came during a long first beginPass (mlt's bootstrap).
     static constexpr int64_t kItemChunk = 256;
     using ItemFn = std::function<void(int64_t, RNG &, SampleRecorder &, Worker &)>;
     void forEachItem(int64_t n, uint64_t tag, const ItemFn &fn);
@@ -149,6 +153,7 @@ class PassContext {
                 const TileGrid &tiles, Shared &shared)
         : scene_(scene), film_(film), sampler_(sampler), opts_(opts), tiles_(tiles), shared_(shared) {}
     Worker &worker() const;
+    bool skipOnInterrupt() const;
     const Scene &scene_;
     Film &film_;
     const Sampler &sampler_;

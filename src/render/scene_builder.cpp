@@ -426,6 +426,15 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
             }
     }
     idesc.params.checkUnused("Integrator \"" + idesc.type + "\"");
+    // An integrator with its own sample count (mlt's mutationsperpixel) keeps it
+    // unless --spp is given; it draws no numbers from the sampler, so a "random"
+    // sampler carries the count (a stratified one could round it).
+    if (const int n = job.integrator->defaultSamplesPerPixel(); n > 0 && sppOverride <= 0) {
+        EntityDesc rd;
+        rd.type = "random";
+        rd.present = true;
+        job.sampler = CreateSampler(rd, opts.seed, opts.quick ? std::max(1, n / 8) : n);
+    }
     // pbrt-v3's integrator "pixelbounds": accepted when it covers the film, else
     // named as unsupported (never silently ignored).
     std::vector<int> pb = idesc.params.getInts("pixelbounds");

@@ -215,6 +215,23 @@ TEST(IntegratorTables, OutOfRangeIntIsLocated) {
         EXPECT_EQ(CreateError("mbdpt", Desc().integer("connections", {0}, Loc(2, 30))),
                   "test.pbrt:2:30: \"connections\" must be in [1, 1024]");
     }
+    if (Registered("mlt")) {
+        EXPECT_EQ(CreateError("mlt", Desc().integer("chains", {0}, Loc(3, 9))), "test.pbrt:3:9: \"chains\" must be >= 1");
+        EXPECT_EQ(CreateError("mlt", Desc().integer("bootstrapsamples", {0}, Loc(4, 2))),
+                  "test.pbrt:4:2: \"bootstrapsamples\" must be >= 1");
+        EXPECT_EQ(CreateError("mlt", Desc().integer("mutationsperpixel", {-3}, Loc(5, 2))),
+                  "test.pbrt:5:2: \"mutationsperpixel\" must be >= 1");
+    }
+}
+
+TEST(IntegratorTables, OutOfRangeFloatIsLocated) {
+    if (!Registered("mlt")) GTEST_SKIP() << "mlt not built";
+    EXPECT_EQ(CreateError("mlt", Desc().real("largestepprobability", 1.5, Loc(2, 7))),
+              "test.pbrt:2:7: \"largestepprobability\" must be in [0, 1]");
+    EXPECT_EQ(CreateError("mlt", Desc().real("sigma", 0, Loc(3, 7))),
+              "test.pbrt:3:7: \"sigma\" must be in [1e-07, 1]: a positive deviation within the unit interval");
+    EXPECT_EQ(CreateError("mlt", Desc().real("sigma", std::nan(""), Loc(3, 7))).rfind("test.pbrt:3:7: \"sigma\"", 0), 0u);
+    EXPECT_EQ(CreateError("mlt", Desc().real("sigma", 0.05).real("largestepprobability", 0)), "");
 }
 
 // gbdpt's explicit restrictions of the family parameters.

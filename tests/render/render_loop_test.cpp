@@ -37,6 +37,8 @@ class ItemIntegrator : public Integrator {
     void beginPass(PassContext &ctx) override {
         firsts.push_back(ctx.firstSample());
         counts.push_back(ctx.sampleCount());
+        if (interruptInBeginPass >= 0 && ctx.pass() == interruptInBeginPass) std::raise(SIGINT);
+        if (setupMs > 0 && ctx.pass() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(setupMs));
     }
     void runPass(PassContext &ctx) override {
         const Point2i res = ctx.film().fullResolution();
@@ -51,7 +53,7 @@ class ItemIntegrator : public Integrator {
         if (interruptAtPass >= 0 && ctx.pass() == interruptAtPass) std::raise(SIGINT);
     }
     void finish(const Film &, const RenderStats &s, Image *) override { finished = s; }
-    int perPass = 1, items = 1000, sleepMs = 0, interruptAtPass = -1;
+    int perPass = 1, items = 1000, sleepMs = 0, interruptAtPass = -1, interruptInBeginPass = -1, setupMs = 0;
     std::vector<int> firsts, counts;
     std::atomic<int64_t> calls{0};
     RenderStats finished;
@@ -188,4 +190,38 @@ TEST(RenderLoop, InterruptEndsAfterTheCurrentPass) {
     EXPECT_EQ(s.passes, 2);
     EXPECT_EQ(s.spp, 2);
     EXPECT_EQ(job.film->splatSamples(), 2);
+}
+
+// A long first beginPass (one-off setup) does not count as the length of a
+// pass: a budget of 0.5 s after 0.3 s of setup still runs many short passes
+// (with the setup in the estimate the loop stopped after the first).
+TEST(RenderLoop, FirstPassSetupIsNotInThePassEstimate) {
+    RenderJob job = Job();
+    ItemIntegrator it;
+    it.setupMs = 300;
+    it.items = 10;
+    RenderStats s = RunLoop(it, job, 0, 2, 0.5);
+    EXPECT_TRUE(s.timeLimited);
+    EXPECT_GT(s.passes, 5);
+    EXPECT_LE(s.seconds, 0.5 + 0.05);
+}
+
+// An interrupt before the first pass's items run (a long first beginPass, e.g.
+// mlt's bootstrap) still lets all of them run: the image is never empty. In a
+// later pass the items not started are skipped.
+TEST(RenderLoop, InterruptRunsTheFirstPassWhole) {
+    InstallInterruptHandler();
+    for (int pass : {0, 1}) {
+        SCOPED_TRACE(pass);
+        ResetInterrupt();
+        RenderJob job = Job();
+        ItemIntegrator it;
+        it.interruptInBeginPass = pass;
+        RenderStats s = RunLoop(it, job, 10, 2);
+        ResetInterrupt();
+        EXPECT_TRUE(s.interrupted);
+        EXPECT_EQ(s.passes, pass + 1);
+        // Pass 0's items all run (none would without the rule); pass 1's are all skipped.
+        EXPECT_EQ(it.calls, it.items);
+    }
 }

@@ -1,0 +1,319 @@
+#include "integrators/mlt/mlt.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <sstream>
+
+#include "core/error.h"
+#include "integrators/factories.h"
+
+namespace gradus {
+
+using mlt::PrimarySampler;
+
+std::unique_ptr<Integrator> CreateMLTIntegrator(const EntityDesc &d) { return std::make_unique<MLTIntegrator>(d); }
+
+namespace {
+
+constexpr uint64_t kBootstrapTag = 0x6d6c740000000001ULL;
+constexpr uint64_t kChainTag = 0x6d6c740000000002ULL;
+constexpr uint64_t kMutationTag = 0x6d6c740000000003ULL;
+
+ParamTable<MLTSettings> Table() {
+    using S = MLTSettings;
+    ParamTable<S> t("mlt");
+    t.integer("maxdepth", &S::maxDepth, 5, "maximum path depth (edges - 1)", AtLeast(0));
+    t.integer("bootstrapsamples", &S::bootstrapSamples, 100000, "bootstrap states per depth (b and the chain starts)",
+              AtLeast(1));
+    t.integer("chains", &S::chains, 1000, "Markov chains", AtLeast(1));
+    t.integer("mutationsperpixel", &S::mutationsPerPixel, 100, "mutations per pixel when --spp is not given",
+              AtLeast(1));
+    t.real("largestepprobability", &S::largeStepProbability, 0.3,
+           "probability of a large step (independent proposal)", Range{0, 1});
+    t.real("sigma", &S::sigma, 0.01, "standard deviation of a small step in primary sample space",
+           Range{1e-7, 1, "a positive deviation within the unit interval"});
+    return t;
+}
+
+// The chains' target function I: luminance of the contribution (Kelemen et
+// al. 2002; pbrt-v3 Sec. 16.4.3). Non-finite contributions count as 0 (and are
+// counted); so do contributions of non-positive luminance, which no chain samples.
+Float Target(const Spectrum &L, bool *nonFinite) {
+    if (!L.isFinite()) {
+        *nonFinite = true;
+        return 0;
+    }
+    const double y = L.y();
+    return y > 0 ? y : 0;
+}
+
+}  // namespace
+
+std::vector<ParamInfo> MLTParameters() { return Table().describe(); }
+
+MLTIntegrator::MLTIntegrator(const EntityDesc &desc) : set_(Table().parse(desc)), loc_(desc.loc) {}
+
+void MLTIntegrator::preprocess(const Scene &scene, Film &film) {
+    lightSampler_ = LightSampler(scene.lights, "power", loc_);
+    ctx_.init(scene, lightSampler_, MISHeuristic::Balance);
+    ctx_.rrDepth = -1;  // the depth of a state is fixed: subpaths have exactly s and t vertices
+    pixels_ = film.pixelBounds();
+    const Point2i full = film.fullResolution();
+    splatScale_ = pixels_.area() > 0 ? Float(int64_t(full.x) * full.y) / Float(pixels_.area()) : 1;
+}
+
+Spectrum MLTIntegrator::contribution(PrimarySampler &u, int depth, Arena &arena, Point2 *pRaster) const {
+    // Strategy selection (Hachisuka et al. 2014, Sec. 4; pbrt-v3 Sec. 16.4.2):
+    // the first number of the connection stream picks (s, t), s + t = depth + 2,
+    // with probability 1 / (depth + 2); the estimate is divided by it. Depth 0
+    // has the one strategy (0, 2): bdpt does not evaluate (1, 1) either.
+    u.startStream(mlt::kConnectionStream);
+    int nStrategies = 1, s = 0, t = 2;
+    if (depth > 0) {
+        nStrategies = depth + 2;
+        s = std::min(int(u.get1D() * nStrategies), nStrategies - 1);
+        t = nStrategies - s;
+    }
+    ConnectSamples cu;
+    if (s == 1) {
+        cu.uLightSelect = u.get1D();
+        cu.uLight = u.get2D();
+    }
+    if (t == 1) cu.uLens = u.get2D();
+
+    const int maxCam = set_.maxDepth + 2, maxLight = set_.maxDepth + 1;
+    PathVertex *camV = static_cast<PathVertex *>(arena.alloc(sizeof(PathVertex) * maxCam, alignof(PathVertex)));
+    PathVertex *lightV = static_cast<PathVertex *>(arena.alloc(sizeof(PathVertex) * maxLight, alignof(PathVertex)));
+    BSDF *camB = static_cast<BSDF *>(arena.alloc(sizeof(BSDF) * maxCam, alignof(BSDF)));
+    BSDF *lightB = static_cast<BSDF *>(arena.alloc(sizeof(BSDF) * maxLight, alignof(BSDF)));
+    for (int i = 0; i < maxCam; ++i) new (&camB[i]) BSDF();
+    for (int i = 0; i < maxLight; ++i) new (&lightB[i]) BSDF();
+
+    // Camera stream: film position over the pixel bounds, lens, then the subpath.
+    int nC = 1;
+    Float w = 1;
+    Point2 pFilm;
+    if (t >= 2) {
+        u.startStream(mlt::kCameraStream);
+        Point2 uf = u.get2D();
+        CameraSample cs;
+        cs.pFilm = Point2(pixels_.pMin.x + uf.x * pixels_.width(), pixels_.pMin.y + uf.y * pixels_.height());
+        cs.pLens = u.get2D();
+        Ray ray;
+        w = ctx_.camera->generateRay(cs, &ray);
+        if (w == 0) return Spectrum(0);
+        nC = GenerateCameraSubpath(ctx_, ray, u, arena, t, camV, camB);
+        if (nC != t) return Spectrum(0);
+        pFilm = cs.pFilm;
+    } else {
+        // t = 1 samples its lens point in the connection; the vertex is a placeholder.
+        camV[0] = PathVertex();
+        camV[0].type = VertexType::Camera;
+    }
+    // Light stream (s >= 2; s = 1 samples its light point in the connection).
+    int nL = 0;
+    if (s >= 2) {
+        u.startStream(mlt::kLightStream);
+        nL = GenerateLightSubpath(ctx_, u, arena, s, lightV, lightB);
+        if (nL != s) return Spectrum(0);
+    }
+    ConnectResult r;
+    if (!ConnectBDPT(ctx_, SubpathView{lightV, lightB, nL}, SubpathView{camV, camB, nC}, s, t, cu, &r))
+        return Spectrum(0);
+    const Spectrum L = r.L * Float(nStrategies);
+    if (r.splat) {
+        *pRaster = r.pRaster;
+        return L * splatScale_;
+    }
+    *pRaster = pFilm;
+    return L * w;
+}
+
+// ---------------------------------------------------------------- bootstrap and chain starts
+void MLTIntegrator::bootstrap(PassContext &ctx) {
+    const int64_t depths = set_.maxDepth + 1, n = int64_t(set_.bootstrapSamples) * depths;
+    const uint64_t key = ctx.seed() ^ kBootstrapTag;
+    std::vector<double> weight(size_t(n), 0.0);
+    std::atomic<uint64_t> bad{0};
+    ctx.parallelFor(n, 1024, [&](int64_t i0, int64_t i1, Worker &wk) {
+        PrimarySampler u(set_.sigma, set_.largeStepProbability);
+        uint64_t nonFinite = 0;
+        for (int64_t i = i0; i < i1; ++i) {
+            RNG rng(Hash(key, uint64_t(i)));
+            u.restart(&rng);
+            Point2 p;
+            bool nf = false;
+            weight[size_t(i)] = Target(contribution(u, int(i % depths), wk.arena, &p), &nf);
+            nonFinite += nf;
+            wk.arena.reset();
+        }
+        bad += nonFinite;
+    });
+    ctx.addNonFinite(bad);
+    nNonFinite_ += int64_t(bad.load());
+    cdf_.resize(size_t(n));
+    double sum = 0;
+    nBootstrapNonZero_ = 0;
+    for (int64_t i = 0; i < n; ++i) {
+        sum += weight[size_t(i)];
+        cdf_[size_t(i)] = sum;
+        nBootstrapNonZero_ += weight[size_t(i)] > 0;
+    }
+    // b: the integral of I over all depths and primary sample space, estimated
+    // by bootstrapsamples uniform states per depth (pbrt-v3 Sec. 16.4.5: the
+    // image is b / (mutations per pixel) times the summed splats of L / I;
+    // Metropolis estimates of integrals, Sec. 13.4.5).
+    b_ = sum / double(set_.bootstrapSamples);
+    if (!(b_ > 0)) {
+        b_ = 0;
+        warning_ = "mlt: none of the " + std::to_string(n) +
+                   " bootstrap paths carries light (b = 0); no chains run and the image is black "
+                   "(raise \"bootstrapsamples\" if the light is hard to reach)";
+        std::fprintf(stderr, "warning: %s\n", warning_.c_str());
+        cdf_.clear();
+        return;
+    }
+    // Chain starts: bootstrap state k with probability I_k / sum_j I_j. With b
+    // from the same samples, E[b g(X_0)] = (1 / bootstrapsamples) sum_k E[I_k g(x_k)]
+    // = the integral of I g for any g, and every later state keeps that (the
+    // kernel leaves I invariant): no start-up bias (pbrt-v3 Secs. 13.4.3, 16.4.5).
+    const int nChains = set_.chains;
+    chains_.clear();
+    chains_.reserve(size_t(nChains));
+    for (int c = 0; c < nChains; ++c) chains_.emplace_back(PrimarySampler(set_.sigma, set_.largeStepProbability));
+    const uint64_t chainKey = ctx.seed() ^ kChainTag;
+    std::atomic<int64_t> mismatch{0};
+    ctx.parallelFor(nChains, 8, [&](int64_t c0, int64_t c1, Worker &wk) {
+        for (int64_t c = c0; c < c1; ++c) {
+            RNG pick(Hash(chainKey, uint64_t(c)));
+            const double x = pick.uniform() * sum;
+            int64_t k = std::upper_bound(cdf_.begin(), cdf_.end(), x) - cdf_.begin();
+            k = std::min(k, n - 1);
+            Chain &ch = chains_[size_t(c)];
+            RNG rng(Hash(key, uint64_t(k)));
+            ch.u.restart(&rng);
+            ch.depth = int(k % depths);
+            bool nf = false;
+            ch.L = contribution(ch.u, ch.depth, wk.arena, &ch.pRaster);
+            ch.I = Target(ch.L, &nf);
+            ch.u.setRNG(nullptr);
+            wk.arena.reset();
+            // The re-evaluated start must be the bootstrap state itself.
+            if (ch.I != weight[size_t(k)]) ++mismatch;
+        }
+    });
+    nStartMismatch_ += mismatch.load();
+}
+
+void MLTIntegrator::beginPass(PassContext &ctx) {
+    if (ctx.pass() == 0) bootstrap(ctx);
+}
+
+// ---------------------------------------------------------------- mutations
+void MLTIntegrator::runPass(PassContext &ctx) {
+    if (chains_.empty()) return;
+    const int64_t nChains = int64_t(chains_.size());
+    const int64_t M = int64_t(ctx.sampleCount()) * pixels_.area();
+    const int64_t first = mutationsIssued_;
+    mutationsIssued_ += M;
+    // Mutation j of the render goes to chain j mod chains: chain i's share of [0, x).
+    auto share = [nChains](int64_t x, int64_t i) { return x > i ? (x - i - 1) / nChains + 1 : 0; };
+    const double b = b_;
+    ctx.forEachItem(nChains, kMutationTag, [&](int64_t i, RNG &rng, SampleRecorder &rec, Worker &wk) {
+        const int64_t count = share(first + M, i) - share(first, i);
+        Chain &c = chains_[size_t(i)];
+        if (count == 0 || !(c.I > 0)) return;
+        c.u.setRNG(&rng);
+        int64_t small = 0, large = 0, smallAcc = 0, largeAcc = 0, zero = 0, nonFinite = 0;
+        for (int64_t k = 0; k < count; ++k) {
+            c.u.propose();
+            const bool isLarge = c.u.largeStep();
+            Point2 pY;
+            const Spectrum LY = contribution(c.u, c.depth, wk.arena, &pY);
+            wk.arena.reset();
+            bool nf = false;
+            const Float IY = Target(LY, &nf);
+            nonFinite += nf;
+            zero += IY == 0;
+            // Acceptance: Metropolis-Hastings a = min(1, I(y) T(y->x) / (I(x) T(x->y)))
+            // (pbrt-v3 Sec. 13.4.1) with Kelemen et al.'s symmetric small and large
+            // steps, T(x->y) = T(y->x): a = min(1, I(y) / I(x)). I(x) > 0 for every
+            // chain state, and a zero or non-finite proposal has a = 0: no 0/0.
+            const Float a = IY > 0 ? std::min<Float>(1, IY / c.I) : 0;
+            // Expected values (Veach and Guibas 1997, "use of expected values";
+            // pbrt-v3 Sec. 13.4.1): the proposal y with weight a and the current
+            // state x with 1 - a, each as b L / I (pbrt-v3 Sec. 16.4.5).
+            if (a > 0) rec.splat(pY, LY * (b * a / IY));
+            if (a < 1) rec.splat(c.pRaster, c.L * (b * (1 - a) / c.I));
+            (isLarge ? large : small) += 1;
+            if (rng.uniform() < a) {
+                c.u.accept();
+                c.L = LY;
+                c.I = IY;
+                c.pRaster = pY;
+                (isLarge ? largeAcc : smallAcc) += 1;
+            } else {
+                c.u.reject();
+            }
+        }
+        c.u.setRNG(nullptr);
+        nMutations_ += count;
+        nSmall_ += small;
+        nLarge_ += large;
+        nSmallAccepted_ += smallAcc;
+        nLargeAccepted_ += largeAcc;
+        nZeroProposals_ += zero;
+        nNonFinite_ += nonFinite;
+        ctx.addNonFinite(uint64_t(nonFinite));
+    });
+}
+
+void MLTIntegrator::finish(const Film &, const RenderStats &, Image *out) {
+    // The film divides by the samples per pixel of the passes run; an
+    // interrupt can skip chains of the last pass: scale by issued / performed.
+    const int64_t done = nMutations_.load();
+    rescale_ = 1;
+    if (done > 0 && done != mutationsIssued_) {
+        rescale_ = double(mutationsIssued_) / double(done);
+        const auto &names = out->channelNames();
+        for (int ch = 0; ch < out->numChannels(); ++ch) {
+            if (names[size_t(ch)] != "R" && names[size_t(ch)] != "G" && names[size_t(ch)] != "B") continue;
+            for (int y = 0; y < out->height(); ++y)
+                for (int x = 0; x < out->width(); ++x) out->at(x, y, ch) = float(out->at(x, y, ch) * rescale_);
+        }
+    }
+    Metadata &m = out->metadata;
+    m["mlt_b"] = MetaValue::Double(b_);
+    m["mlt_mutations"] = MetaValue::Int(done);
+    m["mlt_chains"] = MetaValue::Int(int64_t(chains_.size()));
+    m["mlt_bootstrap_nonzero"] = MetaValue::Int(nBootstrapNonZero_);
+    if (!warning_.empty()) m["mlt_warning"] = warning_;
+}
+
+std::string MLTIntegrator::statistics() const {
+    auto rate = [](int64_t acc, int64_t n) {
+        std::ostringstream o;
+        if (n > 0)
+            o << 100.0 * double(acc) / double(n) << "%";
+        else
+            o << "-";
+        return o.str();
+    };
+    const int64_t depths = set_.maxDepth + 1;
+    std::ostringstream o;
+    o << "MLT:\n";
+    o << "  bootstrap: " << int64_t(set_.bootstrapSamples) * depths << " states (" << set_.bootstrapSamples
+      << " per depth, " << nBootstrapNonZero_ << " carry light), b = " << b_ << "\n";
+    o << "  chains: " << chains_.size() << "; mutations: " << nMutations_ << "\n";
+    o << "  acceptance: small steps " << rate(nSmallAccepted_, nSmall_) << " of " << nSmall_ << ", large steps "
+      << rate(nLargeAccepted_, nLarge_) << " of " << nLarge_ << ", all "
+      << rate(nSmallAccepted_ + nLargeAccepted_, nSmall_ + nLarge_) << "\n";
+    o << "  proposals without contribution: " << nZeroProposals_ << "; non-finite contributions (rejected): "
+      << nNonFinite_ << "\n";
+    if (nStartMismatch_ > 0) o << "  chain starts differing from their bootstrap state: " << nStartMismatch_ << "\n";
+    if (rescale_ != 1) o << "  interrupted pass: image scaled by " << rescale_ << " (mutations issued / run)\n";
+    if (!warning_.empty()) o << "  " << warning_ << "\n";
+    return o.str();
+}
+
+}  // namespace gradus

@@ -1,0 +1,136 @@
+// MLT renders: pbrt-v3 scenes unchanged, the normalisation b / (mutations per
+// pixel) for any pass structure, and the pbrt bugs as regression tests (a
+// bootstrap without light, 0/0 in acceptance and splats).
+#include <csignal>
+#include <thread>
+
+#include "mlt_test_util.h"
+#include "render/render_loop.h"
+
+namespace gradus::mlt_test {
+namespace {
+
+const std::string kSmall = "\"integer maxdepth\" [3] \"integer bootstrapsamples\" [4000] \"integer chains\" [64]";
+
+bool AllFinite(const Image &img) {
+    for (float v : img.data())
+        if (!std::isfinite(v)) return false;
+    return true;
+}
+
+// A pbrt-v3 scene with Integrator "mlt" and its parameters renders with them:
+// mutationsperpixel is the render's spp (not the Sampler's 16, nor rounded by
+// a stratified sampler), every parameter is consumed.
+TEST(MLTRender, PbrtV3SceneRendersWithItsParameters) {
+    const std::string line = MLTLine(
+        "\"integer maxdepth\" [4] \"integer bootstrapsamples\" [3000] \"integer chains\" [50] "
+        "\"integer mutationsperpixel\" [6] \"float largestepprobability\" [0.25] \"float sigma\" [0.02]");
+    Rendered r = Render(BoxScene(line, 12, "open", "Sampler \"lowdiscrepancy\" \"integer pixelsamples\" [16]"), 0, 5);
+    const MLTSettings &s = r.mlt().settings();
+    EXPECT_EQ(s.maxDepth, 4);
+    EXPECT_EQ(s.bootstrapSamples, 3000);
+    EXPECT_EQ(s.chains, 50);
+    EXPECT_EQ(s.largeStepProbability, 0.25);
+    EXPECT_EQ(s.sigma, 0.02);
+    EXPECT_EQ(r.stats.spp, 6);
+    EXPECT_EQ(r.mlt().counts().mutations, 6 * 144);
+    EXPECT_EQ(r.image.metadata["mlt_mutations"].str(), "864");
+    EXPECT_GT(MeanLum(r.image), 0);
+    // --spp overrides mutationsperpixel.
+    Rendered o = Render(BoxScene(line), 3, 5);
+    EXPECT_EQ(o.stats.spp, 3);
+    EXPECT_EQ(o.mlt().counts().mutations, 3 * 144);
+}
+
+TEST(MLTRender, StatisticsReportAcceptanceChainsBAndMutations) {
+    Rendered r = Render(BoxScene(MLTLine(kSmall)), 4, 1);
+    const auto c = r.mlt().counts();
+    EXPECT_EQ(c.mutations, 4 * 144);
+    EXPECT_EQ(c.small + c.large, c.mutations);
+    EXPECT_GT(c.smallAccepted, 0);
+    EXPECT_GT(c.largeAccepted, 0);
+    EXPECT_EQ(c.startMismatch, 0) << "a chain start must re-create its bootstrap state exactly";
+    for (const char *want : {"acceptance: small steps ", "large steps ", "chains: 64", "b = ", "mutations: 576"})
+        EXPECT_NE(r.statistics.find(want), std::string::npos) << want << " in\n" << r.statistics;
+}
+
+// The image's mean luminance is b exactly (every splat carries luminance
+// b * weight, the weights of a mutation sum to 1, all land on the film), for
+// any split into passes, a time budget, and an interrupted pass (the skipped
+// chains are compensated). A normalisation by the wrong mutation count fails.
+TEST(MLTRender, NormalisationIsBOverMutationsPerPixelForAnyPassStructure) {
+    const std::string scene = BoxScene(MLTLine(kSmall));
+    for (int perPass : {1, 3, 7}) {
+        Rendered r = Render(scene, 7, 11, 2, perPass);
+        EXPECT_EQ(r.stats.spp, 7);
+        EXPECT_NEAR(MeanLum(r.image) / r.mlt().b(), 1, 1e-5) << perPass << " spp per pass";
+    }
+    Rendered t = Render(scene, 0, 11, 2, 1, 0.3);
+    EXPECT_TRUE(t.stats.timeLimited);
+    EXPECT_GT(t.stats.spp, 1);
+    EXPECT_NEAR(MeanLum(t.image) / t.mlt().b(), 1, 1e-5) << "time budget, " << t.stats.spp << " spp";
+
+    // Interrupted while passes run (large passes: 400 mutations per pixel each).
+    InstallInterruptHandler();
+    ResetInterrupt();
+    std::thread stopper([] {
+        std::this_thread::sleep_for(std::chrono::milliseconds(400));
+        std::raise(SIGINT);
+    });
+    Rendered i = Render(BoxScene(MLTLine(kSmall), 24), 1 << 20, 11, 2, 400);
+    stopper.join();
+    ResetInterrupt();
+    EXPECT_TRUE(i.stats.interrupted);
+    EXPECT_GT(i.mlt().counts().mutations, 0);
+    EXPECT_NEAR(MeanLum(i.image) / i.mlt().b(), 1, 1e-5) << "interrupted after " << i.stats.passes << " passes";
+}
+
+TEST(MLTRender, ThreadCountIndependent) {
+    const std::string scene = BoxScene(MLTLine(kSmall));
+    Rendered a = Render(scene, 3, 2, 1), b = Render(scene, 3, 2, 3);
+    EXPECT_EQ(a.image.data(), b.image.data());
+}
+
+// pbrt-v4 #77: a bootstrap that finds no light-carrying path crashed. Here: a
+// black image, a message naming the cause, no chain, nothing non-finite.
+TEST(MLTRender, BootstrapWithoutLightGivesBlackImageAndMessage) {
+    for (const char *light : {"", "sealed"}) {
+        SCOPED_TRACE(std::string("light: ") + light);
+        Rendered r = Render(BoxScene(MLTLine(kSmall), 12, light), 2, 3);
+        EXPECT_EQ(r.mlt().b(), 0);
+        for (float v : r.image.data()) ASSERT_EQ(v, 0);
+        EXPECT_NE(r.mlt().warning().find("bootstrap"), std::string::npos) << r.mlt().warning();
+        EXPECT_NE(r.mlt().warning().find("b = 0"), std::string::npos) << r.mlt().warning();
+        EXPECT_NE(r.statistics.find(r.mlt().warning()), std::string::npos) << r.statistics;
+        EXPECT_EQ(r.image.metadata["mlt_warning"].str(), r.mlt().warning());
+        EXPECT_EQ(r.mlt().counts().mutations, 0);
+        EXPECT_EQ(r.stats.nonFinite, 0u);
+        EXPECT_EQ(r.statistics.find("nan"), std::string::npos) << r.statistics;
+    }
+}
+
+// pbrt-v4 #476, #134: 0/0 in the acceptance or the splat weights when a
+// proposal (or the state) has zero luminance. Most proposals of a scene lit
+// through a 2 cm gap carry nothing; none may produce a NaN, lose its
+// weight (the mean would drop below b) or print "nan" statistics; without
+// large steps the large-step rate is "-", not 0/0.
+TEST(MLTRender, ZeroContributionProposalsGiveNoZeroOverZero) {
+    for (const char *p : {"\"float largestepprobability\" [0.3]", "\"float largestepprobability\" [0]",
+                          "\"float largestepprobability\" [1]"}) {
+        SCOPED_TRACE(p);
+        Rendered r = Render(BoxScene(MLTLine(kSmall + " " + p), 12, "up"), 4, 8);
+        const auto c = r.mlt().counts();
+        EXPECT_GT(c.zeroProposals, c.mutations / 3);
+        EXPECT_EQ(c.nonFinite, 0);
+        EXPECT_EQ(r.stats.nonFinite, 0u);
+        EXPECT_TRUE(AllFinite(r.image));
+        EXPECT_NEAR(MeanLum(r.image) / r.mlt().b(), 1, 1e-5);
+        EXPECT_EQ(r.statistics.find("nan"), std::string::npos) << r.statistics;
+        EXPECT_EQ(r.statistics.find("inf"), std::string::npos) << r.statistics;
+    }
+    Rendered r = Render(BoxScene(MLTLine(kSmall + " \"float largestepprobability\" [0]")), 2, 8);
+    EXPECT_NE(r.statistics.find("large steps - of 0"), std::string::npos) << r.statistics;
+}
+
+}  // namespace
+}  // namespace gradus::mlt_test

@@ -159,7 +159,12 @@ TEST_P(Conformance, TimeBudget) {
               << spp << "\n";
     EXPECT_LE(o.proc.seconds, bound) << "pass " << pass << " s, overhead " << overhead << " s";
     EXPECT_LE(rendered, T + pass + jitter);
-    EXPECT_GT(spp, 1) << "a 1.5 s budget on a scene with millisecond passes must render more than one pass";
+    // More than one pass must fit when one pass takes at most a quarter of the budget
+    // (most integrators: milliseconds). mlt's first pass holds its bootstrap (0.4-2 s
+    // here depending on the load), which may legitimately fill the budget alone.
+    if (pass <= T / 4) {
+        EXPECT_GT(spp, 1) << "a 1.5 s budget on a scene with " << pass << " s passes must render more than one pass";
+    }
     // Stopping long before the budget would also be wrong (one pass is ms).
     EXPECT_GE(rendered, T / 2);
 }

@@ -95,21 +95,28 @@ double WeightSum(const BidirContext &ctx, const StrategySet &evaluated, const St
     *nValid = 0;
     if (wLT) *wLT = 0;
     if (wMerge) *wMerge = 0;
-    for (int sp = 0; sp < k; ++sp) {
-        int tp = k - sp;
-        std::vector<PathVertex> L(x.begin(), x.begin() + sp), C;
-        std::vector<BSDF> LB(b.begin(), b.begin() + sp), CB;
+    // Light subpath x[0..sp-1] and camera subpath x[k-1..sp] with the exact densities.
+    std::vector<PathVertex> L, C;
+    std::vector<BSDF> LB, CB;
+    auto split = [&](int sp) {
+        L.assign(x.begin(), x.begin() + sp);
+        LB.assign(b.begin(), b.begin() + sp);
+        C.clear();
+        CB.clear();
         for (int i = 0; i < sp; ++i) {
             L[i].pdfFwd = fwdL(i);
             L[i].pdfRev = fwdC(i);
         }
-        for (int j = 0; j < tp; ++j) {
-            int i = k - 1 - j;
+        for (int i = k - 1; i >= sp; --i) {
             C.push_back(x[i]);
             CB.push_back(b[i]);
             C.back().pdfFwd = fwdC(i);
             C.back().pdfRev = fwdL(i);
         }
+    };
+    for (int sp = 0; sp < k; ++sp) {
+        int tp = k - sp;
+        split(sp);
         bool valid;
         if (sp == 1 && tp == 1)
             valid = false;
@@ -129,19 +136,7 @@ double WeightSum(const BidirContext &ctx, const StrategySet &evaluated, const St
     for (int sp = 1; evaluated.merging && sp + 1 < k; ++sp) {
         if (x[sp].type != VertexType::Surface || !b[sp] || !b[sp].hasNonSpecular()) continue;
         const int tp = k - sp;
-        std::vector<PathVertex> L(x.begin(), x.begin() + sp), C;
-        std::vector<BSDF> LB(b.begin(), b.begin() + sp), CB;
-        for (int i = 0; i < sp; ++i) {
-            L[i].pdfFwd = fwdL(i);
-            L[i].pdfRev = fwdC(i);
-        }
-        for (int j = 0; j < tp; ++j) {
-            int i = k - 1 - j;
-            C.push_back(x[i]);
-            CB.push_back(b[i]);
-            C.back().pdfFwd = fwdC(i);
-            C.back().pdfRev = fwdL(i);
-        }
+        split(sp);
         ++*nValid;
         double w = MergeWeight(ctx, weighting, {L.data(), LB.data(), sp}, {C.data(), CB.data(), tp}, sp, tp);
         sum += w;

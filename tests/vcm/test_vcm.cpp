@@ -95,7 +95,8 @@ void CheckRecursiveWeights(MISHeuristic h) {
             job.scene->camera->generateRay(cs, &ray);
             const int nC = GenerateCameraSubpath(ctx, ray, *sampler, arena, maxDepth + 2, cv.data(), cb.data());
             const int nL = GenerateLightSubpath(ctx, *sampler, arena, maxDepth + 1, lv.data(), lb.data());
-            std::vector<LightVertex> recs = VCMLightVertices(ctx, lv.data(), lb.data(), nL, w);
+            std::vector<LightVertex> recs;
+            VCMLightVertices(ctx, lv.data(), lb.data(), nL, w, &recs);
             std::vector<Float> B(nC);
             VCMCameraB(ctx, cv.data(), cb.data(), nC, w, B.data());
             SubpathView cam{cv.data(), cb.data(), nC}, light{lv.data(), lb.data(), nL};
@@ -105,7 +106,7 @@ void CheckRecursiveWeights(MISHeuristic h) {
                 // s = 0: z is an emitter.
                 if (!EmittedRadiance(ctx, z, cv[uu - 1]).isBlack()) {
                     const Float ref = MISWeight(ctx, set, light, cam, 0, t, nullptr);
-                    const Float rec = 1 / (1 + VCMCameraSum(ctx, cv.data(), cb.data(), uu, B[uu],
+                    const Float rec = 1 / (1 + VCMCameraSum(VCMCameraAt(ctx, cv.data(), cb.data(), uu, B[uu], w),
                                                             PdfLightOrigin(ctx, z, cv[uu - 1]),
                                                             PdfLightDirection(ctx, z, cv[uu - 1]), false, true, w));
                     EXPECT_NEAR(rec, ref, 1e-9 * (1 + ref)) << "s=0 t=" << t << " eta " << eta;
@@ -123,7 +124,8 @@ void CheckRecursiveWeights(MISHeuristic h) {
                     const Float oz = PdfArea(ctx, yv, &lb[s - 1], &lv[s - 2], z, TransportMode::Importance);
                     const Float op = PdfArea(ctx, z, &cb[uu], &yv, cv[uu - 1], TransportMode::Importance);
                     const Float rec = 1 / (1 + VCMLightSum(y, oi, oim1, w) +
-                                           VCMCameraSum(ctx, cv.data(), cb.data(), uu, B[uu], oz, op, w.merging, false, w));
+                                           VCMCameraSum(VCMCameraAt(ctx, cv.data(), cb.data(), uu, B[uu], w), oz, op,
+                                                        w.merging, false, w));
                     EXPECT_NEAR(rec, ref, 1e-6 * (1 + ref)) << "s=" << s << " t=" << t << " eta " << eta;
                     bool spec = false;
                     for (int k = 1; k < s - 1; ++k) spec |= lv[k].delta();

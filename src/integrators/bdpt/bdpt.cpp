@@ -28,12 +28,10 @@ void BDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &a
     Float w = scene.camera->generateRay(cs, &ray);
     if (w == 0) return;
     const int maxCam = set_.maxDepth + 2, maxLight = set_.maxDepth + 1;
-    PathVertex *camV = static_cast<PathVertex *>(arena.alloc(sizeof(PathVertex) * maxCam, alignof(PathVertex)));
-    PathVertex *lightV = static_cast<PathVertex *>(arena.alloc(sizeof(PathVertex) * maxLight, alignof(PathVertex)));
-    BSDF *camB = static_cast<BSDF *>(arena.alloc(sizeof(BSDF) * maxCam, alignof(BSDF)));
-    BSDF *lightB = static_cast<BSDF *>(arena.alloc(sizeof(BSDF) * maxLight, alignof(BSDF)));
-    for (int i = 0; i < maxCam; ++i) new (&camB[i]) BSDF();
-    for (int i = 0; i < maxLight; ++i) new (&lightB[i]) BSDF();
+    PathVertex *camV, *lightV;
+    BSDF *camB, *lightB;
+    AllocSubpath(arena, maxCam, &camV, &camB);
+    AllocSubpath(arena, maxLight, &lightV, &lightB);
 
     int nC = GenerateCameraSubpath(ctx_, ray, sampler, arena, maxCam, camV, camB);
     int nL = scene.lights.empty() ? 0 : GenerateLightSubpath(ctx_, sampler, arena, maxLight, lightV, lightB);

@@ -14,24 +14,6 @@ TransportMode Flip(TransportMode m) {
     return m == TransportMode::Radiance ? TransportMode::Importance : TransportMode::Radiance;
 }
 
-Interaction AsInteraction(const PathVertex &v) {
-    // Light and camera vertices off a surface get no ray offset (zero normal).
-    Vec3 n = v.onSurface() ? Vec3(v.ng) : Vec3(0, 0, 0);
-    return Interaction(v.p, n, v.wo);
-}
-
-// Solid-angle density at `from` -> area density at `to` (Veach 1997, Eq. 8.10).
-// Densities towards infinite-light vertices stay directional.
-Float ConvertDensity(Float pdf, const PathVertex &from, const PathVertex &to) {
-    if (to.isInfiniteLight()) return pdf;
-    Vec3 w = to.p - from.p;
-    Float d2 = w.lengthSquared();
-    if (d2 == 0) return 0;
-    Float invD2 = 1 / d2;
-    if (to.onSurface()) pdf *= AbsDot(Vec3(to.ng), w * std::sqrt(invD2));
-    return pdf * invD2;
-}
-
 // Directional density of all infinite lights towards w (direction to the light).
 Float InfiniteLightDensity(const BidirContext &ctx, const Vec3 &w) {
     Float pdf = 0;
@@ -159,6 +141,66 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
 }
 
 }  // namespace
+
+Interaction AsInteraction(const PathVertex &v) {
+    // Light and camera vertices off a surface get no ray offset (zero normal).
+    Vec3 n = v.onSurface() ? Vec3(v.ng) : Vec3(0, 0, 0);
+    return Interaction(v.p, n, v.wo);
+}
+
+// Veach 1997, Eq. 8.10; densities towards infinite-light vertices stay directional.
+Float ConvertDensity(Float pdf, const PathVertex &from, const PathVertex &to) {
+    if (to.isInfiniteLight()) return pdf;
+    Vec3 w = to.p - from.p;
+    Float d2 = w.lengthSquared();
+    if (d2 == 0) return 0;
+    Float invD2 = 1 / d2;
+    if (to.onSurface()) pdf *= AbsDot(Vec3(to.ng), w * std::sqrt(invD2));
+    return pdf * invD2;
+}
+
+bool IsMergeable(const PathVertex &v, const BSDF *bsdf) {
+    GRADUS_CHECK(bsdf);  // merging terms need the BSDFs of the subpaths
+    return v.type == VertexType::Surface && *bsdf && bsdf->hasNonSpecular();
+}
+
+void AllocSubpath(Arena &arena, int n, PathVertex **v, BSDF **b) {
+    *v = static_cast<PathVertex *>(arena.alloc(sizeof(PathVertex) * n, alignof(PathVertex)));
+    *b = static_cast<BSDF *>(arena.alloc(sizeof(BSDF) * n, alignof(BSDF)));
+    for (int i = 0; i < n; ++i) new (&(*b)[i]) BSDF();
+}
+
+bool SampleLensVertex(const BidirContext &ctx, const PathVertex &qs, Point2 u, PathVertex *v, CameraWiSample *cws) {
+    if (!ctx.camera->sampleWi(AsInteraction(qs), u, cws) || cws->pdf == 0) return false;
+    *v = PathVertex();
+    v->type = VertexType::Camera;
+    v->p = cws->pLens.p;
+    v->ng = cws->pLens.n;
+    v->ns = cws->pLens.n;
+    v->setThroughput(cws->We / cws->pdf);
+    v->pdfFwd = 1;
+    return true;
+}
+
+bool SampleLightVertex(const BidirContext &ctx, const PathVertex &pt, Float uSel, Point2 u, PathVertex *v,
+                       LightLiSample *ls, Spectrum *weight) {
+    Float pmf;
+    const Light *lt = ctx.lightSampler->sample(uSel, &pmf);
+    if (!lt || pmf == 0) return false;
+    if (!lt->sampleLi(AsInteraction(pt), u, ls) || ls->pdf == 0 || ls->L.isBlack()) return false;
+    *v = PathVertex();
+    v->type = VertexType::Light;
+    v->light = lt;
+    if (IsDeltaLight(lt->flags)) v->flags |= VERTEX_DELTA_LIGHT;
+    if (lt->flags & (LIGHT_INFINITE | LIGHT_DELTA_DIRECTION)) v->flags |= VERTEX_INFINITE;
+    v->p = ls->pLight.p;
+    v->ng = ls->pLight.n;
+    v->ns = ls->pLight.n;
+    *weight = ls->L / (ls->pdf * pmf);
+    v->setThroughput(*weight);
+    v->pdfFwd = PdfLightOrigin(ctx, *v, pt);
+    return true;
+}
 
 void BidirContext::init(const Scene &s, const LightSampler &ls, MISHeuristic h) {
     scene = &s;
@@ -365,13 +407,6 @@ bool EdgeConnectible(const BidirContext &ctx, const PathVertex &a, const PathVer
 
 namespace {
 
-// A vertex at which a camera and a light subpath can be merged (VCM): a surface
-// with a non-specular BSDF component.
-bool Mergeable(const PathVertex &v, const BSDF *bsdf) {
-    GRADUS_CHECK(bsdf);  // merging terms need the BSDFs of the subpaths
-    return v.type == VertexType::Surface && *bsdf && bsdf->hasNonSpecular();
-}
-
 // Sum over every strategy in `set` except the connection (s, t) of
 // (n_k p_k / n_st p_st)^beta for the path light[0..s-1] camera[t-1..0]; *ptRevOut
 // gets the light-side density of camera[t-1]. mergeMode: the strategy being
@@ -432,7 +467,7 @@ Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathVi
     for (int i = t - 1; i > 0; --i) {
         // ri is the ratio of the connection with camera endpoint C[i]: merging at C[i]
         // (not at the light origin x_0, which C[t-1] is when s = 0).
-        if (eta > 0 && !(s == 0 && i == t - 1) && Mergeable(Cv(i), Cb(i))) sumRi += mis(eta * remap(camRev(i)) * ri);
+        if (eta > 0 && !(s == 0 && i == t - 1) && IsMergeable(Cv(i), Cb(i))) sumRi += mis(eta * remap(camRev(i)) * ri);
         ri *= remap(camRev(i)) / remap(Cv(i).pdfFwd);
         int sp = s + t - i;
         if (sp == 1 && i == 1) continue;  // (1,1) is not evaluated
@@ -445,7 +480,7 @@ Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathVi
     ri = 1;
     for (int i = s - 1; i >= 0; --i) {
         // ri is the ratio of the connection with light endpoint L[i]: merging at L[i] (i >= 1).
-        if (eta > 0 && i >= 1 && Mergeable(Lv(i), Lb(i))) sumRi += mis(eta * remap(lightRev(i)) * ri);
+        if (eta > 0 && i >= 1 && IsMergeable(Lv(i), Lb(i))) sumRi += mis(eta * remap(lightRev(i)) * ri);
         ri *= remap(lightRev(i)) / remap(Lv(i).pdfFwd);
         int tp = s + t - i;
         if (i == 1 && tp == 1) continue;
@@ -501,13 +536,7 @@ bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera,
         const BSDF *qb = light.bsdf ? &light.bsdf[s - 1] : nullptr;
         if (!IsConnectible(qs, qb) || qs.type != VertexType::Surface) return false;
         CameraWiSample cws;
-        if (!ctx.camera->sampleWi(AsInteraction(qs), u.uLens, &cws) || cws.pdf == 0) return false;
-        sampled.type = VertexType::Camera;
-        sampled.p = cws.pLens.p;
-        sampled.ng = cws.pLens.n;
-        sampled.ns = cws.pLens.n;
-        sampled.setThroughput(cws.We / cws.pdf);
-        sampled.pdfFwd = 1;
+        if (!SampleLensVertex(ctx, qs, u.uLens, &sampled, &cws)) return false;
         haveSampled = true;
         if (!EdgeConnectible(ctx, qs, sampled)) return false;
         L = qs.throughput() * EvalBSDF(qs, *qb, sampled, TransportMode::Importance) * (cws.We / cws.pdf) *
@@ -521,24 +550,12 @@ bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera,
         const PathVertex &pt = camera.v[t - 1];
         const BSDF *pb = camera.bsdf ? &camera.bsdf[t - 1] : nullptr;
         if (!IsConnectible(pt, pb) || pt.type != VertexType::Surface) return false;
-        Float pmf;
-        const Light *lt = ctx.lightSampler->sample(u.uLightSelect, &pmf);
-        if (!lt || pmf == 0) return false;
         LightLiSample ls;
-        if (!lt->sampleLi(AsInteraction(pt), u.uLight, &ls) || ls.pdf == 0 || ls.L.isBlack()) return false;
-        sampled.type = VertexType::Light;
-        sampled.light = lt;
-        if (IsDeltaLight(lt->flags)) sampled.flags |= VERTEX_DELTA_LIGHT;
-        if (lt->flags & (LIGHT_INFINITE | LIGHT_DELTA_DIRECTION)) sampled.flags |= VERTEX_INFINITE;
-        sampled.p = ls.pLight.p;
-        sampled.ng = ls.pLight.n;
-        sampled.ns = ls.pLight.n;
-        sampled.setThroughput(ls.L / (ls.pdf * pmf));
-        sampled.pdfFwd = PdfLightOrigin(ctx, sampled, pt);
+        Spectrum Lw;
+        if (!SampleLightVertex(ctx, pt, u.uLightSelect, u.uLight, &sampled, &ls, &Lw)) return false;
         haveSampled = true;
         if (!EdgeConnectible(ctx, sampled, pt)) return false;
-        L = pt.throughput() * EvalBSDF(pt, *pb, sampled, TransportMode::Radiance) * (ls.L / (ls.pdf * pmf)) *
-            AbsDot(ls.wi, Vec3(pt.ns));
+        L = pt.throughput() * EvalBSDF(pt, *pb, sampled, TransportMode::Radiance) * Lw * AbsDot(ls.wi, Vec3(pt.ns));
         if (L.isBlack()) return false;
         res->shadowRayTraced = true;
         if (!scene.unoccluded(AsInteraction(pt), ls.pLight)) return false;

@@ -119,6 +119,24 @@ const Light *EmitterOf(const BidirContext &ctx, const PathVertex &v);
 // delta-direction light).
 bool IsConnectible(const PathVertex &v, const BSDF *bsdf);
 
+// A vertex at which a camera and a light subpath can be merged (VCM): a surface
+// with a non-specular BSDF component (bsdf must be given).
+bool IsMergeable(const PathVertex &v, const BSDF *bsdf);
+// The vertex as an interaction (no ray offset off surfaces).
+Interaction AsInteraction(const PathVertex &v);
+// Solid-angle density at `from` towards `to` -> area density at `to` (Veach 1997,
+// Eq. 8.10); towards an infinite-light vertex it stays directional.
+Float ConvertDensity(Float pdf, const PathVertex &from, const PathVertex &to);
+// Arena storage for a subpath of n vertices with empty BSDFs.
+void AllocSubpath(Arena &arena, int n, PathVertex **v, BSDF **b);
+// A lens vertex sampled towards surface vertex qs (light tracing, t = 1):
+// throughput We / pdf, pdfFwd 1.
+bool SampleLensVertex(const BidirContext &ctx, const PathVertex &qs, Point2 u, PathVertex *v, CameraWiSample *cws);
+// A light vertex sampled from pt (next-event estimation, s = 1): *weight = L / (pdf pmf),
+// pdfFwd = PdfLightOrigin.
+bool SampleLightVertex(const BidirContext &ctx, const PathVertex &pt, Float uSel, Point2 u, PathVertex *v,
+                       LightLiSample *ls, Spectrum *weight);
+
 // Rebuilds the surface interaction and the BSDF of a stored surface vertex
 // (for integrators that store vertices across an iteration). Returns an empty
 // BSDF for non-surface vertices.

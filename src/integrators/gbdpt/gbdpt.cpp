@@ -107,14 +107,10 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
     // [1] camera and light subpaths.
     const int maxCam = set_.maxDepth + 2, maxLight = set_.maxDepth + 1;
     ShiftSubpath cam, light;
-    cam.v = static_cast<PathVertex *>(arena.alloc(sizeof(PathVertex) * maxCam, alignof(PathVertex)));
-    light.v = static_cast<PathVertex *>(arena.alloc(sizeof(PathVertex) * maxLight, alignof(PathVertex)));
-    cam.b = static_cast<BSDF *>(arena.alloc(sizeof(BSDF) * maxCam, alignof(BSDF)));
-    light.b = static_cast<BSDF *>(arena.alloc(sizeof(BSDF) * maxLight, alignof(BSDF)));
+    AllocSubpath(arena, maxCam, &cam.v, &cam.b);
+    AllocSubpath(arena, maxLight, &light.v, &light.b);
     cam.deltaSample = static_cast<uint8_t *>(arena.alloc(maxCam));
     light.deltaSample = static_cast<uint8_t *>(arena.alloc(maxLight));
-    for (int i = 0; i < maxCam; ++i) new (&cam.b[i]) BSDF();
-    for (int i = 0; i < maxLight; ++i) new (&light.b[i]) BSDF();
     cam.n = GenerateCameraSubpath(bctx_, ray, sampler, arena, maxCam, cam.v, cam.b);
     light.n = scene.lights.empty() ? 0 : GenerateLightSubpath(bctx_, sampler, arena, maxLight, light.v, light.b);
     PrepareSubpath(sctx_, &cam);

@@ -82,12 +82,10 @@ Spectrum MLTIntegrator::contribution(PrimarySampler &u, int depth, Arena &arena,
     if (t == 1) cu.uLens = u.get2D();
 
     const int maxCam = set_.maxDepth + 2, maxLight = set_.maxDepth + 1;
-    PathVertex *camV = static_cast<PathVertex *>(arena.alloc(sizeof(PathVertex) * maxCam, alignof(PathVertex)));
-    PathVertex *lightV = static_cast<PathVertex *>(arena.alloc(sizeof(PathVertex) * maxLight, alignof(PathVertex)));
-    BSDF *camB = static_cast<BSDF *>(arena.alloc(sizeof(BSDF) * maxCam, alignof(BSDF)));
-    BSDF *lightB = static_cast<BSDF *>(arena.alloc(sizeof(BSDF) * maxLight, alignof(BSDF)));
-    for (int i = 0; i < maxCam; ++i) new (&camB[i]) BSDF();
-    for (int i = 0; i < maxLight; ++i) new (&lightB[i]) BSDF();
+    PathVertex *camV, *lightV;
+    BSDF *camB, *lightB;
+    AllocSubpath(arena, maxCam, &camV, &camB);
+    AllocSubpath(arena, maxLight, &lightV, &lightB);
 
     // Camera stream: film position over the pixel bounds, lens, then the subpath.
     int nC = 1;

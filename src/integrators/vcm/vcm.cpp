@@ -49,19 +49,7 @@ class RNGSampler final : public Sampler {
 
 Float Remap(Float f) { return f != 0 ? f : Float(1); }
 
-// Solid-angle density at `from` towards `to` -> area density at `to` (Veach 1997 Eq. 8.10).
-Float ToArea(Float pdf, const Point3 &from, const PathVertex &to) {
-    if (to.isInfiniteLight()) return pdf;
-    Vec3 w = to.p - from;
-    Float d2 = w.lengthSquared();
-    if (d2 == 0) return 0;
-    if (to.onSurface()) pdf *= AbsDot(Vec3(to.ng), w) / std::sqrt(d2);
-    return pdf / d2;
-}
-
-bool Mergeable(const PathVertex &v, const BSDF &b) {
-    return v.type == VertexType::Surface && b && b.hasNonSpecular();
-}
+Float Mis(Float x, bool power) { return power ? x * x : x; }
 
 PathVertex AsPathVertex(const LightVertex &lv) {
     PathVertex v;
@@ -79,17 +67,12 @@ PathVertex AsPathVertex(const LightVertex &lv) {
     return v;
 }
 
-Interaction AsInteraction(const PathVertex &v) {
-    return Interaction(v.p, v.onSurface() ? Vec3(v.ng) : Vec3(0, 0, 0), v.wo);
-}
-
 }  // namespace
 
 // ---------------------------------------------------------------- recursive MIS (vcm.h)
-std::vector<LightVertex> VCMLightVertices(const BidirContext &ctx, const PathVertex *v, const BSDF *b, int n,
-                                          const VCMWeights &w) {
-    std::vector<LightVertex> out;
-    auto mis = [&](Float x) { return w.power ? x * x : x; };
+int VCMLightVertices(const BidirContext &ctx, const PathVertex *v, const BSDF *b, int n, const VCMWeights &w,
+                     std::vector<LightVertex> *out) {
+    const size_t before = out->size();
     // B_0 = 0, B_1 = c_{-1} (s' = 0: the emitter can be hit unless it is a delta light),
     // B_{m+2} = c_m + eta g_m other(v_m) + R_m B_{m+1}.
     Float B = n > 0 && !v[0].isDeltaLight() ? 1 : 0;  // B_1
@@ -97,8 +80,8 @@ std::vector<LightVertex> VCMLightVertices(const BidirContext &ctx, const PathVer
         // Here B = B_i. c_{i-1}: light endpoint y_{i-1}, camera endpoint y_i.
         const bool prevDelta = i - 1 >= 1 && v[i - 1].delta();
         const bool edgeOK = EdgeConnectible(ctx, v[i - 1], v[i]);
-        const bool prevMerge = w.merging && i - 1 >= 1 && Mergeable(v[i - 1], b[i - 1]);
-        if (Mergeable(v[i], b[i])) {
+        const bool prevMerge = w.merging && i - 1 >= 1 && IsMergeable(v[i - 1], &b[i - 1]);
+        if (IsMergeable(v[i], &b[i])) {
             LightVertex lv;
             lv.p = v[i].p;
             lv.ng = v[i].ng;
@@ -111,34 +94,39 @@ std::vector<LightVertex> VCMLightVertices(const BidirContext &ctx, const PathVer
             lv.b2 = v[i].b2;
             lv.pdfFwd = v[i].pdfFwd;
             lv.prevPdfFwd = v[i - 1].pdfFwd;
-            lv.prevGeom = ToArea(1, v[i].p, v[i - 1]);
+            lv.prevGeom = ConvertDensity(1, v[i], v[i - 1]);
             lv.B = B;
             lv.depth = uint16_t(i);
             lv.flags = uint8_t((prevDelta ? LightVertex::kPrevDelta : 0) | (prevMerge ? LightVertex::kPrevMergeable : 0) |
                                (edgeOK ? LightVertex::kPrevEdgeOK : 0));
-            out.push_back(lv);
+            out->push_back(lv);
         }
         // B_{i+1} = c_{i-1} + eta g_{i-1} other(y_{i-1}) + R_{i-1} B_i, other(y_{i-1}) = pdfRev (exact);
         // y_i is not an endpoint of c_{i-1} here, so its own lobe counts too.
         const Float c = !prevDelta && edgeOK && !v[i].delta() ? 1 : 0;
-        B = c + (prevMerge ? mis(w.eta * Remap(v[i - 1].pdfRev)) : 0) +
-            mis(Remap(v[i - 1].pdfRev) / Remap(v[i - 1].pdfFwd)) * B;
+        B = c + (prevMerge ? Mis(w.eta * Remap(v[i - 1].pdfRev), w.power) : 0) +
+            Mis(Remap(v[i - 1].pdfRev) / Remap(v[i - 1].pdfFwd), w.power) * B;
     }
-    return out;
+    return int(out->size() - before);
+}
+
+Float VCMLightPrevSum(const LightVertex &lv, Float oim1, const VCMWeights &w) {
+    // S_L(i-1) = eta g_{i-1} o_{i-1} + R_{i-1} B_i.
+    const bool gim1 = lv.flags & LightVertex::kPrevMergeable;
+    return (gim1 ? Mis(w.eta * Remap(oim1), w.power) : 0) + Mis(Remap(oim1) / Remap(lv.prevPdfFwd), w.power) * lv.B;
+}
+
+bool VCMPrevConnectible(const LightVertex &lv) {
+    return !(lv.flags & LightVertex::kPrevDelta) && (lv.flags & LightVertex::kPrevEdgeOK);
 }
 
 Float VCMLightSum(const LightVertex &lv, Float oi, Float oim1, const VCMWeights &w) {
-    auto mis = [&](Float x) { return w.power ? x * x : x; };
-    // S_L(i) = eta g_i o_i + R_i (c_{i-1} + eta g_{i-1} o_{i-1} + R_{i-1} B_i).
-    const Float cim1 = (lv.flags & LightVertex::kPrevDelta) || !(lv.flags & LightVertex::kPrevEdgeOK) ? 0 : 1;
-    const bool gim1 = lv.flags & LightVertex::kPrevMergeable;
-    return (w.merging ? mis(w.eta * Remap(oi)) : 0) +
-           mis(Remap(oi) / Remap(lv.pdfFwd)) *
-               (cim1 + (gim1 ? mis(w.eta * Remap(oim1)) : 0) + mis(Remap(oim1) / Remap(lv.prevPdfFwd)) * lv.B);
+    // S_L(i) = eta g_i o_i + R_i (c_{i-1} + S_L(i-1)).
+    return (w.merging ? Mis(w.eta * Remap(oi), w.power) : 0) +
+           Mis(Remap(oi) / Remap(lv.pdfFwd), w.power) * ((VCMPrevConnectible(lv) ? 1 : 0) + VCMLightPrevSum(lv, oim1, w));
 }
 
 void VCMCameraB(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, int nC, const VCMWeights &w, Float *B) {
-    auto mis = [&](Float x) { return w.power ? x * x : x; };
     // B_0 = 0, B_1 = 0 (t' = 0 is no strategy), B_{m+2} = c_m + eta g_m other(z_m) + R_m B_{m+1}.
     for (int u = 0; u < nC; ++u) {
         if (u < 2) {
@@ -147,23 +135,34 @@ void VCMCameraB(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, in
         }
         const int m = u - 2;
         const bool cm = (m == 0 ? w.connecting : !z[m].delta()) && !z[m + 1].delta() && EdgeConnectible(ctx, z[m], z[m + 1]);
-        const bool gm = w.merging && m >= 1 && Mergeable(z[m], zb[m]);
-        B[u] = (cm ? 1 : 0) + (gm ? mis(w.eta * Remap(z[m].pdfRev)) : 0) +
-               mis(Remap(z[m].pdfRev) / Remap(z[m].pdfFwd)) * B[u - 1];
+        const bool gm = w.merging && m >= 1 && IsMergeable(z[m], &zb[m]);
+        B[u] = (cm ? 1 : 0) + (gm ? Mis(w.eta * Remap(z[m].pdfRev), w.power) : 0) +
+               Mis(Remap(z[m].pdfRev) / Remap(z[m].pdfFwd), w.power) * B[u - 1];
     }
 }
 
-Float VCMCameraSum(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, int u, Float Bu, Float oz,
-                   Float oPrev, bool gu, bool emitter, const VCMWeights &w) {
-    auto mis = [&](Float x) { return w.power ? x * x : x; };
+VCMCameraTerms VCMCameraAt(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, int u, Float Bu,
+                           const VCMWeights &w) {
     const PathVertex &zu = z[u], &zp = z[u - 1];
-    // c_{u-1}: camera endpoint z_{u-1}, light endpoint z_u; with z_u as the light
-    // origin, c_0 would be (1, 1), which is not a strategy.
-    const bool c = (u - 1 == 0 ? w.connecting && !emitter : !zp.delta()) && EdgeConnectible(ctx, zp, zu);
-    const bool gPrev = w.merging && u - 1 >= 1 && Mergeable(zp, zb[u - 1]);
+    VCMCameraTerms c;
+    // c_{u-1}: camera endpoint z_{u-1}, light endpoint z_u. For u = 1 it is light
+    // tracing, which with z_u as the light origin would be (1, 1): not a strategy.
+    const bool edge = EdgeConnectible(ctx, zp, zu);
+    c.cPrev = (u - 1 == 0 ? w.connecting : !zp.delta()) && edge;
+    c.cPrevEmitter = u - 1 != 0 && c.cPrev;
+    c.gPrev = w.merging && u - 1 >= 1 && IsMergeable(zp, &zb[u - 1]);
+    c.ownU = Remap(zu.pdfFwd);
+    c.ownPrev = Remap(zp.pdfFwd);
+    c.B = Bu;
+    return c;
+}
+
+Float VCMCameraSum(const VCMCameraTerms &c, Float oz, Float oPrev, bool gu, bool emitter, const VCMWeights &w) {
     // S_C(u) = eta g_u o_u + R_u (c_{u-1} + eta g_{u-1} o_{u-1} + R_{u-1} B_u).
-    const Float Ru = mis(Remap(oz) / Remap(zu.pdfFwd)), Rp = mis(Remap(oPrev) / Remap(zp.pdfFwd));
-    return (gu ? mis(w.eta * Remap(oz)) : 0) + Ru * ((c ? 1 : 0) + (gPrev ? mis(w.eta * Remap(oPrev)) : 0) + Rp * Bu);
+    const Float Ru = Mis(Remap(oz) / c.ownU, w.power), Rp = Mis(Remap(oPrev) / c.ownPrev, w.power);
+    const bool cPrev = emitter ? c.cPrevEmitter : c.cPrev;
+    return (gu ? Mis(w.eta * Remap(oz), w.power) : 0) +
+           Ru * ((cPrev ? 1 : 0) + (c.gPrev ? Mis(w.eta * Remap(oPrev), w.power) : 0) + Rp * c.B);
 }
 
 std::vector<ParamInfo> VCMParameters() { return Table().describe(); }
@@ -252,41 +251,31 @@ void VCMIntegrator::lightPass(PassContext &ctx) {
     std::vector<std::vector<LightVertex>> out(static_cast<size_t>(chunks));
     std::vector<uint32_t> count(static_cast<size_t>(N), 0);
     const Scene &scene = ctx.scene();
-    std::atomic<uint64_t> nLT{0};
     ctx.forEachItem(N, kLightTag, [&](int64_t item, RNG &rng, SampleRecorder &rec, Worker &wk) {
         if (scene.lights.empty()) return;
-        PathVertex *v = static_cast<PathVertex *>(wk.arena.alloc(sizeof(PathVertex) * maxLight, alignof(PathVertex)));
-        BSDF *b = static_cast<BSDF *>(wk.arena.alloc(sizeof(BSDF) * maxLight, alignof(BSDF)));
-        for (int i = 0; i < maxLight; ++i) new (&b[i]) BSDF();
+        PathVertex *v;
+        BSDF *b;
+        AllocSubpath(wk.arena, maxLight, &v, &b);
         RNGSampler smp(rng);
         const int n = GenerateLightSubpath(ctx_, smp, wk.arena, maxLight, v, b);
         std::vector<LightVertex> &dst = out[size_t(item / PassContext::kItemChunk)];
-        std::vector<LightVertex> recs = VCMLightVertices(ctx_, v, b, n, weights);
-        count[size_t(item)] = uint32_t(recs.size());
-        for (const LightVertex &lv : recs) {
-            dst.push_back(lv);
+        const size_t first = dst.size();
+        count[size_t(item)] = uint32_t(VCMLightVertices(ctx_, v, b, n, weights, &dst));
+        for (size_t k = first; k < dst.size(); ++k) {
+            const LightVertex &lv = dst[k];
             const int i = lv.depth;
             // Light tracing (t = 1) from y_i, depth i: w = 1 / (1 + S_L(i)), S_C(0) = 0 (vcm.h).
             if (!connecting_ || i > set_.maxDepth) continue;
-            CameraWiSample cws;
-            Point2 uLens = smp.get2D();
-            if (!scene.camera->sampleWi(AsInteraction(v[i]), uLens, &cws) || cws.pdf == 0) continue;
             PathVertex lens;
-            lens.type = VertexType::Camera;
-            lens.p = cws.pLens.p;
-            lens.ng = cws.pLens.n;
-            lens.ns = cws.pLens.n;
-            if (!EdgeConnectible(ctx_, v[i], lens)) continue;
+            CameraWiSample cws;
+            if (!SampleLensVertex(ctx_, v[i], smp.get2D(), &lens, &cws) || !EdgeConnectible(ctx_, v[i], lens)) continue;
             Spectrum L = v[i].throughput() * EvalBSDF(v[i], b[i], lens, TransportMode::Importance) *
                          (cws.We / cws.pdf) * AbsDot(cws.wi, Vec3(v[i].ns));
             if (L.isBlack() || !scene.unoccluded(AsInteraction(v[i]), cws.pLens)) continue;
             // o_i: camera density of y_i; o_{i-1}: y_i's BSDF from the lens towards y_{i-1}.
-            Float pdfPos, pdfDir;
-            scene.camera->pdfWe(Ray(lens.p, Normalize(v[i].p - lens.p)), &pdfPos, &pdfDir);
-            const Float oi = ToArea(pdfDir, lens.p, v[i]);
+            const Float oi = PdfArea(ctx_, lens, nullptr, nullptr, v[i], TransportMode::Radiance);
             const Float oim1 = b[i].pdf(cws.wi, Vec3(v[i].wo), TransportMode::Radiance) * lv.prevGeom;
             rec.splat(cws.pRaster, L * (splatScale_ / (1 + VCMLightSum(lv, oi, oim1, weights))));
-            ++nLT;
         }
     });
     // Concatenate in item order (chunks hold their items in order).
@@ -308,12 +297,11 @@ void VCMIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
     const Float w = scene.camera->generateRay(cs, &ray);
     if (w == 0) return;
     const int maxCam = set_.maxDepth + 2;
-    PathVertex *z = static_cast<PathVertex *>(arena.alloc(sizeof(PathVertex) * maxCam, alignof(PathVertex)));
-    BSDF *zb = static_cast<BSDF *>(arena.alloc(sizeof(BSDF) * maxCam, alignof(BSDF)));
-    for (int i = 0; i < maxCam; ++i) new (&zb[i]) BSDF();
+    PathVertex *z;
+    BSDF *zb;
+    AllocSubpath(arena, maxCam, &z, &zb);
     const int nC = GenerateCameraSubpath(ctx_, ray, sampler, arena, maxCam, z, zb);
     const bool power = ctx_.heuristic == MISHeuristic::Power;
-    auto mis = [power](Float x) { return power ? x * x : x; };
     const Float eta = eta_;
     const Point2i pixel = rec.pixel();
     const int64_t own = int64_t(pixel.y - bounds_.pMin.y) * bounds_.width() + (pixel.x - bounds_.pMin.x);
@@ -327,8 +315,9 @@ void VCMIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
         const PathVertex &zu = z[u], &zp = z[u - 1];
         const BSDF &bu = zb[u];
         const int depthHere = u - 1;  // edges from the camera to z_u, minus 1
+        const VCMCameraTerms terms = VCMCameraAt(ctx_, z, zb, u, Bc[u], weights);
         auto SC = [&](Float oz, Float oPrev, bool gu, bool emitter = false) {
-            return VCMCameraSum(ctx_, z, zb, u, Bc[u], oz, oPrev, gu, emitter, weights);
+            return VCMCameraSum(terms, oz, oPrev, gu, emitter, weights);
         };
 
         // s = 0: z_u is an emitter (or the infinite lights).
@@ -351,32 +340,20 @@ void VCMIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
             // s = 1: next-event estimation (as ConnectBDPT), depth u.
             Float uSel = sampler.get1D();
             Point2 uLight = sampler.get2D();
-            if (u <= set_.maxDepth) {
-                Float pmf;
-                const Light *lt = ctx_.lightSampler->sample(uSel, &pmf);
-                LightLiSample ls;
-                if (lt && pmf > 0 && lt->sampleLi(AsInteraction(zu), uLight, &ls) && ls.pdf > 0 && !ls.L.isBlack()) {
-                    PathVertex y0;
-                    y0.type = VertexType::Light;
-                    y0.light = lt;
-                    if (IsDeltaLight(lt->flags)) y0.flags |= VERTEX_DELTA_LIGHT;
-                    if (lt->flags & (LIGHT_INFINITE | LIGHT_DELTA_DIRECTION)) y0.flags |= VERTEX_INFINITE;
-                    y0.p = ls.pLight.p;
-                    y0.ng = ls.pLight.n;
-                    y0.ns = ls.pLight.n;
-                    y0.pdfFwd = PdfLightOrigin(ctx_, y0, zu);
-                    if (EdgeConnectible(ctx_, y0, zu)) {
-                        Spectrum c = zu.throughput() * EvalBSDF(zu, bu, y0, TransportMode::Radiance) *
-                                     (ls.L / (ls.pdf * pmf)) * AbsDot(ls.wi, Vec3(zu.ns));
-                        if (!c.isBlack() && scene.unoccluded(AsInteraction(zu), ls.pLight)) {
-                            // S_L(0) = R_0 c_{-1}; S_C(u) with other(z_u) = emission density, other(z_{u-1}) from y_0.
-                            const Float o0 = PdfArea(ctx_, zu, &bu, &zp, y0, TransportMode::Radiance);
-                            const Float SL = y0.isDeltaLight() ? 0 : mis(Remap(o0) / Remap(y0.pdfFwd));
-                            const Float oz = PdfLightDirection(ctx_, y0, zu);
-                            const Float oPrev = PdfArea(ctx_, zu, &bu, &y0, zp, TransportMode::Importance);
-                            L += c / (1 + SL + SC(oz, oPrev, merging_));
-                        }
-                    }
+            PathVertex y0;
+            LightLiSample ls;
+            Spectrum Lw;
+            if (u <= set_.maxDepth && SampleLightVertex(ctx_, zu, uSel, uLight, &y0, &ls, &Lw) &&
+                EdgeConnectible(ctx_, y0, zu)) {
+                const Spectrum c =
+                    zu.throughput() * EvalBSDF(zu, bu, y0, TransportMode::Radiance) * Lw * AbsDot(ls.wi, Vec3(zu.ns));
+                if (!c.isBlack() && scene.unoccluded(AsInteraction(zu), ls.pLight)) {
+                    // S_L(0) = R_0 c_{-1}; S_C(u) with other(z_u) = emission density, other(z_{u-1}) from y_0.
+                    const Float o0 = PdfArea(ctx_, zu, &bu, &zp, y0, TransportMode::Radiance);
+                    const Float SL = y0.isDeltaLight() ? 0 : Mis(Remap(o0) / Remap(y0.pdfFwd), power);
+                    const Float oz = PdfLightDirection(ctx_, y0, zu);
+                    const Float oPrev = PdfArea(ctx_, zu, &bu, &y0, zp, TransportMode::Importance);
+                    L += c / (1 + SL + SC(oz, oPrev, merging_));
                 }
             }
             // s >= 2: connections to the own light subpath's vertices y_i (depth i + u).
@@ -403,16 +380,14 @@ void VCMIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
                     const Float oim1 = by.pdf(-d, Vec3(y.wo), TransportMode::Radiance) * lv.prevGeom;
                     const Float SL = VCMLightSum(lv, oi, oim1, weights);
                     // Camera side: other(z_u) from y_i's BSDF, other(z_{u-1}) from z_u's BSDF with y_i as predecessor.
-                    const Float oz = by.pdf(Vec3(y.wo), -d, TransportMode::Importance) == 0
-                                         ? 0
-                                         : ToArea(by.pdf(Vec3(y.wo), -d, TransportMode::Importance), y.p, zu);
+                    const Float oz = ConvertDensity(by.pdf(Vec3(y.wo), -d, TransportMode::Importance), y, zu);
                     const Float oPrev = PdfArea(ctx_, zu, &bu, &y, zp, TransportMode::Importance);
                     L += c / (1 + SL + SC(oz, oPrev, merging_));
                 }
             }
         }
         // Merges at z_u with every light vertex within r (Eq. 11).
-        if (merging_ && Mergeable(zu, bu)) {
+        if (merging_ && IsMergeable(zu, &bu)) {
             Spectrum Lm(0);
             grid_.query(zu.p, [&](uint32_t k, Float) {
                 const LightVertex &lv = vertices_[k];
@@ -426,11 +401,10 @@ void VCMIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
                     // w_VM = eta o(z_u) / (c + S_L(m-1) + S_C(u)), o(z_u) = pdfFwd of y_m (vcm.h).
                     const Float oz = Remap(lv.pdfFwd);
                     const Float om1 = bu.pdf(Vec3(zu.wo), wi, TransportMode::Radiance) * lv.prevGeom;
-                    const bool gm1 = lv.flags & LightVertex::kPrevMergeable;
-                    const Float SL = (gm1 ? mis(eta * Remap(om1)) : 0) + mis(Remap(om1) / Remap(lv.prevPdfFwd)) * lv.B;
-                    const Float cRef = (lv.flags & LightVertex::kPrevDelta) || !(lv.flags & LightVertex::kPrevEdgeOK) ? 0 : 1;
-                    const Float oPrev = ToArea(bu.pdf(wi, Vec3(zu.wo), TransportMode::Importance), zu.p, zp);
-                    weight = mis(eta * oz) / (cRef + SL + SC(oz, oPrev, true));
+                    const Float SL = VCMLightPrevSum(lv, om1, weights);  // S_L(m-1)
+                    const Float cRef = VCMPrevConnectible(lv) ? 1 : 0;  // the connection of y_{m-1} and z_u
+                    const Float oPrev = ConvertDensity(bu.pdf(wi, Vec3(zu.wo), TransportMode::Importance), zu, zp);
+                    weight = Mis(eta * oz, power) / (cRef + SL + SC(oz, oPrev, true));
                 }
                 Lm += lv.throughput() * f * weight;
             });
@@ -455,7 +429,6 @@ std::string VCMIntegrator::statistics() const {
                   grid_.bytes() / 1e6, (unsigned long long)nMerges_.load(), (unsigned long long)nConnections_.load(),
                   skipped_.empty() ? "" : "; ", skipped_.c_str());
     return std::string(buf) + "\n";
-    // (returned above)
 }
 
 }  // namespace gradus

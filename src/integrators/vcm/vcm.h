@@ -104,18 +104,31 @@ struct VCMWeights {
     bool connecting;  // connections (and light tracing) are strategies
     bool power;       // power heuristic (exponent 2)
 };
-// The stored vertices y_i (i >= 1, non-specular BSDF) of a light subpath with their B_i.
-std::vector<LightVertex> VCMLightVertices(const BidirContext &ctx, const PathVertex *v, const BSDF *b, int n,
-                                          const VCMWeights &w);
+// Appends the stored vertices y_i (i >= 1, non-specular BSDF) of a light subpath
+// with their B_i to *out; returns how many.
+int VCMLightVertices(const BidirContext &ctx, const PathVertex *v, const BSDF *b, int n, const VCMWeights &w,
+                     std::vector<LightVertex> *out);
+// S_L(i-1) for light vertex y_i given o_{i-1} (density of y_{i-1} from y_i
+// towards it), and whether the connection of y_{i-1} and y_i is a strategy (c_{i-1}).
+Float VCMLightPrevSum(const LightVertex &lv, Float oim1, const VCMWeights &w);
+bool VCMPrevConnectible(const LightVertex &lv);
 // S_L(i) of a connection ending at light vertex y_i, given o_i (density of y_i
-// from the camera side) and o_{i-1} (of y_{i-1} from y_i towards it).
+// from the camera side) and o_{i-1}.
 Float VCMLightSum(const LightVertex &lv, Float oi, Float oim1, const VCMWeights &w);
 // B_u of the camera subpath z[0..nC).
 void VCMCameraB(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, int nC, const VCMWeights &w, Float *B);
-// S_C(u) of a strategy ending at camera vertex z_u, given o_u (density of z_u from
-// the light side) and o_{u-1}; gu: merging at z_u is a strategy; emitter: z_u is the light origin (s = 0).
-Float VCMCameraSum(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, int u, Float Bu, Float oz,
-                   Float oPrev, bool gu, bool emitter, const VCMWeights &w);
+// What S_C(u) needs of camera vertex z_u besides the connection (once per vertex).
+struct VCMCameraTerms {
+    bool cPrev, cPrevEmitter;  // c_{u-1} for a connection / merge at z_u, and with z_u as the light origin
+    bool gPrev;                // merging at z_{u-1} is a strategy
+    Float ownU, ownPrev;       // own(z_u), own(z_{u-1}) (deltas as 1)
+    Float B;                   // B_u
+};
+VCMCameraTerms VCMCameraAt(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, int u, Float Bu,
+                           const VCMWeights &w);
+// S_C(u) given o_u (density of z_u from the light side) and o_{u-1}; gu: merging
+// at z_u is a strategy; emitter: z_u is the light origin (s = 0).
+Float VCMCameraSum(const VCMCameraTerms &c, Float oz, Float oPrev, bool gu, bool emitter, const VCMWeights &w);
 
 class VCMIntegrator : public PixelSampleIntegrator, public BidirFamily {
   public:
@@ -127,14 +140,8 @@ class VCMIntegrator : public PixelSampleIntegrator, public BidirFamily {
     std::string statistics() const override;
     void estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const override;
 
-    const VCMSettings &settings() const { return set_; }
-    Float initialRadius() const { return radius1_; }
-    bool merging() const { return merging_; }
     // Merging radius of 1-based iteration i.
     Float radiusAt(int iteration) const;
-    // The last pass's light vertices and their subpath offsets (tests).
-    const std::vector<LightVertex> &lightVertices() const { return vertices_; }
-    const std::vector<uint32_t> &lightPathStart() const { return pathStart_; }
 
   private:
     void lightPass(PassContext &ctx);

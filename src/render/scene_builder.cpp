@@ -322,6 +322,35 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
     return scene;
 }
 
+namespace {
+
+// pbrt-v3's "sppm" is vcm's merging-only mode (progressive photon mapping,
+// vcm.h), which reads sppm's parameters (numiterations, radius, ...); pbrt-v3's
+// defaults of 64 iterations and radius 1 are made explicit.
+void MapPbrtSppm(EntityDesc *d) {
+    if (d->type != "sppm" || std::none_of(IntegratorRegistry().begin(), IntegratorRegistry().end(),
+                                          [](const IntegratorInfo &i) { return i.name == "vcm"; }))
+        return;
+    auto add = [&](const std::string &type, const std::string &name, double number, const std::string &str) {
+        if (d->params.has(name)) return;
+        Param p;
+        p.type = type;
+        p.name = name;
+        p.loc = d->loc;
+        if (type == "string")
+            p.strings = {str};
+        else
+            p.numbers = {number};
+        d->params.add(p);
+    };
+    add("integer", "numiterations", 64, "");
+    add("float", "radius", 1, "");
+    add("string", "mode", 0, "vm");
+    d->type = "vcm";
+}
+
+}  // namespace
+
 RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
     RenderJob job;
     // Film.
@@ -365,43 +394,10 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
         throw Error(fp.locOf("xresolution", fd.loc), e.what());
     }
 
-    // Integrator description (created below). pbrt-v3's "sppm" is vcm's merging-only
-    // mode (progressive photon mapping, vcm.h): numiterations become the samples per
-    // pixel, radius keeps pbrt-v3's default of 1.
-    EntityDesc idesc = desc.integrator;
-    if (!idesc.present) idesc.type = "path";
-    bool overridden = !opts.integratorOverride.empty() && opts.integratorOverride != idesc.type;
-    if (!opts.integratorOverride.empty()) idesc.type = opts.integratorOverride;
-    int sppmIterations = 0;
-    if (idesc.type == "sppm" && std::any_of(IntegratorRegistry().begin(), IntegratorRegistry().end(),
-                                            [](const IntegratorInfo &i) { return i.name == "vcm"; })) {
-        sppmIterations = idesc.params.getInt("numiterations", 64);
-        if (sppmIterations < 1) throw Error(idesc.params.locOf("numiterations", idesc.loc), "\"numiterations\" must be >= 1");
-        if (idesc.params.getInt("photonsperiteration", -1) != -1)
-            throw UnsupportedError(idesc.params.locOf("photonsperiteration", idesc.loc),
-                                   "sppm \"photonsperiteration\" other than -1 (one light subpath per pixel)");
-        idesc.params.getInt("imagewritefrequency", 0);  // accepted: intermediate images are not written
-        auto add = [&](const std::string &type, const std::string &name, double number, const std::string &str) {
-            Param p;
-            p.type = type;
-            p.name = name;
-            p.loc = idesc.loc;
-            if (type == "string")
-                p.strings = {str};
-            else
-                p.numbers = {number};
-            idesc.params.add(p);
-        };
-        if (!idesc.params.has("radius")) add("float", "radius", 1, "");
-        add("string", "mode", 0, "vm");
-        idesc.type = "vcm";
-    }
-
     // Sampler.
     EntityDesc sdesc = desc.sampler;
     if (!sdesc.present) sdesc.type = "halton";
-    int sppOverride = opts.sppOverride > 0 ? opts.sppOverride : sppmIterations;
-    if (opts.quick && opts.sppOverride <= 0 && sppmIterations > 0) sppOverride = std::max(1, sppmIterations / 8);
+    int sppOverride = opts.sppOverride;
     job.sampler = CreateSampler(sdesc, opts.seed, sppOverride);
     if (opts.quick && sppOverride <= 0)
         job.sampler = CreateSampler(sdesc, opts.seed, std::max(1, job.sampler->samplesPerPixel() / 8));
@@ -413,6 +409,11 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
     }
 
     // Integrator.
+    EntityDesc idesc = desc.integrator;
+    if (!idesc.present) idesc.type = "path";
+    bool overridden = !opts.integratorOverride.empty() && opts.integratorOverride != idesc.type;
+    if (!opts.integratorOverride.empty()) idesc.type = opts.integratorOverride;
+    MapPbrtSppm(&idesc);
     ApplyParamOverrides(opts.paramOverrides, &idesc);
     job.integrator = CreateIntegrator(idesc);
     if (overridden) {
@@ -426,9 +427,10 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
             }
     }
     idesc.params.checkUnused("Integrator \"" + idesc.type + "\"");
-    // An integrator with its own sample count (mlt's mutationsperpixel) keeps it
-    // unless --spp is given; it draws no numbers from the sampler, so a "random"
-    // sampler carries the count (a stratified one could round it).
+    // An integrator with its own sample count (mlt's mutationsperpixel, vcm's
+    // numiterations) keeps it unless --spp is given, carried by a "random" sampler
+    // (a stratified one could round it; mlt draws no numbers from it, and pbrt-v3's
+    // sppm ignores the scene's Sampler as well).
     if (const int n = job.integrator->defaultSamplesPerPixel(); n > 0 && sppOverride <= 0) {
         EntityDesc rd;
         rd.type = "random";

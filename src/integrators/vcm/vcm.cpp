@@ -27,6 +27,13 @@ ParamTable<VCMSettings> Table() {
     t.real("radius", &S::radius, 0, "initial merging radius in scene units (0: from the pixel footprint)", AtLeast(0));
     t.real("radiusscale", &S::radiusScale, 1, "the footprint radius in pixels (radius 0)", Range{1e-3, 1e3});
     t.real("radiusalpha", &S::radiusAlpha, 0.75, "radius reduction r_i^2 = r_1^2 i^(alpha - 1)", Range{1e-3, 1});
+    t.integer("numiterations", &S::iterations, 0,
+              "iterations (samples per pixel) unless --spp is given; 0: the sampler's (pbrt-v3 sppm)", AtLeast(0));
+    t.integer("photonsperiteration", &S::photonsPerIteration, -1,
+              "pbrt-v3 sppm: light subpaths per iteration; only -1 (one per sampled pixel)",
+              Range{-1, -1, "vcm traces one light subpath per sampled pixel"});
+    t.integer("imagewritefrequency", &S::imageWriteFrequency, 0,
+              "pbrt-v3 sppm: accepted; intermediate images are not written");
     return t;
 }
 

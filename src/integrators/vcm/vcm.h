@@ -62,6 +62,9 @@
 //   float radius 0                  initial merging radius in scene units (0: from the pixel footprint)
 //   float radiusscale 1             the footprint radius in pixels (radius 0)
 //   float radiusalpha 0.75          radius reduction r_i^2 = r_1^2 i^(alpha - 1)
+//   integer numiterations 0         iterations (samples per pixel) unless --spp is given; 0: the sampler's (pbrt-v3 sppm)
+//   integer photonsperiteration -1  pbrt-v3 sppm: light subpaths per iteration; only -1 (one per sampled pixel)
+//   integer imagewritefrequency 0   pbrt-v3 sppm: accepted; intermediate images are not written
 #pragma once
 #include <atomic>
 #include <string>
@@ -78,6 +81,7 @@ enum class VCMMode { VCM, VC, VM };
 struct VCMSettings : BidirSettings {
     VCMMode mode;
     Float radius, radiusScale, radiusAlpha;
+    int iterations, photonsPerIteration, imageWriteFrequency;
 };
 
 // One stored light vertex y_i (i >= 1, non-specular BSDF). 128 bytes.
@@ -136,6 +140,7 @@ class VCMIntegrator : public PixelSampleIntegrator, public BidirFamily {
     std::string name() const override { return "vcm"; }
     void preprocess(const Scene &scene, Film &film) override;
     int samplesPerPass(const RenderOptions &) const override { return 1; }  // one iteration = 1 spp
+    int defaultSamplesPerPixel() const override { return set_.iterations; }
     void runPass(PassContext &ctx) override;
     std::string statistics() const override;
     void estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const override;

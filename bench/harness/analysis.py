@@ -49,7 +49,7 @@ def summarise(rows):
         g = groups[key]
         s = {"scene": key[0], "integrator": key[1], "budget": key[2], "runs": len(g)}
         for metric in ("seconds", "wall_seconds", "spp", "relmse", "relmse_untrimmed", "mse",
-                       "psnr", "cpu_seconds", "loadavg"):
+                       "psnr", "mean_rel", "cpu_seconds", "loadavg"):
             m, se, _ = mean_stderr([_float(r.get(metric)) for r in g])
             s[metric] = m
             s[metric + "_stderr"] = se

@@ -150,7 +150,7 @@ def _main(args, argv):
         wanted = _names(args.integrators)
         if not wanted:
             raise HarnessError("--integrators is empty")
-    unknown = [n for n in dict.fromkeys(runs.split_label(w)[0] for w in wanted)
+    unknown = [n for n in dict.fromkeys(runs.integrator_params(runs.split_label(w)[0])[0] for w in wanted)
                if n not in available]
     if unknown:
         raise HarnessError("unknown integrator%s %s; gradus --list-integrators offers: %s"

@@ -17,6 +17,15 @@ def _fmt(x, digits=4):
     return html.escape(str(x))
 
 
+def _mean_rel(r):
+    """Relative mean difference to the reference (over the pixels the relMSE uses), in %."""
+    m = r.get("mean_rel")
+    if m is None:
+        return "&ndash;"
+    se = r.get("mean_rel_stderr")
+    return "%+.2f%%" % (100 * m) + (" &plusmn; %.2f" % (100 * se) if se else "")
+
+
 def _pm(m, se):
     if m is None:
         return "&ndash;"
@@ -176,7 +185,7 @@ def scene_section(scene, summary_rows, assets, integrators, baseline, report_bud
     # Table.
     h.append("<table><tr><th class=l>integrator</th><th>budget (s)</th><th>runs</th>"
              "<th>render s</th><th>spp</th><th>relMSE</th><th>relMSE &minus; ref noise</th>"
-             "<th>relMSE untrimmed</th><th>MSE</th><th>PSNR (dB)</th>"
+             "<th>relMSE untrimmed</th><th>MSE</th><th>PSNR (dB)</th><th>mean vs ref</th>"
              "<th title=\"CPU seconds of gradus / wall seconds: below the thread count when the "
              "machine was shared\">cores used</th><th>speed-up vs %s</th></tr>"
              % html.escape(baseline))
@@ -196,13 +205,13 @@ def scene_section(scene, summary_rows, assets, integrators, baseline, report_bud
         net = (r["relmse"] - floor) if (floor is not None and r["relmse"] is not None) else None
         net_txt = _fmt(net) if net is None or net > 0 else '<span class="warn">&le; 0</span>'
         h.append("<tr><td class=l>%s</td><td>%s</td><td>%d</td><td>%s</td><td>%s</td><td>%s</td>"
-                 "<td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td></tr>"
+                 "<td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td><td>%s</td></tr>"
                  % (html.escape(r["integrator"]), _fmt(r["budget"]), r["runs"],
                     _fmt(r["seconds"], 3), _fmt(r["spp"], 5), _pm(r["relmse"], r["relmse_stderr"]),
                     net_txt,
                     _pm(r["relmse_untrimmed"], r["relmse_untrimmed_stderr"]),
                     _pm(r["mse"], r["mse_stderr"]), _pm(r["psnr"], r["psnr_stderr"]),
-                    _cores(r), sp))
+                    _mean_rel(r), _cores(r), sp))
     h.append("</table>")
     h.append('<p class="note">Speed-up: time %s needs to reach the same relMSE (interpolated on its '
              'log-log curve%s) divided by the integrator\'s render time.</p>'

@@ -9,13 +9,14 @@ from . import analysis
 
 # The first seven columns are the interface; the rest document each run.
 CSV_COLUMNS = ["scene", "integrator", "seconds", "spp", "relmse", "mse", "psnr",
-               "budget", "seed", "wall_seconds", "relmse_untrimmed",
+               "budget", "seed", "wall_seconds", "relmse_untrimmed", "mean", "ref_mean", "mean_rel",
                "discard_fraction", "discard_count", "discarded_pixels", "ref_noise",
                "cpu_seconds", "loadavg", "layer", "image", "status", "error"]
 
 SUMMARY_COLUMNS = ["scene", "integrator", "budget", "runs", "seconds", "seconds_stderr", "spp",
                    "relmse", "relmse_stderr", "relmse_untrimmed", "relmse_untrimmed_stderr",
-                   "mse", "mse_stderr", "psnr", "psnr_stderr", "cpu_seconds", "loadavg",
+                   "mse", "mse_stderr", "psnr", "psnr_stderr", "mean_rel", "mean_rel_stderr",
+                   "cpu_seconds", "loadavg",
                    "ref_noise", "speedup",
                    "speedup_extrapolated", "baseline_seconds", "at_noise_floor"]
 
@@ -42,6 +43,18 @@ def split_label(label):
     (gradient integrators write primal, reconstructed_l1, reconstructed_l2, ...)."""
     integ, _, layer = label.partition("/")
     return integ, (layer or None)
+
+
+def integrator_params(integ):
+    """'vcm[mode=vm;radiusscale=2]' -> ('vcm', ['mode=vm', 'radiusscale=2']): an integrator
+    with parameters passed as gradus --param NAME=VALUE (';' separates them, since
+    --integrators is comma-separated)."""
+    name, bracket, rest = integ.partition("[")
+    if not bracket:
+        return integ, []
+    if not rest.endswith("]"):
+        raise ValueError("integrator '%s': parameters must end with ']'" % integ)
+    return name, [p for p in rest[:-1].split(";") if p]
 
 
 def group_labels(labels):
@@ -80,15 +93,16 @@ def measure(tools, scene, integ, labels, budget, seed, args):
     except OSError:
         base["loadavg"] = None
     try:
-        meta, wall = tools.render(scene.scene, path, integrator=integ, seconds=budget,
-                                  seed=seed, nthreads=args.nthreads)
+        name, params = integrator_params(integ)
+        meta, wall = tools.render(scene.scene, path, integrator=name, seconds=budget,
+                                  seed=seed, nthreads=args.nthreads, params=params)
         base["wall_seconds"] = wall
         base["cpu_seconds"] = tools.last_cpu_seconds
         base["seconds"] = float(meta.get("render_seconds", wall))
         base["spp"] = int(float(meta.get("spp", 0)))
-        if meta.get("integrator") and meta["integrator"] != integ:
+        if meta.get("integrator") and meta["integrator"] != name:
             raise RuntimeError("image metadata says integrator '%s', asked for '%s'"
-                               % (meta["integrator"], integ))
+                               % (meta["integrator"], name))
     except RuntimeError as e:
         base["status"] = "failed"
         base["error"] = str(e).replace("\n", " ")
@@ -104,6 +118,11 @@ def measure(tools, scene, integ, labels, budget, seed, args):
                 row["mse"] = d["mse"]
                 row["psnr"] = d["psnr"]
                 row["discarded_pixels"] = d.get("discarded_pixels", 0)
+                # Means over the pixels the relMSE uses: a lower relMSE bought by losing
+                # energy shows here.
+                row["mean"] = d.get("mean_image")
+                row["ref_mean"] = d.get("mean_reference")
+                row["mean_rel"] = d.get("mean_rel_diff")
                 if frac or count:
                     row["relmse_untrimmed"] = tools.diff(path, scene.reference,
                                                          layer=layer)["relmse"]

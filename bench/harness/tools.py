@@ -71,11 +71,13 @@ class Tools:
         return names
 
     def render(self, scene, outfile, integrator=None, seconds=None, spp=None, seed=0,
-               nthreads=None):
+               nthreads=None, params=()):
         """Render and return (metadata dict, harness-measured wall seconds)."""
         argv = [self.gradus, scene, "--outfile", outfile, "--seed", str(seed), "--quiet"]
         if integrator:
             argv += ["--integrator", integrator]
+        for p in params:
+            argv += ["--param", p]
         if seconds is not None:
             argv += ["--time", _num(seconds)]
         if spp is not None:

@@ -39,6 +39,27 @@ class HarnessTiny(unittest.TestCase):
         with open(os.path.join(self.out, "results.csv"), newline="") as f:
             return list(csv.DictReader(f))
 
+    def test_integrator_parameters_and_means(self):
+        # NAME[P=V;...] passes --param P=V; the means beside relMSE are imgtool's, and
+        # a render that loses energy (maxdepth 0: emitters seen directly only) shows it.
+        out = os.path.join(self.tmp, "out-params")
+        p = bu.harness(BIN, "--scenes", bu.TINY, "--integrators", "path,path[maxdepth=0]",
+                       "--times", "0.5", "--refdir", self.refdir, "--out", out, "--nthreads", 2,
+                       "--quiet", tmp=self.tmp)
+        self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
+        with open(os.path.join(out, "results.csv"), newline="") as f:
+            rows = {r["integrator"]: r for r in csv.DictReader(f)}
+        self.assertEqual(set(rows), {"path", "path[maxdepth=0]"})
+        for r in rows.values():
+            self.assertEqual(r["status"], "ok", r["error"])
+            # The CSV keeps 6 significant digits of each number.
+            self.assertAlmostEqual(float(r["mean_rel"]), float(r["mean"]) / float(r["ref_mean"]) - 1, delta=1e-4)
+        self.assertLess(float(rows["path[maxdepth=0]"]["mean"]), 0.8 * float(rows["path"]["mean"]))
+        meta = json.loads(subprocess.run([os.path.join(BIN, "imgtool"), "info", "--json",
+                                          os.path.join(out, rows["path[maxdepth=0]"]["image"])],
+                                         capture_output=True, text=True, check=True).stdout)["metadata"]
+        self.assertIn('"integer maxdepth" 0', meta["integrator_parameters"])
+
     def test_run_succeeds(self):
         self.assertEqual(self.proc.returncode, 0, self.proc.stdout + self.proc.stderr)
 

@@ -120,9 +120,7 @@ Worker &PassContext::worker() const {
     return w;
 }
 
-bool PassContext::interrupted() const { return InterruptRequested(); }
-
-bool PassContext::skipOnInterrupt() const { return pass_ > 0 && InterruptRequested(); }
+bool PassContext::interrupted() const { return pass_ > 0 && InterruptRequested(); }
 
 void PassContext::addNonFinite(uint64_t n) { shared_.nonFinite += n; }
 
@@ -130,7 +128,7 @@ void PassContext::forEachTile(const TileFn &fn) {
     const int n = tiles_.count();
     std::vector<std::unique_ptr<FilmTile>> out(n);
     tbb::parallel_for(0, n, [&](int t) {
-        if (skipOnInterrupt()) return;
+        if (interrupted()) return;
         Bounds2i tb = tiles_.tile(t);
         auto tile = film_.makeTile(tb);
         fn(t, tb, *tile, worker());
@@ -184,7 +182,7 @@ void PassContext::forEachItem(int64_t n, uint64_t tag, const ItemFn &fn) {
     std::vector<std::unique_ptr<FilmTile>> out(size_t(std::max<int64_t>(0, chunks)));
     const uint64_t key = seed() ^ tag;
     tbb::parallel_for(int64_t(0), chunks, [&](int64_t c) {
-        if (skipOnInterrupt()) return;
+        if (interrupted()) return;
         auto tile = film_.makeSplatTile();
         Worker &w = worker();
         uint64_t bad = 0;

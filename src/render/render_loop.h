@@ -118,7 +118,10 @@ class PassContext {
     int firstSample() const { return firstSample_; }  // pixel samples [first, first + count) of this pass
     int sampleCount() const { return sampleCount_; }
     const TileGrid &tiles() const { return tiles_; }  // tiles of the film's sample bounds
-    bool interrupted() const;                         // Ctrl-C / SIGTERM: return early
+    // Ctrl-C / SIGTERM: return early. Never in the first pass, which always runs
+    // whole (so an interrupted render has an image even when the interrupt came
+    // during a long first beginPass, such as mlt's bootstrap).
+    bool interrupted() const;
     bool debugging() const { return opts_.debug; }
 
     // Per-pixel-sample work: every pixel of the sample bounds, samples
@@ -132,10 +135,8 @@ class PassContext {
     // is keyed by (seed, tag, pass, item); the recorder's splats go to the
     // film, merged in item order (chunks of kItemChunk items; the items of one
     // chunk run in order on one thread, so per-chunk output needs no locking).
-    // After an interrupt, forEachTile and forEachItem skip the tiles / chunks
-    // not started yet, except in the first pass, which always runs whole: an
-    // interrupted render never ends with an empty image because the interrupt
-    // came during a long first beginPass (mlt's bootstrap).
+    // When interrupted(), forEachTile and forEachItem skip the tiles / chunks
+    // not started yet.
     static constexpr int64_t kItemChunk = 256;
     using ItemFn = std::function<void(int64_t, RNG &, SampleRecorder &, Worker &)>;
     void forEachItem(int64_t n, uint64_t tag, const ItemFn &fn);
@@ -153,7 +154,6 @@ class PassContext {
                 const TileGrid &tiles, Shared &shared)
         : scene_(scene), film_(film), sampler_(sampler), opts_(opts), tiles_(tiles), shared_(shared) {}
     Worker &worker() const;
-    bool skipOnInterrupt() const;
     const Scene &scene_;
     Film &film_;
     const Sampler &sampler_;

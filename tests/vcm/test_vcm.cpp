@@ -38,8 +38,9 @@ TEST(PhotonGrid, QueriesEqualBruteForce) {
     pts.push_back(pts[5]);                                                                          // a duplicate
     for (double r : {0.003, 0.02, 0.1}) {
         PhotonGrid a, b;
-        a.build(pts, r, Serial(false));
-        b.build(pts, r, Serial(true));
+        auto at = [&](size_t i) { return pts[i]; };
+        a.build(pts.size(), at, r, Serial(false));
+        b.build(pts.size(), at, r, Serial(true));
         for (int q = 0; q < 300; ++q) {
             Point3 p = q < 100 ? pts[q * 37] : Point3(u(rng), u(rng), u(rng));
             std::vector<uint32_t> got, got2, want;

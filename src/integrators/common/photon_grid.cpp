@@ -8,12 +8,13 @@
 
 namespace gradus {
 
-void PhotonGrid::build(const std::vector<Point3> &points, Float radius, const ParallelFor &pf) {
-    GRADUS_CHECK(radius > 0 && points.size() < (uint64_t(1) << 32));
+void PhotonGrid::build(size_t numPoints, const std::function<Point3(size_t)> &position, Float radius,
+                       const ParallelFor &pf) {
+    GRADUS_CHECK(radius > 0 && numPoints < (uint64_t(1) << 32));
     radius_ = radius;
     r2_ = radius * radius;
     invCell_ = 1 / (2 * radius);
-    const int64_t n = int64_t(points.size());
+    const int64_t n = int64_t(numPoints);
     uint64_t tableSize = 1;
     while (tableSize < uint64_t(std::max<int64_t>(n, 1))) tableSize <<= 1;
     mask_ = tableSize - 1;
@@ -25,7 +26,7 @@ void PhotonGrid::build(const std::vector<Point3> &points, Float radius, const Pa
     });
     pf(n, 4096, [&](int64_t i0, int64_t i1) {
         for (int64_t i = i0; i < i1; ++i) {
-            const Point3 &p = points[i];
+            const Point3 p = position(size_t(i));
             const Float fx = std::floor(p.x * invCell_), fy = std::floor(p.y * invCell_), fz = std::floor(p.z * invCell_);
             // Points beyond +-4e18 cells (|p| > 8e18 r) cannot be queried; they go to bucket 0 and are never near.
             const bool ok = std::abs(fx) < 4e18 && std::abs(fy) < 4e18 && std::abs(fz) < 4e18;
@@ -51,7 +52,7 @@ void PhotonGrid::build(const std::vector<Point3> &points, Float radius, const Pa
     });
     points_.resize(size_t(n));
     pf(n, 4096, [&](int64_t k0, int64_t k1) {
-        for (int64_t k = k0; k < k1; ++k) points_[k] = points[index_[k]];
+        for (int64_t k = k0; k < k1; ++k) points_[k] = position(index_[k]);
     });
 }
 

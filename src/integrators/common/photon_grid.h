@@ -19,8 +19,8 @@ class PhotonGrid {
   public:
     // fn(begin, end) over fixed ranges of [0, n); may run ranges in parallel.
     using ParallelFor = std::function<void(int64_t n, int64_t grain, const std::function<void(int64_t, int64_t)> &)>;
-    // Indexes points[0..n) for queries of radius `radius` (> 0).
-    void build(const std::vector<Point3> &points, Float radius, const ParallelFor &pf);
+    // Indexes the points position(0..n) for queries of radius `radius` (> 0).
+    void build(size_t n, const std::function<Point3(size_t)> &position, Float radius, const ParallelFor &pf);
     // Calls fn(index, squared distance) for every point closer than the radius to p.
     template <typename Fn>
     void query(const Point3 &p, Fn &&fn) const;

@@ -238,9 +238,8 @@ void VCMIntegrator::runPass(PassContext &ctx) {
     lightPass(ctx);
     if (ctx.interrupted()) return;
     if (merging_) {
-        std::vector<Point3> pts(vertices_.size());
-        for (size_t i = 0; i < pts.size(); ++i) pts[i] = vertices_[i].p;
-        grid_.build(pts, radius_, [&](int64_t n, int64_t grain, const std::function<void(int64_t, int64_t)> &fn) {
+        grid_.build(vertices_.size(), [&](size_t i) { return vertices_[i].p; }, radius_,
+                    [&](int64_t n, int64_t grain, const std::function<void(int64_t, int64_t)> &fn) {
             ctx.parallelFor(n, grain, [&](int64_t b, int64_t e, Worker &) { fn(b, e); });
         });
     }

@@ -111,6 +111,14 @@ std::unique_ptr<Camera> CreateCamera(const CameraDesc &desc, Point2i res) {
     Float fov = ps.getFloat("fov", 90);
     Float halffov = ps.getFloat("halffov", -1);
     if (halffov > 0) fov = 2 * halffov;
+    // Gradus extension (glTF cameras): "yfov" is the vertical field of view
+    // whatever the image's aspect ratio.
+    if (ps.has("yfov")) {
+        if (ps.has("fov") || ps.has("halffov") || !swp.empty())
+            throw Error(ps.locOf("yfov", desc.loc), "\"yfov\" excludes \"fov\", \"halffov\" and \"screenwindow\"");
+        fov = ps.getFloat("yfov", 60);
+        sw[0] = -aspect, sw[1] = aspect, sw[2] = -1, sw[3] = 1;
+    }
     if (!(fov > 0 && fov < 180)) throw Error(ps.locOf("fov", desc.loc), "\"fov\" must be in (0, 180) degrees");
     if (lensRadius < 0) throw Error(ps.locOf("lensradius", desc.loc), "\"lensradius\" must be >= 0");
     // Lengths beyond 1e15 scene units leave the range the ray tracer (Embree,

@@ -96,25 +96,28 @@ class PointLight : public Light {
 // ---------------------------------------------------------------- spot light
 class SpotLight : public Light {
   public:
-    SpotLight(const Transform &w, const Spectrum &I, Float coneAngle, Float coneDelta)
-        : Light(LIGHT_DELTA_POSITION, w), pos_(w.applyPoint(Point3(0, 0, 0))), I_(I) {
+    // gltfFalloff: KHR_lights_punctual's recommended attenuation instead of pbrt-v3's.
+    SpotLight(const Transform &w, const Spectrum &I, Float coneAngle, Float coneDelta, bool gltfFalloff = false)
+        : Light(LIGHT_DELTA_POSITION, w), pos_(w.applyPoint(Point3(0, 0, 0))), I_(I), gltf_(gltfFalloff) {
         dir_ = Normalize(w.applyVector(Vec3(0, 0, 1)));
         frame_ = Frame(dir_);
         cosTotal_ = std::cos(Radians(coneAngle));
         cosFalloffStart_ = std::cos(Radians(coneAngle - coneDelta));
     }
-    // pbrt-v3's smooth falloff: ((cos - cosTotal) / (cosStart - cosTotal))^4.
+    // pbrt-v3's smooth falloff: ((cos - cosTotal) / (cosStart - cosTotal))^4; glTF
+    // (KHR_lights_punctual, "Inner and Outer Cone Angles"): the same ratio squared.
     Float falloff(const Vec3 &w) const {
         Float c = Dot(w, dir_);
         if (c < cosTotal_) return 0;
         if (c >= cosFalloffStart_) return 1;
         Float delta = (c - cosTotal_) / (cosFalloffStart_ - cosTotal_);
-        return (delta * delta) * (delta * delta);
+        return gltf_ ? delta * delta : (delta * delta) * (delta * delta);
     }
-    // Exact integral of I falloff over the sphere: the quartic ramp integrates to
-    // (cosStart - cosTotal) / 5 in cos(theta) (pbrt-v3 used a midpoint approximation).
+    // Exact integral of I falloff over the sphere: the ramp delta^k integrates to
+    // (cosStart - cosTotal) / (k + 1) in cos(theta) (pbrt-v3 used a midpoint approximation).
     Spectrum power() const override {
-        return I_ * (2 * Pi * ((1 - cosFalloffStart_) + (cosFalloffStart_ - cosTotal_) / 5));
+        Float ramp = (cosFalloffStart_ - cosTotal_) / (gltf_ ? 3 : 5);
+        return I_ * (2 * Pi * ((1 - cosFalloffStart_) + ramp));
     }
     bool sampleLi(const Interaction &ref, Point2, LightLiSample *s) const override {
         Vec3 d = pos_ - ref.p;
@@ -148,6 +151,7 @@ class SpotLight : public Light {
     Frame frame_;
     Spectrum I_;
     Float cosTotal_, cosFalloffStart_;
+    bool gltf_;
 };
 
 // -------------------------------------------------------------- distant light
@@ -326,7 +330,10 @@ std::shared_ptr<Light> CreateLight(const LightDesc &desc, const SceneDesc &scene
         // Light space: +z along (to - from).
         Frame f(Normalize(dir));
         Matrix4 m(f.s.x, f.t.x, f.n.x, from.x, f.s.y, f.t.y, f.n.y, from.y, f.s.z, f.t.z, f.n.z, from.z, 0, 0, 0, 1);
-        light = std::make_shared<SpotLight>(desc.worldFromLight * Transform(m), I, cone, delta);
+        std::string fo = ps.getString("falloff", "pbrt");
+        if (fo != "pbrt" && fo != "gltf")
+            throw Error(ps.locOf("falloff", desc.loc), "spot light: unknown \"falloff\" \"" + fo + "\" (known: pbrt, gltf)");
+        light = std::make_shared<SpotLight>(desc.worldFromLight * Transform(m), I, cone, delta, fo == "gltf");
     } else if (t == "distant") {
         Spectrum L = ps.getSpectrum("L", Spectrum(1), SpectrumKind::Illuminant) * scale;
         Point3 from = ps.getPoint3("from", Point3(0, 0, 0)), to = ps.getPoint3("to", Point3(0, 0, 1));

@@ -12,6 +12,7 @@
 #include <string_view>
 
 #include "core/provenance.h"
+#include "parser/gltf.h"
 #include "parser/scene_desc.h"
 
 namespace gradus {
@@ -157,7 +158,7 @@ enum class Dir {
     Transform, ConcatTransform, CoordinateSystem, CoordSysTransform, ActiveTransform, TransformTimes,
     Identity, ReverseOrientation, WorldBegin, WorldEnd, AttributeBegin, AttributeEnd, TransformBegin,
     TransformEnd, ObjectBegin, ObjectEnd, ObjectInstance, Material, MakeNamedMaterial, NamedMaterial,
-    Texture, LightSource, AreaLightSource, Shape, MakeNamedMedium, MediumInterface, Include
+    Texture, LightSource, AreaLightSource, Shape, MakeNamedMedium, MediumInterface, Include, GltfAsset
 };
 
 Dir LookupDirective(std::string_view w) {
@@ -177,6 +178,7 @@ Dir LookupDirective(std::string_view w) {
         {"Texture", Dir::Texture}, {"LightSource", Dir::LightSource}, {"AreaLightSource", Dir::AreaLightSource},
         {"Shape", Dir::Shape}, {"MakeNamedMedium", Dir::MakeNamedMedium},
         {"MediumInterface", Dir::MediumInterface}, {"Include", Dir::Include},
+        {"GltfAsset", Dir::GltfAsset},
     };
     for (const auto &e : table)
         if (w == e.first) return e.second;
@@ -854,6 +856,22 @@ class Parser {
                 // The peeked token (if any) belongs after the Include: none is
                 // pending here because expectString consumed the only lookahead.
                 pushFile(std::move(text), path, DirectoryOf(path));
+                break;
+            }
+            case Dir::GltfAsset: {
+                // Gradus extension: GltfAsset "file.gltf|glb" ["string camera" "NAME"]
+                // places a glTF asset's meshes, materials and lights under the CTM;
+                // with "camera", that camera of the asset replaces the scene's Camera.
+                requireWorld(t);
+                if (!currentInstance_.empty()) fail(t, "GltfAsset inside ObjectBegin");
+                Token ft = peek();
+                std::string f = expectString(dn, "glTF file name");
+                ParamSet ps = parseParams();
+                GltfOptions go;
+                go.camera = ps.getString("camera", "");
+                ps.checkUnused("GltfAsset");
+                noteMotion(t);
+                AddGltfAsset(JoinPath(active_.back()->dir(), f), ctm_[0], go, !go.camera.empty(), locOf(ft), scene_);
                 break;
             }
             case Dir::Unknown: break;

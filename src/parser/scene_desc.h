@@ -4,6 +4,7 @@
 // Embree geometry, materials, lights, camera and film.
 #pragma once
 #include <map>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -65,6 +66,15 @@ struct MediumDesc : EntityDesc {
     Transform worldFromMedium;
 };
 
+// A decoded image held in memory (glTF images): texels row by row from the
+// top row, `channels` values each, as stored (not linearised), in 1/65535
+// units (8-bit values are scaled by 257). "gltfimage" textures read it.
+struct EmbeddedImage {
+    std::string name;
+    int width = 0, height = 0, channels = 0;
+    std::vector<uint16_t> texels;
+};
+
 struct SceneDesc {
     CameraDesc camera;
     EntityDesc film, sampler, filter, integrator, accelerator;
@@ -77,6 +87,9 @@ struct SceneDesc {
     std::map<std::string, InstanceDesc> instances;
     std::vector<InstanceUseDesc> instanceUses;
     std::vector<MediumDesc> media;
+    std::vector<std::shared_ptr<const EmbeddedImage>> images;  // "integer image" of gltfimage textures
+    // Messages for the user from loading (e.g. a glTF file's defaults and ignored features).
+    std::vector<std::string> notes;
     // TransformTimes and the end transforms are parsed; an entity whose start
     // and end transforms differ (motion blur) is refused by the scene builder
     // at motionLoc. Media are refused there too.

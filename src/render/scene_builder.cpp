@@ -353,6 +353,7 @@ void MapPbrtSppm(EntityDesc *d) {
 
 RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
     RenderJob job;
+    job.warnings = desc.notes;
     // Film.
     const EntityDesc &fd = desc.film;
     if (fd.present && fd.type != "image")
@@ -366,6 +367,7 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
             throw Error(fp.locOf(n, fd.loc), std::string("\"") + n + "\" must be in [1, " + std::to_string(kMaxSide) +
                                                  "], got " + std::to_string(v));
     }
+    if (opts.resolution.x > 0 && opts.resolution.y > 0) res = opts.resolution;
     if (opts.quick) res = {std::max(1, res.x / 4), std::max(1, res.y / 4)};
     Float crop[4] = {0, 1, 0, 1};
     std::vector<Float> cw = fp.getFloats("cropwindow");

@@ -3,6 +3,7 @@
 
 #include "materials/material.h"
 #include "image/image.h"
+#include "textures/gltf_texture.h"
 #include "textures/textures.h"
 
 namespace gradus {
@@ -514,11 +515,12 @@ std::shared_ptr<FloatTexture> MakeFloatTexture(const TextureDesc &d, const Scene
                                                const NamedTextures &tex) {
     if (d.type == "uv" || d.type == "marble")
         throw Error(d.loc, "texture \"" + d.type + "\" is a spectrum texture and cannot be declared \"float\"");
+    if (d.type == "gltfimage") return MakeGltfFloatTexture(d, scene);
     auto t = MakeTexture<Float>(d, scene, tex);
     if (!t)
         throw Error(d.loc, "unknown texture type \"" + d.type +
                                "\" (known: constant, scale, mix, bilerp, imagemap, checkerboard, dots, fbm, "
-                               "wrinkled, windy, uv, marble)");
+                               "wrinkled, windy, uv, marble, gltfimage)");
     return t;
 }
 
@@ -530,11 +532,12 @@ std::shared_ptr<SpectrumTexture> MakeSpectrumTexture(const TextureDesc &d, const
         return std::make_shared<MarbleTexture>(TextureMapping3D(d.worldFromTexture), p.getInt("octaves", 8),
                                                p.getFloat("roughness", 0.5), p.getFloat("scale", 1),
                                                p.getFloat("variation", 0.2));
+    if (d.type == "gltfimage") return MakeGltfSpectrumTexture(d, scene);
     auto t = MakeTexture<Spectrum>(d, scene, tex);
     if (!t)
         throw Error(d.loc, "unknown texture type \"" + d.type +
                                "\" (known: constant, scale, mix, bilerp, imagemap, checkerboard, dots, fbm, "
-                               "wrinkled, windy, uv, marble)");
+                               "wrinkled, windy, uv, marble, gltfimage)");
     return t;
 }
 

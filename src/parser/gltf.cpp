@@ -556,6 +556,7 @@ class Loader {
         int texCoord = 0;      // uv set the material's textures read
         bool normalMap = false;
         Spectrum emission;     // emissiveFactor * emissiveStrength
+        std::string emissionTexture;  // emissiveTexture (area light "Lmap")
         bool doubleSided = false;
         std::string alphaTexture;  // MASK with a base colour texture
         bool cutAway = false;      // MASK with a constant alpha below the cutoff
@@ -657,8 +658,13 @@ class Loader {
             info.emission = Spectrum(m.emissiveFactor[0], m.emissiveFactor[1], m.emissiveFactor[2]) * strength;
             if (!(info.emission.r >= 0 && info.emission.g >= 0 && info.emission.b >= 0) || !info.emission.isFinite())
                 fail(ptr + "/emissiveFactor", "emission must be finite and non-negative");
-            if (m.emissiveTexture.index >= 0 && !info.emission.isBlack())
-                note(ptr + ": emissiveTexture is not read; the primitive emits emissiveFactor uniformly");
+            if (m.emissiveTexture.index >= 0 && !info.emission.isBlack()) {
+                int s;
+                info.emissionTexture = makeTexture(m.emissiveTexture, m.emissiveTexture.texCoord, ptr + "/emissiveTexture",
+                                                   "spectrum", "rgb", true, {1, 1, 1, 1}, -1, &s);
+                useSet(s, ptr + "/emissiveTexture");
+                noteOnce("emissive textures emit their mean over each triangle (piecewise constant emission)");
+            }
             info.doubleSided = m.doubleSided;
             if (m.alphaMode == "MASK") {
                 if (pbr.baseColorTexture.index >= 0) {
@@ -1001,6 +1007,7 @@ class Loader {
                         al.present = true;
                         addNumbers(al.params, "rgb", "L", {mat.emission.r, mat.emission.g, mat.emission.b}, sd.loc);
                         addBool(al.params, "twosided", mat.doubleSided, sd.loc);
+                        if (!mat.emissionTexture.empty()) addTextureRef(al.params, "Lmap", mat.emissionTexture, sd.loc);
                         sd.areaLight = int(desc_->areaLights.size());
                         desc_->areaLights.push_back(std::move(al));
                         emissive_ = true;

@@ -253,6 +253,18 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
                 throw Error(ad.loc, "unknown area light \"" + ad.type + "\" (valid: diffuse, area)");
             Spectrum L = ad.params.getSpectrum("L", Spectrum(1), SpectrumKind::Illuminant) * ad.params.getSpectrum("scale", Spectrum(1));
             bool twoSided = ad.params.getBool("twosided", false);
+            // Gradus extension (glTF emissive textures): "texture Lmap" scales L per
+            // triangle by the texture's mean over the triangle (4x4 stratified
+            // barycentric points): emission stays piecewise constant per triangle.
+            std::shared_ptr<SpectrumTexture> lmap;
+            if (ad.params.has("Lmap")) {
+                std::string tn = ad.params.getTexture("Lmap");
+                auto it = textures.spectra.find(tn);
+                if (tn.empty() || it == textures.spectra.end())
+                    throw Error(ad.params.locOf("Lmap", ad.loc), "\"Lmap\": unknown spectrum texture \"" + tn + "\"");
+                if (!b.mesh) throw UnsupportedError(ad.params.locOf("Lmap", ad.loc), "\"Lmap\" on non-triangle shapes");
+                lmap = it->second;
+            }
             ad.params.getInt("nsamples", 1);
             ad.params.checkUnused("AreaLightSource \"" + ad.type + "\"");
             if (b.mesh) {
@@ -262,7 +274,24 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
                         rec.areaLights.push_back(nullptr);
                         continue;
                     }
-                    auto al = std::make_shared<AreaLight>(tri, L, twoSided);
+                    Spectrum Lt = L;
+                    if (lmap) {
+                        Spectrum sum(0);
+                        for (int i = 0; i < 4; ++i)
+                            for (int j = 0; j < 4; ++j) {
+                                // Stratified uniform points on the triangle (square-root mapping).
+                                Float su = std::sqrt((i + 0.5) / 4), v = (j + 0.5) / 4;
+                                SurfaceInteraction si;
+                                b.mesh->interaction(t, su * (1 - v), su * v, Vec3(0, 0, 1), &si);
+                                sum += lmap->evaluate(si);
+                            }
+                        Lt = L * (sum / 16);
+                        if (Lt.isBlack()) {
+                            rec.areaLights.push_back(nullptr);
+                            continue;
+                        }
+                    }
+                    auto al = std::make_shared<AreaLight>(tri, Lt, twoSided);
                     rec.areaLights.push_back(al.get());
                     scene->lights.push_back(al);
                 }

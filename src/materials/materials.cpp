@@ -1,8 +1,10 @@
 // pbrt-v3 materials: matte, plastic, metal, mirror, glass, uber, substrate,
 // translucent, mix (+ "bumpmap" on each). Parameter names and defaults follow pbrt-v3.
+// "gltfpbr" (glTF 2.0 metallic-roughness) lives in gltf_pbr.cpp.
 #include <vector>
 
 #include "materials/bxdfs.h"
+#include "materials/gltf_pbr.h"
 #include "materials/material.h"
 #include "materials/material_util.h"
 
@@ -375,8 +377,9 @@ std::shared_ptr<Material> CreateMaterial(const MaterialDesc &desc, const NamedTe
         m->rough = ReadRoughness(p, tex, loc, nullptr, nullptr, "roughness", 0.1);
         return m;
     }
+    if (t == "gltfpbr") return CreateGltfPbrMaterial(p, tex, loc, bump);
     throw Error(loc, "unknown material type \"" + t +
-                         "\" (known: matte, plastic, metal, mirror, glass, uber, substrate, translucent, mix)");
+                         "\" (known: matte, plastic, metal, mirror, glass, uber, substrate, translucent, mix, gltfpbr)");
 }
 
 }  // namespace gradus

@@ -1,63 +1,16 @@
 // pbrt-v3 materials: matte, plastic, metal, mirror, glass, uber, substrate,
 // translucent, mix (+ "bumpmap" on each). Parameter names and defaults follow pbrt-v3.
+// "gltfpbr" (glTF 2.0 metallic-roughness) lives in gltf_pbr.cpp.
 #include <vector>
 
 #include "materials/bxdfs.h"
+#include "materials/gltf_pbr.h"
 #include "materials/material.h"
+#include "materials/material_util.h"
 
 namespace gradus {
+using namespace matutil;
 namespace {
-
-Spectrum ClampNeg(const Spectrum &s) { return {std::max(0.0, s.r), std::max(0.0, s.g), std::max(0.0, s.b)}; }
-
-bool NonConstant(const std::shared_ptr<FloatTexture> &t) { return t && !t->isConstant(); }
-bool NonConstant(const std::shared_ptr<SpectrumTexture> &t) { return t && !t->isConstant(); }
-
-// Smallest value a float texture can take, when known (constant); else -1.
-Float ConstantOr(const std::shared_ptr<FloatTexture> &t, Float unknown) {
-    if (auto c = dynamic_cast<const ConstantTexture<Float> *>(t.get())) return c->value();
-    return unknown;
-}
-
-// Material with optional bump map (pbrt-v3 semantics: displacement along the
-// shading normal, finite differences in u and v).
-class BumpMaterial : public Material {
-  public:
-    explicit BumpMaterial(std::shared_ptr<FloatTexture> bump) : bump_(std::move(bump)) {}
-    BSDF getBSDF(SurfaceInteraction &si, Arena &arena, TransportMode mode) const override {
-        if (bump_) ApplyBump(*bump_, si);
-        const BxDF *b = build(si, arena, mode);
-        return b ? BSDF(si, b) : BSDF();
-    }
-    // The BxDF at si (after bump mapping); nullptr for "no surface" (e.g. fully black glass).
-    virtual const BxDF *build(const SurfaceInteraction &si, Arena &arena, TransportMode mode) const = 0;
-    bool hasTextures() const override { return NonConstant(bump_) || texturesVary(); }
-    virtual bool texturesVary() const = 0;
-
-    static void ApplyBump(const FloatTexture &d, SurfaceInteraction &si) {
-        // Without ray differentials a fixed small step in (u, v) is used, as pbrt-v3 does
-        // when the differentials are zero.
-        const Float du = 0.0005, dv = 0.0005;
-        SurfaceInteraction e = si;
-        e.p = si.p + si.shading.dpdu * du;
-        e.uv = si.uv + Point2(du, 0);
-        Float uDisp = d.evaluate(e);
-        e.p = si.p + si.shading.dpdv * dv;
-        e.uv = si.uv + Point2(0, dv);
-        Float vDisp = d.evaluate(e);
-        Float disp = d.evaluate(si);
-        Vec3 dpdu = si.shading.dpdu + si.shading.n * ((uDisp - disp) / du) + si.shading.dndu * disp;
-        Vec3 dpdv = si.shading.dpdv + si.shading.n * ((vDisp - disp) / dv) + si.shading.dndv * disp;
-        if (Cross(dpdu, dpdv).lengthSquared() == 0) return;
-        // Keep the perturbed normal on the side of the unperturbed shading normal.
-        Vec3 nOld = si.shading.n;
-        si.setShadingGeometry(dpdu, dpdv, si.shading.dndu, si.shading.dndv, false);
-        if (Dot(si.shading.n, nOld) < 0) si.shading.n = -si.shading.n;
-    }
-
-  private:
-    std::shared_ptr<FloatTexture> bump_;
-};
 
 // Roughness parameters shared by the microfacet materials.
 struct Roughness {
@@ -424,8 +377,9 @@ std::shared_ptr<Material> CreateMaterial(const MaterialDesc &desc, const NamedTe
         m->rough = ReadRoughness(p, tex, loc, nullptr, nullptr, "roughness", 0.1);
         return m;
     }
+    if (t == "gltfpbr") return CreateGltfPbrMaterial(p, tex, loc, bump);
     throw Error(loc, "unknown material type \"" + t +
-                         "\" (known: matte, plastic, metal, mirror, glass, uber, substrate, translucent, mix)");
+                         "\" (known: matte, plastic, metal, mirror, glass, uber, substrate, translucent, mix, gltfpbr)");
 }
 
 }  // namespace gradus

@@ -67,6 +67,7 @@ GltfPbrBxDF::GltfPbrBxDF(const Spectrum &baseColor, Float metallic, Float alpha,
 
 Float GltfPbrBxDF::roughness() const { return smoothR_ || (hasTrans_ && smoothT_) ? 0 : alpha_; }
 
+// Appendix B, fresnel_mix: F = f0 + (1 - f0)(1 - |V.H|)^5.
 Float GltfPbrBxDF::fresnelD(Float c) const { return f0_ + (1 - f0_) * Pow5(1 - Clamp01(c)); }
 
 Spectrum GltfPbrBxDF::fresnelMix(Float c) const {
@@ -113,7 +114,8 @@ Spectrum GltfPbrBxDF::f(const Vec3 &wo, const Vec3 &wi, TransportMode mode) cons
     Float oh = Dot(wo, wh), ih = Dot(wi, wh);
     Float denom = Sqr(ih + oh / etap);
     if (!(denom > 0)) return Spectrum(0);
-    // Walter et al. 2007, Eq. 21 (divided by eta_o^2, Fresnel left out). F_d at the
+    // KHR_materials_transmission's specular_btdf as Walter et al. 2007, Eq. 21 (divided
+    // by eta_o^2, Fresnel left out: fresnel_mix applies 1 - F_d). F_d at the
     // cosine on the outside (z > 0) keeps f(wo, wi) = f*(wi, wo) (adjoint).
     Float btdf = d_.D(wh) * d_.G(wo, wi) * std::abs(oh * ih) / (cosO * cosI * denom);
     if (mode == TransportMode::Radiance) btdf /= etap * etap;

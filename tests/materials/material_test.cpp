@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "materials/bxdfs.h"
+#include "materials/gltf_pbr.h"
 #include "materials/material.h"
 #include "parser/scene_desc.h"
 #include "samplers/rng.h"
@@ -247,6 +248,116 @@ TEST(Material, BumpMapTiltsShadingNormal) {
     EXPECT_NEAR(si.shading.n.z, expect.z, 1e-9);
     EXPECT_NEAR(b.ns().x, expect.x, 1e-9);
     EXPECT_EQ(si.n, Normal3(0, 0, 1));  // geometric normal untouched
+}
+
+namespace {
+// f of a material at FlatHit against a GltfPbrBxDF built directly, for several pairs.
+void ExpectSameAsBxDF(const Material &m, const GltfPbrBxDF &ref, const std::string &what) {
+    SurfaceInteraction si = FlatHit();
+    Arena arena;
+    BSDF b = m.getBSDF(si, arena, TransportMode::Radiance);
+    ASSERT_TRUE(bool(b)) << what;
+    EXPECT_EQ(b.flags(), ref.flags()) << what;
+    EXPECT_EQ(b.roughness(), ref.roughness()) << what;
+    const Vec3 pairs[][2] = {{Normalize(Vec3(0.3, 0.2, 1)), Normalize(Vec3(-0.2, 0.4, 1))},
+                             {Normalize(Vec3(0.1, -0.5, 0.4)), Normalize(Vec3(-0.7, 0.1, 0.3))},
+                             {Normalize(Vec3(0.2, 0.1, 1)), Normalize(Vec3(-0.1, -0.05, -1))}};
+    for (auto &pr : pairs) {
+        Spectrum f = b.f(pr[0], pr[1]), e = ref.f(pr[0], pr[1], TransportMode::Radiance);
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(f[k], e[k], 1e-12 * (1 + e[k])) << what << " channel " << k;
+    }
+}
+}  // namespace
+
+TEST(Material, GltfPbrParameters) {
+    MaterialDesc d = ParseMaterial(
+        "Material \"gltfpbr\" \"rgb basecolor\" [0.8 0.4 0.2] \"float metallic\" [0.25] \"float roughness\" [0.5] "
+        "\"float ior\" [1.33] \"float transmission\" [0.5]");
+    auto m = Make(d);
+    EXPECT_NO_THROW(d.params.checkUnused("Material \"gltfpbr\""));
+    // alpha = roughness^2.
+    ExpectSameAsBxDF(*m, GltfPbrBxDF(Spectrum(0.8, 0.4, 0.2), 0.25, 0.25, 1.33, 0.5), "explicit");
+    EXPECT_NEAR(m->minRoughness(), 0.25, 1e-15);
+    EXPECT_FALSE(m->hasTextures());
+    // Defaults: basecolor 1, metallic 1, roughness 1, ior 1.5, transmission 0.
+    MaterialDesc d0 = ParseMaterial("Material \"gltfpbr\"");
+    auto m0 = Make(d0);
+    ExpectSameAsBxDF(*m0, GltfPbrBxDF(Spectrum(1), 1, 1, 1.5, 0), "defaults");
+    EXPECT_EQ(m0->minRoughness(), 1);
+    // Clamping to the valid ranges (ior exactly 1 allowed: f0 = 0).
+    MaterialDesc dc = ParseMaterial(
+        "Material \"gltfpbr\" \"rgb basecolor\" [1.5 -0.2 0.5] \"float metallic\" [-1] \"float roughness\" [3] "
+        "\"float ior\" [0.5] \"float transmission\" [2]");
+    ExpectSameAsBxDF(*Make(dc), GltfPbrBxDF(Spectrum(1, 0, 0.5), 0, 1, 1, 1), "clamped");
+    MaterialDesc d1 = ParseMaterial("Material \"gltfpbr\" \"float metallic\" [0] \"float ior\" [1]");
+    ExpectSameAsBxDF(*Make(d1), GltfPbrBxDF(Spectrum(1), 0, 1, 1, 0), "ior 1");
+}
+
+TEST(Material, GltfPbrMisspeltParameterStaysUnused) {
+    MaterialDesc d = ParseMaterial("Material \"gltfpbr\" \"float metalic\" [0] \"float roughness\" [0.5]");
+    auto m = Make(d);
+    try {
+        d.params.checkUnused("Material \"gltfpbr\"");
+        FAIL() << "unused parameter not detected";
+    } catch (const Error &e) {
+        EXPECT_NE(std::string(e.what()).find("metalic"), std::string::npos) << e.what();
+    }
+    // The default metallic 1 was used.
+    ExpectSameAsBxDF(*m, GltfPbrBxDF(Spectrum(1), 1, 0.25, 1.5, 0), "misspelt");
+}
+
+TEST(Material, GltfPbrMinRoughnessAndTextures) {
+    NamedTextures tex;
+    tex.floats["r"] = std::make_shared<RampU>(1.0);
+    tex.spectra["c"] = std::make_shared<ConstantTexture<Spectrum>>(Spectrum(0.3));
+    auto minR = [&](const std::string &params) {
+        MaterialDesc d = ParseMaterial("Material \"gltfpbr\" " + params);
+        auto m = Make(d, tex);
+        d.params.checkUnused("Material");
+        return m->minRoughness();
+    };
+    EXPECT_NEAR(minR("\"float roughness\" [0.3]"), 0.09, 1e-15);
+    EXPECT_EQ(minR("\"texture roughness\" \"r\""), 0);        // textured: unknown
+    EXPECT_EQ(minR("\"float roughness\" [0.01]"), 0);         // alpha 1e-4: smooth limit
+    EXPECT_EQ(minR("\"float ior\" [1] \"float transmission\" [1]"), 0);  // straight-through delta
+    EXPECT_EQ(minR("\"float ior\" [1]"), 1);                  // no transmission: alpha
+    EXPECT_NEAR(minR("\"float transmission\" [0.5] \"float roughness\" [0.5]"), 0.25, 1e-15);
+    MaterialDesc d = ParseMaterial("Material \"gltfpbr\" \"texture roughness\" \"r\" \"texture basecolor\" \"c\"");
+    EXPECT_TRUE(Make(d, tex)->hasTextures());
+    MaterialDesc dc = ParseMaterial("Material \"gltfpbr\" \"texture basecolor\" \"c\"");
+    EXPECT_FALSE(Make(dc, tex)->hasTextures());  // a constant texture does not vary
+}
+
+TEST(Material, GltfPbrNormalMap) {
+    auto shadingNormal = [](const std::string &params, SurfaceInteraction si) {
+        MaterialDesc d = ParseMaterial("Material \"gltfpbr\" " + params);
+        auto m = Make(d);
+        EXPECT_NO_THROW(d.params.checkUnused("Material")) << params;
+        Arena arena;
+        BSDF b = m->getBSDF(si, arena, TransportMode::Radiance);
+        EXPECT_NEAR((b.ns() - si.shading.n).length(), 0, 1e-12);
+        EXPECT_NEAR(Dot(si.shading.n, si.shading.dpdu), 0, 1e-12);
+        EXPECT_NEAR(Dot(si.shading.n, si.shading.dpdv), 0, 1e-12);
+        EXPECT_EQ(si.n, Normal3(0, 0, 1));  // geometric normal untouched
+        return si.shading.n;
+    };
+    auto near = [](const Vec3 &a, const Vec3 &b) { return (a - b).length() < 1e-12; };
+    SurfaceInteraction flat = FlatHit();
+    // rgb (0.75, 0.5, 1) -> n_ts = (0.5, 0, 1): tilted towards +T = +dpdu.
+    EXPECT_TRUE(near(shadingNormal("\"rgb normalmap\" [0.75 0.5 1]", flat), Normalize(Vec3(0.5, 0, 1))));
+    EXPECT_TRUE(near(shadingNormal("\"rgb normalmap\" [0.5 0.5 1]", flat), Vec3(0, 0, 1)));
+    // normalscale multiplies x and y.
+    EXPECT_TRUE(near(shadingNormal("\"rgb normalmap\" [0.75 0.5 1] \"float normalscale\" [2]", flat),
+                     Normalize(Vec3(1, 0, 1))));
+    // B follows dpdv (here -y, a mirrored uv layout) and T follows dpdu projected.
+    SurfaceInteraction mirrored = FlatHit();
+    mirrored.shading.dpdu = Vec3(1, 0, 0.5);
+    mirrored.shading.dpdv = Vec3(0.3, -1, 0);
+    EXPECT_TRUE(near(shadingNormal("\"rgb normalmap\" [0.5 0.75 1]", mirrored), Normalize(Vec3(0, -0.5, 1))));
+    // A texel below the surface is mirrored to the side of the unperturbed normal.
+    EXPECT_TRUE(near(shadingNormal("\"rgb normalmap\" [0.75 0.5 0]", flat), Normalize(Vec3(0.5, 0, 1))));
+    // Without "normalmap" the shading frame is unchanged.
+    EXPECT_TRUE(near(shadingNormal("\"float roughness\" [0.5]", flat), Vec3(0, 0, 1)));
 }
 
 TEST(BSDF, FrameAndWorldQueries) {

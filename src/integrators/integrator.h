@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/error.h"
 #include "image/image.h"
 #include "integrators/params.h"
 #include "parser/scene_desc.h"
@@ -38,6 +39,16 @@ class Integrator {
     virtual double finishEstimate() const { return 0; }
     // Integrator-specific statistics for the end-of-render report.
     virtual std::string statistics() const { return ""; }
+    // Checkpoints (render/checkpoint.h): what later passes need beyond the
+    // film and the pass index, as bytes (mlt: chains and b); loadState throws
+    // Error on bytes it did not write. Counters of statistics() are per session.
+    virtual std::string saveState() const { return ""; }
+    virtual void loadState(const std::string &state) {
+        if (!state.empty()) throw Error("checkpoint: integrator state given to " + name() + ", which keeps none");
+    }
+    // True when pass p needs nothing from passes before it but its index
+    // (gradus --passes A:B can then render [A, B) alone); false for mlt.
+    virtual bool independentPasses() const { return true; }
 };
 
 // An integrator that estimates independent camera samples: each pass is

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 #include <cstdio>
+#include <cstring>
 
 #include <unistd.h>
 
@@ -169,6 +170,118 @@ Image Film::toImage() const {
     Image img = mainImage();
     for (int l = 0; l < numLayers(); ++l) img.setLayerRGB(layerNames_[l], layerImage(l));
     return img;
+}
+
+// ---------------------------------------------------------------- checkpoints
+namespace {
+
+constexpr uint32_t kFilmStateMagic = 0x4d4c4946;  // "FILM"
+constexpr uint32_t kFilmStateVersion = 1;
+static_assert(sizeof(Spectrum) == 3 * sizeof(double), "film states store Spectrum as three doubles");
+
+void PutU32(std::string *s, uint32_t v) { s->append(reinterpret_cast<const char *>(&v), 4); }
+void PutBytes(std::string *s, const void *p, size_t n) { s->append(static_cast<const char *>(p), n); }
+
+// Length of the header of a film state (everything before the doubles), or
+// throws; *doubles receives the number of doubles the header announces.
+size_t FilmStateHeader(const std::string &s, size_t *doubles, Bounds2i *b, std::vector<std::string> *names) {
+    size_t at = 0;
+    auto need = [&](size_t n) {
+        if (s.size() - at < n) throw Error("film state: truncated");
+    };
+    auto u32 = [&] {
+        need(4);
+        uint32_t v;
+        std::memcpy(&v, s.data() + at, 4);
+        at += 4;
+        return v;
+    };
+    if (s.size() < 8 || u32() != kFilmStateMagic) throw Error("film state: not a film state");
+    if (u32() != kFilmStateVersion) throw Error("film state: unknown version");
+    int32_t c[4];
+    for (int32_t &v : c) v = int32_t(u32());
+    b->pMin = {c[0], c[1]};
+    b->pMax = {c[2], c[3]};
+    if (b->width() <= 0 || b->height() <= 0 || b->area() > (int64_t(1) << 34)) throw Error("film state: bad bounds");
+    uint32_t nl = u32();
+    if (nl > 4096) throw Error("film state: bad layer count");
+    names->clear();
+    for (uint32_t i = 0; i < nl; ++i) {
+        uint32_t len = u32();
+        need(len);
+        names->emplace_back(s.data() + at, len);
+        at += len;
+    }
+    const uint64_t n = uint64_t(b->area());
+    *doubles = size_t(n * (3 + 1 + 3 + 1) + uint64_t(nl) * n * 6);
+    if ((s.size() - at) / sizeof(double) != *doubles || (s.size() - at) % sizeof(double))
+        throw Error("film state: size does not match its header");
+    return at;
+}
+
+}  // namespace
+
+std::string Film::saveState() const {
+    std::string s;
+    const size_t n = size_t(bounds_.area());
+    s.reserve(64 + size_t(n) * sizeof(double) * (8 + 6 * layers_.size()));
+    PutU32(&s, kFilmStateMagic);
+    PutU32(&s, kFilmStateVersion);
+    for (int v : {bounds_.pMin.x, bounds_.pMin.y, bounds_.pMax.x, bounds_.pMax.y}) PutU32(&s, uint32_t(v));
+    PutU32(&s, uint32_t(layerNames_.size()));
+    for (const auto &name : layerNames_) {
+        PutU32(&s, uint32_t(name.size()));
+        s += name;
+    }
+    PutBytes(&s, sum_.data(), n * sizeof(Spectrum));
+    PutBytes(&s, weight_.data(), n * sizeof(double));
+    PutBytes(&s, splat_.data(), n * sizeof(Spectrum));
+    PutBytes(&s, count_.data(), n * sizeof(double));
+    for (size_t l = 0; l < layers_.size(); ++l) {
+        PutBytes(&s, layers_[l].data(), n * sizeof(Spectrum));
+        PutBytes(&s, layerSplats_[l].data(), n * sizeof(Spectrum));
+    }
+    return s;
+}
+
+void Film::loadState(const std::string &state) {
+    size_t doubles;
+    Bounds2i b;
+    std::vector<std::string> names;
+    size_t at = FilmStateHeader(state, &doubles, &b, &names);
+    if (!(b.pMin == bounds_.pMin) || !(b.pMax == bounds_.pMax))
+        throw Error("film state: its pixel bounds differ from this film's");
+    if (names != layerNames_) throw Error("film state: its layers differ from this render's");
+    const size_t n = size_t(bounds_.area());
+    auto get = [&](void *dst, size_t bytes) {
+        std::memcpy(dst, state.data() + at, bytes);
+        at += bytes;
+    };
+    get(sum_.data(), n * sizeof(Spectrum));
+    get(weight_.data(), n * sizeof(double));
+    get(splat_.data(), n * sizeof(Spectrum));
+    get(count_.data(), n * sizeof(double));
+    for (size_t l = 0; l < layers_.size(); ++l) {
+        get(layers_[l].data(), n * sizeof(Spectrum));
+        get(layerSplats_[l].data(), n * sizeof(Spectrum));
+    }
+}
+
+std::string Film::AddStates(const std::string &a, const std::string &b) {
+    size_t da, db;
+    Bounds2i ba, bb;
+    std::vector<std::string> na, nb;
+    size_t ha = FilmStateHeader(a, &da, &ba, &na), hb = FilmStateHeader(b, &db, &bb, &nb);
+    if (ha != hb || a.compare(0, ha, b, 0, hb) != 0) throw Error("film states of different films (bounds or layers differ)");
+    std::string out = a;
+    for (size_t i = 0; i < da; ++i) {
+        double x, y;
+        std::memcpy(&x, a.data() + ha + i * sizeof(double), sizeof(double));
+        std::memcpy(&y, b.data() + hb + i * sizeof(double), sizeof(double));
+        x += y;
+        std::memcpy(&out[ha + i * sizeof(double)], &x, sizeof(double));
+    }
+    return out;
 }
 
 }  // namespace gradus

@@ -58,6 +58,16 @@ class Film {
     // Output values clamped to the float range by the image functions so far.
     uint64_t clampedValues() const { return clamped_; }
 
+    // Checkpoints: every accumulator (main sums, weights, counts, splats, all
+    // layers) as bytes: a header (pixel bounds, layer names) then doubles.
+    std::string saveState() const;
+    // Replaces the accumulators; throws Error when the bytes are not a film
+    // state of this film's bounds and layers.
+    void loadState(const std::string &state);
+    // Elementwise sum of two states of the same film (partial renders of
+    // disjoint passes); throws Error when their headers differ.
+    static std::string AddStates(const std::string &a, const std::string &b);
+
   private:
     friend class FilmTile;
     size_t index(Point2i p) const {

@@ -120,7 +120,7 @@ Worker &PassContext::worker() const {
     return w;
 }
 
-bool PassContext::interrupted() const { return pass_ > 0 && InterruptRequested(); }
+bool PassContext::interrupted() const { return pass_ > 0 && !opts_.wholePasses && InterruptRequested(); }
 
 void PassContext::addNonFinite(uint64_t n) { shared_.nonFinite += n; }
 
@@ -232,14 +232,19 @@ RenderStats RunRender(Integrator &integ, const Scene &scene, Film &film, const S
     stats.seed = sampler.seed();
     Progress progress("Rendering", unlimited ? 0 : spp, opts.quiet || opts.debug);
     double lastPassTime = 0;
-    int done = 0;
-    while (unlimited || done < spp) {
+    int done = opts.firstSpp >= 0 ? opts.firstSpp : opts.firstPass * perPass;
+    if (!unlimited) done = std::min(done, spp);
+    stats.passes = stats.firstPass = opts.firstPass;
+    stats.firstSpp = done;
+    film.setSplatSamples(done);
+    const int startDone = done;
+    while ((unlimited || done < spp) && (opts.lastPass < 0 || stats.passes < opts.lastPass)) {
         if (InterruptRequested()) {
             stats.interrupted = true;
             break;
         }
         // Stop before a pass that would end past the budget (estimated by the last pass).
-        if (opts.timeLimit > 0 && done > 0 && elapsed() + lastPassTime > opts.timeLimit) {
+        if (opts.timeLimit > 0 && done > startDone && elapsed() + lastPassTime > opts.timeLimit) {
             stats.timeLimited = true;
             break;
         }
@@ -258,10 +263,17 @@ RenderStats RunRender(Integrator &integ, const Scene &scene, Film &film, const S
         // The first beginPass is one-off setup (mlt's bootstrap): not part of the estimate of the next pass.
         lastPassTime = elapsed() - (stats.passes == 1 ? afterBegin : passStart);
         progress.update(done, elapsed(), opts.timeLimit);
+        if (opts.afterPass) {
+            stats.spp = done;
+            stats.nonFinite = shared.nonFinite;
+            stats.complete = !unlimited && done >= spp;
+            opts.afterPass(stats);
+        }
     }
     progress.done(elapsed());
     gDebugMode = false;
     stats.spp = done;
+    stats.complete = !unlimited && done >= spp;
     stats.cameraSamples = int64_t(done) * grid.bounds.area();
     stats.seconds = elapsed();
     stats.nonFinite = shared.nonFinite;

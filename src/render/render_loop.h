@@ -27,6 +27,7 @@ namespace gradus {
 
 class Integrator;
 class Scene;
+struct RenderStats;
 
 struct RenderOptions {
     int spp = 0;              // samples per pixel; 0 = the sampler's
@@ -42,6 +43,19 @@ struct RenderOptions {
     bool debug = false;
     Point2i debugPixel;
     int debugSample = -1;
+    // Checkpoints and exact splitting (RenderJobImage; render/checkpoint.h).
+    std::string checkpointFile;       // --checkpoint: written every checkpointInterval s, at the end, on interrupt
+    double checkpointInterval = 300;  // --checkpoint-interval
+    std::string resumeFile;           // --resume
+    int passBegin = 0, passEnd = -1;  // --passes A:B: render passes [A, B) only (-1: to the end)
+    // Loop level (set by RenderJobImage): start at pass firstPass with
+    // firstSpp samples per pixel done (-1: firstPass x samples per pass);
+    // stop before pass lastPass (-1: none); run every pass whole even when
+    // interrupted (checkpoints then hold whole passes only); afterPass is
+    // called after each pass with the statistics so far.
+    int firstPass = 0, firstSpp = -1, lastPass = -1;
+    bool wholePasses = false;
+    std::function<void(const RenderStats &)> afterPass;
 };
 
 struct RenderStats {
@@ -53,6 +67,8 @@ struct RenderStats {
     uint64_t nonFinite = 0;   // NaN/Inf contributions discarded
     bool interrupted = false;
     bool timeLimited = false;
+    int firstPass = 0, firstSpp = 0;  // where this session started (resume, --passes)
+    bool complete = false;            // the render's last pass is done (spp reached)
 };
 
 // Collects one camera sample's (or one work item's) contributions; guards

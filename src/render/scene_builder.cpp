@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "core/provenance.h"
 #include "parser/ply.h"
+#include "render/checkpoint.h"
 #include "samplers/sampling.h"
 #include "shapes/loopsubdiv.h"
 #include "shapes/quadrics.h"
@@ -502,6 +503,36 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
     return job;
 }
 
+std::string RenderIdentity(const RenderJob &job, const RenderOptions &opts) {
+    // Everything the accumulated values depend on (not the output name, the
+    // film's scale or the thread count).
+    std::string id;
+    for (const char *k : {"scene_hash", "camera", "sampler", "pixelfilter", "resolution", "cropwindow", "quick",
+                          "integrator_parameters"}) {
+        auto it = job.provenance.find(k);
+        id += std::string(k) + ": " + (it == job.provenance.end() ? std::string("-") : it->second.str()) + "\n";
+    }
+    id += "integrator: " + job.integrator->name() + "\n";
+    id += "spp: " + std::to_string(opts.spp) + " (" + std::to_string(opts.sppPerPass) + " per pass)\n";
+    id += "seed: " + std::to_string(job.sampler->seed()) + "\n";
+    return id;
+}
+
+namespace {
+// The first line in which two identities differ, for the refusal message.
+std::string FirstDifference(const std::string &a, const std::string &b) {
+    std::istringstream sa(a), sb(b);
+    std::string la, lb;
+    while (true) {
+        bool ga = bool(std::getline(sa, la)), gb = bool(std::getline(sb, lb));
+        if (!ga && !gb) return "";
+        if (!ga) la = "(none)";
+        if (!gb) lb = "(none)";
+        if (la != lb) return "checkpoint has \"" + la + "\", this render \"" + lb + "\"";
+    }
+}
+}  // namespace
+
 RenderResult RenderJobImage(RenderJob &job, const RenderOptions &opts) {
     using Clock = std::chrono::steady_clock;
     auto seconds = [](Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); };
@@ -512,8 +543,70 @@ RenderResult RenderJobImage(RenderJob &job, const RenderOptions &opts) {
     RenderOptions loopOpts = opts;
     if (opts.timeLimit > 0)  // at least one pass runs whatever is left
         loopOpts.timeLimit = std::max(1e-9, opts.timeLimit - seconds(t0, t1) - job.integrator->finishEstimate());
+    // Checkpoints: resume, --passes, periodic and final writes (render/checkpoint.h).
+    const std::string identity = RenderIdentity(job, opts);
+    Checkpoint prior;
+    bool resumed = false;
+    if (!opts.resumeFile.empty()) {
+        if (opts.passBegin != 0 || opts.passEnd >= 0) throw Error("--resume and --passes exclude each other");
+        prior = ReadCheckpoint(opts.resumeFile);
+        if (prior.identity != identity || prior.integrator != job.integrator->name())
+            throw Error(opts.resumeFile + ": a checkpoint of another render (" + FirstDifference(prior.identity, identity) +
+                        "); resume with the scene, integrator, parameters, --spp and --seed it was made with");
+        job.film->loadState(prior.film);
+        try {
+            job.integrator->loadState(prior.state);
+        } catch (const Error &e) {
+            throw Error(opts.resumeFile + ": " + e.what());
+        }
+        loopOpts.firstPass = prior.passEnd;
+        loopOpts.firstSpp = prior.sppEnd;
+        resumed = true;
+    } else if (opts.passBegin != 0 || opts.passEnd >= 0) {
+        if (opts.passBegin > 0 && !job.integrator->independentPasses())
+            throw Error("--passes " + std::to_string(opts.passBegin) + ":...: " + job.integrator->name() +
+                        "'s passes depend on the ones before (split it with --checkpoint and --resume instead)");
+        if (opts.timeLimit > 0 && opts.spp <= 0) throw Error("--passes needs --spp (or the sampler's count), not --time alone");
+        loopOpts.firstPass = opts.passBegin;
+        loopOpts.firstSpp = -1;
+        loopOpts.lastPass = opts.passEnd;
+    }
+    auto makeCheckpoint = [&](const RenderStats &st) {
+        Checkpoint c;
+        c.identity = identity;
+        c.integrator = job.integrator->name();
+        c.seed = job.sampler->seed();
+        c.passBegin = resumed ? prior.passBegin : st.firstPass;
+        c.sppBegin = resumed ? prior.sppBegin : st.firstSpp;
+        c.passEnd = st.passes;
+        c.sppEnd = st.spp;
+        c.complete = st.complete;
+        c.seconds = prior.seconds + seconds(t0, Clock::now());
+        c.nonFinite = prior.nonFinite + st.nonFinite;
+        c.film = job.film->saveState();
+        c.state = job.integrator->saveState();
+        return c;
+    };
+    auto lastWrite = Clock::now();
+    double writeSeconds = 0;
+    size_t writeBytes = 0;
+    auto writeCheckpoint = [&](const RenderStats &st) {
+        const auto w0 = Clock::now();
+        Checkpoint c = makeCheckpoint(st);
+        WriteCheckpoint(opts.checkpointFile, c);
+        lastWrite = Clock::now();
+        writeSeconds = seconds(w0, lastWrite);
+        writeBytes = c.film.size() + c.state.size();
+    };
+    if (!opts.checkpointFile.empty()) {
+        loopOpts.wholePasses = true;
+        loopOpts.afterPass = [&](const RenderStats &st) {
+            if (seconds(lastWrite, Clock::now()) >= opts.checkpointInterval) writeCheckpoint(st);
+        };
+    }
     RenderResult r;
     r.stats = RunRender(*job.integrator, *job.scene, *job.film, *job.sampler, loopOpts);
+    if (!opts.checkpointFile.empty()) writeCheckpoint(r.stats);
     const auto t2 = Clock::now();
     r.image = job.film->toImage();
     job.integrator->finish(*job.film, r.stats, &r.image);
@@ -539,6 +632,20 @@ RenderResult RenderJobImage(RenderJob &job, const RenderOptions &opts) {
     m["output_values_clamped"] = MetaValue::Int(int64_t(film.clampedValues()));
     m["peak_rss_mb"] = MetaValue::Double(PeakRSSMegabytes());
     m["gradus_version"] = std::string(GradusVersion()) + " (" + GradusGitCommit() + ")";
+    if (resumed) {
+        m["resumed_from"] = opts.resumeFile;
+        m["resumed_at_pass"] = MetaValue::Int(prior.passEnd);
+        m["render_seconds_all_sessions"] = MetaValue::Double(prior.seconds + r.stats.seconds);
+    }
+    if (loopOpts.firstPass > 0 || loopOpts.lastPass >= 0) {
+        m["pass_begin"] = MetaValue::Int(resumed ? prior.passBegin : r.stats.firstPass);
+        m["pass_end"] = MetaValue::Int(r.stats.passes);
+    }
+    if (!opts.checkpointFile.empty()) {
+        m["checkpoint"] = opts.checkpointFile;
+        m["checkpoint_bytes"] = MetaValue::Int(int64_t(writeBytes));
+        m["checkpoint_write_seconds"] = MetaValue::Double(writeSeconds);
+    }
     // Crops keep their place in the full image (EXR data window in the display window).
     r.image.originX = film.pixelBounds().pMin.x;
     r.image.originY = film.pixelBounds().pMin.y;

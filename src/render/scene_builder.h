@@ -56,7 +56,11 @@ struct RenderResult {
 // the one route from a built job to an image (gradus, tests, benchmarks).
 // opts.timeLimit bounds all of it: the loop gets what preprocessing left,
 // minus the integrator's estimate of its finish (e.g. reconstruction).
+// Checkpoints (opts.checkpointFile, resumeFile, passBegin/passEnd): see
+// render/checkpoint.h; a checkpoint of another render is refused.
 RenderResult RenderJobImage(RenderJob &job, const RenderOptions &opts);
+// The text that identifies a render for its checkpoints.
+std::string RenderIdentity(const RenderJob &job, const RenderOptions &opts);
 
 // --param NAME=VALUE overrides for the integrator entity (typed by its
 // parameter table; located errors name the command line).

@@ -6,6 +6,9 @@
 //   TimeBudget              --time T ends within one pass of T
 //   InterruptWritesImage    SIGINT -> exit 130 and a readable, finite EXR
 //   AgreesWithBdpt          same expectation as bdpt on two scenes (z-test with power check)
+//   ResumeEqualsWhole       --passes 0:k --checkpoint, then --resume -> bit-identical to the whole render
+//   MergedPartsEqualWhole   4 partial renders (--passes) merged -> the whole render (summation order only)
+//   SigtermLeavesCheckpoint SIGTERM with --checkpoint -> exit 130, a valid checkpoint that resumes
 // and every output read above has finite values in every layer and reports
 // nonfinite_discarded.
 #include <gtest/gtest.h>
@@ -17,6 +20,7 @@
 #include <set>
 
 #include "agreement.h"
+#include "render/checkpoint.h"
 
 using namespace gradus;
 using namespace gradus::conformance;
@@ -192,6 +196,117 @@ TEST_P(Conformance, InterruptWritesImage) {
     for (int y = 0; y < rgb.height(); ++y)
         for (int x = 0; x < rgb.width(); ++x) sum += Luminance(rgb, x, y);
     EXPECT_GT(sum, 0) << "the partial image is black";
+}
+
+// ---------------------------------------------------------------- check 7 (checkpoints)
+// Every pass depends only on the seed and its index (and, for mlt, on the
+// state saved with the film), so stopping after pass k and resuming must give
+// the same bits as never stopping.
+TEST_P(Conformance, ResumeEqualsWhole) {
+    ScratchDir dir;
+    for (const std::string &scene : Scenes()) {
+        SCOPED_TRACE(scene);
+        const std::vector<std::string> base = {"--spp", "6", "--seed", "5", "--nthreads", "2"};
+        Output whole = Render(dir.path(), scene, GetParam(), base, "whole.exr");
+        ASSERT_TRUE(whole.ok);
+        std::vector<std::string> first = base;
+        first.insert(first.end(), {"--passes", "0:2", "--checkpoint", "first.ckpt"});
+        Output part = Render(dir.path(), scene, GetParam(), first, "first.exr");
+        ASSERT_TRUE(part.ok);
+        Checkpoint c = ReadCheckpoint((dir.path() / "first.ckpt").string());
+        EXPECT_EQ(c.passBegin, 0);
+        EXPECT_EQ(c.passEnd, 2);
+        EXPECT_FALSE(c.complete);
+        std::vector<std::string> rest = base;
+        rest.insert(rest.end(), {"--resume", "first.ckpt"});
+        Output resumed = Render(dir.path(), scene, GetParam(), rest, "resumed.exr");
+        ASSERT_TRUE(resumed.ok);
+        EXPECT_EQ(BitwiseDifference(resumed.image, whole.image), "") << "resumed after pass 2 vs whole";
+        EXPECT_EQ(resumed.image.metadata["spp"], whole.image.metadata["spp"]);
+    }
+}
+
+// Partial renders of passes [0,1), [1,3), [3,4), [4,6) summed in double
+// precision: equal to the whole render up to the order of the additions, so
+// every output value agrees to float rounding (relative 1e-6; the figure
+// printed is the largest difference seen).
+TEST_P(Conformance, MergedPartsEqualWhole) {
+    ScratchDir dir;
+    const std::string scene = "specular-box";
+    const std::vector<std::string> base = {"--spp", "6", "--seed", "8", "--nthreads", "2"};
+    Output whole = Render(dir.path(), scene, GetParam(), base, "whole.exr");
+    ASSERT_TRUE(whole.ok);
+    const std::vector<std::pair<int, int>> ranges = {{3, 4}, {0, 1}, {4, 6}, {1, 3}};
+    std::vector<Checkpoint> parts;
+    std::vector<std::string> names;
+    bool independent = true;
+    for (auto [a, b] : ranges) {
+        std::vector<std::string> args = base;
+        std::string name = "part" + std::to_string(a) + ".ckpt";
+        args.insert(args.end(), {"--passes", std::to_string(a) + ":" + std::to_string(b), "--checkpoint", name});
+        std::vector<std::string> all = {ScenePath(scene), "--integrator", GetParam(), "--quiet"};
+        all.insert(all.end(), args.begin(), args.end());
+        ProcResult r = RunGradus(all, dir.path());
+        ASSERT_TRUE(r.exited) << r.describe();
+        if (a > 0 && r.exitCode != 0) {
+            // Integrators whose passes depend on the earlier ones refuse a later range.
+            EXPECT_NE(r.err.find("depend on the ones before"), std::string::npos) << r.describe();
+            independent = false;
+            continue;
+        }
+        ASSERT_EQ(r.exitCode, 0) << r.describe();
+        EXPECT_FALSE(fs::exists(dir.path() / (name + ".tmp")));
+        parts.push_back(ReadCheckpoint((dir.path() / name).string()));
+        names.push_back(name);
+    }
+    if (!independent) {
+        std::cout << "[ note ] " << GetParam() << ": passes are not independent; --passes beyond the first is refused\n";
+        return;
+    }
+    WriteCheckpoint((dir.path() / "merged.ckpt").string(), MergeCheckpoints(parts, names));
+    std::vector<std::string> fin = base;
+    fin.insert(fin.end(), {"--resume", "merged.ckpt"});
+    Output merged = Render(dir.path(), scene, GetParam(), fin, "merged.exr");
+    ASSERT_TRUE(merged.ok);
+    ASSERT_EQ(merged.image.channelNames(), whole.image.channelNames());
+    double worst = 0;
+    for (int c = 0; c < whole.image.numChannels(); ++c)
+        for (int y = 0; y < whole.image.height(); ++y)
+            for (int x = 0; x < whole.image.width(); ++x) {
+                double a = merged.image.at(x, y, c), b = whole.image.at(x, y, c);
+                worst = std::max(worst, std::abs(a - b) / std::max(std::abs(b), 1e-3));
+            }
+    std::cout << "[ merge ] " << GetParam() << ": largest relative difference " << worst << " ("
+              << (BitwiseDifference(merged.image, whole.image).empty() ? "bit-identical" : "not bit-identical") << ")\n";
+    EXPECT_LE(worst, 1e-6);
+}
+
+TEST_P(Conformance, SigtermLeavesCheckpoint) {
+    ScratchDir dir;
+    Child c({ScenePath("specular-box"), "--integrator", GetParam(), "--outfile", "int.exr", "--quiet", "--spp",
+             "100000000", "--seed", "9", "--nthreads", "2", "--checkpoint", "int.ckpt"},
+            dir.path());
+    std::this_thread::sleep_for(std::chrono::milliseconds(1000));
+    c.signal(SIGTERM);
+    ProcResult r = c.wait(30);
+    ASSERT_FALSE(r.timedOut) << "no exit within 30 s of SIGTERM";
+    ASSERT_TRUE(r.exited) << r.describe();
+    EXPECT_EQ(r.exitCode, 130) << r.describe();
+    Checkpoint ck;
+    ASSERT_NO_THROW(ck = ReadCheckpoint((dir.path() / "int.ckpt").string()));
+    EXPECT_FALSE(fs::exists(dir.path() / "int.ckpt.tmp"));
+    EXPECT_GE(ck.passEnd, 1);
+    EXPECT_EQ(ck.integrator, GetParam());
+    // The image written at the interrupt holds exactly the checkpoint's passes.
+    Image img = ReadImage((dir.path() / "int.exr").string());
+    EXPECT_EQ(std::atoi(img.metadata["spp"].c_str()), ck.sppEnd);
+    // And the render continues from it.
+    Output more = Render(dir.path(), "specular-box", GetParam(),
+                         {"--spp", "100000000", "--seed", "9", "--nthreads", "2", "--resume", "int.ckpt", "--time", "0.5"},
+                         "more.exr");
+    ASSERT_TRUE(more.ok);
+    EXPECT_GT(std::atoi(more.image.metadata["spp"].c_str()), ck.sppEnd);
+    EXPECT_EQ(more.image.metadata["resumed_at_pass"], std::to_string(ck.passEnd));
 }
 
 INSTANTIATE_TEST_SUITE_P(conformance, Conformance, ::testing::ValuesIn(Integrators()), IntegratorName);

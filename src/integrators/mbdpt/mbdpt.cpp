@@ -319,7 +319,8 @@ void MBDPTIntegrator::visualizeMatrix(PassContext &ctx) {
 
 // ---------------------------------------------------------------- one iteration = one pass
 void MBDPTIntegrator::runPass(PassContext &ctx) {
-    if (ctx.pass() == 0) paths_.init(ctx.tiles());
+    // Once per session (a resumed or split render starts at a later pass).
+    if (!pathsReady_) paths_.init(ctx.tiles()), pathsReady_ = true;
     double start = Seconds();
     paths_.generate(ctx, ctx_, set_.maxDepth);
     nCamVerts_ += paths_.camera.v.size();

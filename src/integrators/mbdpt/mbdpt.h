@@ -90,6 +90,7 @@ class MBDPTIntegrator : public Integrator, public BidirFamily {
 
     // Per-iteration data (reused across iterations).
     ImageSubpaths paths_;                      // one camera and one light subpath per sampled pixel
+    bool pathsReady_ = false;
     std::vector<std::vector<uint32_t>> rows_;  // [t]: eligible camera subpaths in reordered order
     std::vector<std::vector<int32_t>> rank_;   // [t][p]: rank of camera subpath p in rows_[t], or -1
     std::vector<std::vector<uint32_t>> cols_;  // [s]: eligible light subpaths in reordered order

@@ -1,5 +1,7 @@
 #include "integrators/mlt/mlt.h"
 
+#include <cstring>
+
 #include <algorithm>
 #include <cstdio>
 #include <sstream>
@@ -201,6 +203,73 @@ void MLTIntegrator::bootstrap(PassContext &ctx) {
         }
     });
     nStartMismatch_ += mismatch.load();
+}
+
+namespace {
+constexpr uint32_t kMLTStateMagic = 0x544c4d31;  // "1MLT"
+template <typename T>
+void Put(std::string *s, const T &v) { s->append(reinterpret_cast<const char *>(&v), sizeof v); }
+template <typename T>
+bool Get(const std::string &s, size_t *at, T *v) {
+    if (s.size() - *at < sizeof(T)) return false;
+    std::memcpy(v, s.data() + *at, sizeof(T));
+    *at += sizeof(T);
+    return true;
+}
+}  // namespace
+
+std::string MLTIntegrator::saveState() const {
+    std::string s;
+    Put(&s, kMLTStateMagic);
+    Put(&s, b_);
+    Put(&s, mutationsIssued_);
+    for (const auto *c : {&nMutations_, &nSmall_, &nLarge_, &nSmallAccepted_, &nLargeAccepted_, &nZeroProposals_,
+                          &nNonFinite_, &nStartMismatch_})
+        Put(&s, int64_t(c->load()));
+    Put(&s, nBootstrapNonZero_);
+    Put(&s, uint64_t(warning_.size()));
+    s += warning_;
+    Put(&s, uint64_t(chains_.size()));
+    for (const Chain &c : chains_) {
+        Put(&s, int32_t(c.depth));
+        Put(&s, c.L);
+        Put(&s, c.I);
+        Put(&s, c.pRaster);
+        c.u.save(&s);
+    }
+    return s;
+}
+
+void MLTIntegrator::loadState(const std::string &s) {
+    size_t at = 0;
+    uint32_t magic = 0;
+    auto bad = [] { throw Error("checkpoint: mlt state is inconsistent"); };
+    if (!Get(s, &at, &magic) || magic != kMLTStateMagic) bad();
+    if (!Get(s, &at, &b_) || !Get(s, &at, &mutationsIssued_)) bad();
+    for (auto *c : {&nMutations_, &nSmall_, &nLarge_, &nSmallAccepted_, &nLargeAccepted_, &nZeroProposals_,
+                    &nNonFinite_, &nStartMismatch_}) {
+        int64_t v;
+        if (!Get(s, &at, &v)) bad();
+        c->store(v);
+    }
+    uint64_t n;
+    if (!Get(s, &at, &nBootstrapNonZero_) || !Get(s, &at, &n) || n > s.size() - at) bad();
+    warning_ = s.substr(at, n);
+    at += n;
+    if (!Get(s, &at, &n)) bad();
+    if (n != uint64_t(set_.chains) && n != 0) bad();
+    chains_.clear();
+    chains_.reserve(n);
+    for (uint64_t k = 0; k < n; ++k) {
+        Chain c(PrimarySampler(set_.sigma, set_.largeStepProbability));
+        int32_t depth;
+        if (!Get(s, &at, &depth) || !Get(s, &at, &c.L) || !Get(s, &at, &c.I) || !Get(s, &at, &c.pRaster) ||
+            !c.u.load(s, &at))
+            bad();
+        c.depth = depth;
+        chains_.push_back(std::move(c));
+    }
+    if (at != s.size()) bad();
 }
 
 void MLTIntegrator::beginPass(PassContext &ctx) {

@@ -67,6 +67,11 @@ class MLTIntegrator : public Integrator {
     void runPass(PassContext &ctx) override;
     void finish(const Film &film, const RenderStats &stats, Image *out) override;
     std::string statistics() const override;
+    // Checkpoints: b, the chains (states, contributions, raster positions),
+    // the running mutation index and the counters.
+    std::string saveState() const override;
+    void loadState(const std::string &state) override;
+    bool independentPasses() const override { return false; }
 
     const MLTSettings &settings() const { return set_; }
     double b() const { return b_; }

@@ -28,7 +28,9 @@
 #pragma once
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "samplers/rng.h"
@@ -80,6 +82,30 @@ class PrimarySampler : public Sampler {
         next_ = 0;
     }
     int64_t coordinates() const { return int64_t(coords_.size()); }
+    // Checkpoints: the state between mutations (coordinates with their ages,
+    // the age and the last large step), appended to / read from bytes.
+    void save(std::string *out) const {
+        auto put = [out](const void *p, size_t n) { out->append(static_cast<const char *>(p), n); };
+        const uint64_t n = coords_.size();
+        put(&n, 8);
+        put(coords_.data(), n * sizeof(Coord));
+        put(&time_, 8);
+        put(&lastLarge_, 8);
+    }
+    // Reads what save() wrote at *at; false when the bytes run out.
+    bool load(const std::string &in, size_t *at) {
+        auto get = [&](void *p, size_t n) {
+            if (in.size() - *at < n) return false;
+            std::memcpy(p, in.data() + *at, n);
+            *at += n;
+            return true;
+        };
+        uint64_t n;
+        if (!get(&n, 8) || n > (in.size() - *at) / sizeof(Coord)) return false;
+        coords_.resize(n);
+        proposing_ = large_ = false;
+        return get(coords_.data(), n * sizeof(Coord)) && get(&time_, 8) && get(&lastLarge_, 8);
+    }
 
     // Sampler interface (the path sampler's view): reads the current stream.
     void startPixelSample(Point2i, int64_t, int dimension) override {

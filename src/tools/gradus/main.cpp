@@ -34,6 +34,16 @@ const char *kUsage =
     "  --camera NAME        glTF scenes: the camera (or camera node) to render (default: the first)\n"
     "  --cropwindow x0 x1 y0 y1   render a sub-rectangle (fractions of the image, in [0, 1])\n"
     "  --integrator NAME    override the scene's integrator (see --list-integrators)\n"
+    "  --checkpoint FILE    write the render's accumulators to FILE every --checkpoint-interval\n"
+    "                       seconds (default 300), at the end and on SIGINT/SIGTERM (which then\n"
+    "                       stop after the current pass); atomic (FILE.tmp, fsync, rename)\n"
+    "  --checkpoint-interval S   seconds between checkpoints (> 0)\n"
+    "  --resume FILE        continue the render of a checkpoint (same scene, integrator, parameters,\n"
+    "                       --spp and --seed; anything else is refused); a complete one only finishes\n"
+    "  --passes A:B         render only passes [A, B) (one pass = one sample per pixel; vcm: an\n"
+    "                       iteration) with the random numbers of the whole render; needs\n"
+    "                       --checkpoint; writes no image unless --outfile is given. Partial\n"
+    "                       checkpoints merge with imgtool merge OUT.ckpt IN.ckpt...\n"
     "  --param NAME=VALUE   set an integrator parameter (repeatable; see --describe NAME)\n"
     "  --debugpixel x,y[,s] re-run the samples (or sample s) of one pixel single-threaded with the\n"
     "                       random numbers of the full render; prints vertices and contributions\n"
@@ -93,7 +103,7 @@ int main(int argc, char **argv) {
     RenderOptions ro;
     std::string sceneFile;
     GltfOptions gltfOpts;
-    bool printStats = false;
+    bool printStats = false, splitting = false;
     for (int i = 1; i < argc; ++i) {
         std::string a = argv[i];
         auto next = [&](int n = 1) {
@@ -153,6 +163,22 @@ int main(int argc, char **argv) {
                 h > (1 << 17))
                 Fail("--resolution expects WxH with W and H in [1, 131072], got \"" + std::string(v) + "\"");
             bo.resolution = {w, h};
+        } else if (a == "--checkpoint") {
+            ro.checkpointFile = next();
+        } else if (a == "--checkpoint-interval") {
+            ro.checkpointInterval = ParseDouble(a, next());
+            if (!(ro.checkpointInterval > 0)) Fail("--checkpoint-interval must be > 0 seconds");
+        } else if (a == "--resume") {
+            ro.resumeFile = next();
+        } else if (a == "--passes") {
+            const char *v = next();
+            long long pa = -1, pb = -1;
+            int n = 0;
+            if (std::sscanf(v, "%lld:%lld%n", &pa, &pb, &n) != 2 || v[n] != 0 || pa < 0 || pb <= pa || pb > (1 << 30))
+                Fail("--passes expects A:B with 0 <= A < B <= 2^30, got \"" + std::string(v) + "\"");
+            ro.passBegin = int(pa);
+            ro.passEnd = int(pb);
+            splitting = true;
         } else if (a == "--camera") {
             gltfOpts.camera = next();
         } else if (a == "--integrator") {
@@ -175,6 +201,8 @@ int main(int argc, char **argv) {
         std::fprintf(stderr, "gradus: no scene file given\n%s", kUsage);
         return 1;
     }
+    if (splitting && ro.checkpointFile.empty()) Fail("--passes needs --checkpoint FILE (the partial render's output)");
+    if (splitting && ro.debug) Fail("--passes and --debugpixel exclude each other");
     std::string commandLine;
     for (int i = 0; i < argc; ++i) commandLine += (i ? " " : "") + std::string(argv[i]);
 
@@ -208,7 +236,8 @@ int main(int argc, char **argv) {
             std::fprintf(stderr, "--debugpixel: no image written\n");
             return 0;
         }
-        WriteImage(job.film->filename(), img);
+        const bool writeImage = !splitting || !bo.outfileOverride.empty();
+        if (writeImage) WriteImage(job.film->filename(), img);
         if (!ro.quiet) {
             std::fprintf(stderr,
                          "Scene loaded in %.2fs; rendered %d spp in %.2fs (%.3g camera samples/s)%s\n"
@@ -218,7 +247,8 @@ int main(int argc, char **argv) {
                          (unsigned long long)rs.nonFinite);
             std::fprintf(stderr, "Statistics:\n%s%s", FormatStats(StatRegistry::get().snapshot()).c_str(),
                          job.integrator->statistics().c_str());
-            std::fprintf(stderr, "Wrote %s\n", job.film->filename().c_str());
+            if (writeImage) std::fprintf(stderr, "Wrote %s\n", job.film->filename().c_str());
+            if (!ro.checkpointFile.empty()) std::fprintf(stderr, "Wrote checkpoint %s\n", ro.checkpointFile.c_str());
         }
         return rs.interrupted ? 130 : 0;
     } catch (const std::bad_alloc &) {

@@ -15,6 +15,7 @@
 #include "core/error.h"
 #include "image/image.h"
 #include "image/metrics.h"
+#include "render/checkpoint.h"
 
 using namespace gradus;
 using nlohmann::json;
@@ -48,6 +49,7 @@ const CommandHelp kHelp[] = {
       --layer NAME            write only this layer, as R,G,B
 )"},
     {"info", R"(  info FILE                      size, channels, NaN/Inf per layer, min/max/mean, metadata
+                                 (a checkpoint: its render, pass range and sizes)
       --json                  print one JSON object
 )"},
     {"merge", R"(  merge OUT IN1 [IN2 ...]        weighted average of images (every channel)
@@ -56,6 +58,9 @@ const CommandHelp kHelp[] = {
       --allow-equal-seeds     merge renders that share a seed (correlated: refused by default)
     The output records its inputs (merged_inputs), the summed spp and render_seconds, and
     keeps the first input's other metadata.
+  merge OUT.ckpt IN1.ckpt [IN2.ckpt ...]   exact sum of partial checkpoints of one render
+    (gradus --passes A:B) whose pass ranges are disjoint and cover [0, N); resume OUT.ckpt
+    with gradus to finish the image. Other renders, gaps and overlaps are refused.
 )"},
     {"falsecolor", R"(  falsecolor A REF OUT.png       per-pixel relMSE of A vs REF as a colour ramp
       --max V                 value mapped to white (default: 99th percentile)
@@ -257,6 +262,10 @@ int CmdConvert(const std::vector<std::string> &argv) {
 int CmdInfo(const std::vector<std::string> &argv) {
     Args a = Parse(argv, {}, {"json"});
     NeedPositionals(a, 1, "info");
+    if (IsCheckpointFile(a.pos[0])) {
+        std::cout << a.pos[0] << ": Gradus checkpoint\n" << DescribeCheckpoint(ReadCheckpoint(a.pos[0]));
+        return 0;
+    }
     Image img = ReadImage(a.pos[0]);
     std::vector<ChannelStats> stats = ComputeChannelStats(img);
     // Per-layer NaN/Inf totals.
@@ -315,9 +324,28 @@ int CmdInfo(const std::vector<std::string> &argv) {
     return 0;
 }
 
+// Partial checkpoints of one render (gradus --passes): exact sums of the
+// accumulators into the checkpoint of the whole render.
+int MergeCheckpointFiles(const Args &a) {
+    std::vector<Checkpoint> parts;
+    std::vector<std::string> names(a.pos.begin() + 1, a.pos.end());
+    for (const auto &n : names) {
+        if (!IsCheckpointFile(n)) throw Error("merge: " + n + " is not a checkpoint (checkpoints and images do not mix)");
+        parts.push_back(ReadCheckpoint(n));
+    }
+    Checkpoint m = MergeCheckpoints(parts, names);
+    WriteCheckpoint(a.pos[0], m);
+    std::cout << "merged " << parts.size() << " checkpoints into " << a.pos[0] << ": passes [" << m.passBegin << ", "
+              << m.passEnd << "), " << (m.complete ? "complete (gradus --resume " + a.pos[0] + " finishes the image)"
+                                                   : "not complete")
+              << "\n";
+    return 0;
+}
+
 int CmdMerge(const std::vector<std::string> &argv) {
     Args a = Parse(argv, {"weights"}, {"allow-equal-seeds"});
     NeedPositionals(a, 2, "merge", true);
+    if (IsCheckpointFile(a.pos[1])) return MergeCheckpointFiles(a);
     std::vector<Image> images;
     for (size_t i = 1; i < a.pos.size(); ++i) images.push_back(ReadImage(a.pos[i]));
     // Renders with the same seed (and scene) repeat the same random numbers:

@@ -1,0 +1,191 @@
+// Checkpoint files and film states: round trip, refusal of every truncation
+// and of every corrupted byte, and the rules of merging partial renders.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <unistd.h>
+
+#include "render/checkpoint.h"
+#include "render/film.h"
+
+using namespace gradus;
+
+namespace {
+
+std::string TempPath(const std::string &name) {
+    return "/tmp/gradus_ckpt_test_" + std::to_string(::getpid()) + "_" + name;
+}
+
+std::string ReadAll(const std::string &p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+void WriteAll(const std::string &p, const std::string &s) { std::ofstream(p, std::ios::binary) << s; }
+
+std::unique_ptr<Film> SmallFilm(int w = 4, int h = 3) {
+    const Float crop[4] = {0, 1, 0, 1};
+    auto f = std::make_unique<Film>(Point2i{w, h}, crop, CreateFilter(EntityDesc()), "x.exr", 1);
+    f->addLayer("primal");
+    return f;
+}
+
+// A film state with every double set to v (header of `film`'s state kept).
+std::string StateOf(const Film &film, double v) {
+    std::string s = film.saveState();
+    const size_t doubles = size_t(film.pixelBounds().area()) * (8 + 6 * film.numLayers());
+    const size_t header = s.size() - doubles * sizeof(double);
+    for (size_t i = 0; i < doubles; ++i) std::memcpy(&s[header + i * sizeof(double)], &v, sizeof v);
+    return s;
+}
+
+Checkpoint Sample(int a, int b, const std::string &film) {
+    Checkpoint c;
+    c.identity = "scene_hash: x\nspp: 6\n";
+    c.integrator = "path";
+    c.seed = 7;
+    c.passBegin = c.sppBegin = a;
+    c.passEnd = c.sppEnd = b;
+    c.complete = b == 6;
+    c.seconds = 1.5;
+    c.nonFinite = 2;
+    c.film = film;
+    return c;
+}
+
+TEST(Checkpoint, RoundTrip) {
+    auto film = SmallFilm();
+    Checkpoint c = Sample(2, 5, StateOf(*film, 0.25));
+    c.state = std::string("\0mlt\xff", 5);
+    const std::string p = TempPath("rt.ckpt");
+    WriteCheckpoint(p, c);
+    EXPECT_TRUE(IsCheckpointFile(p));
+    EXPECT_FALSE(std::ifstream(p + ".tmp").good()) << "the temporary file must be renamed";
+    Checkpoint r = ReadCheckpoint(p);
+    EXPECT_EQ(r.identity, c.identity);
+    EXPECT_EQ(r.integrator, c.integrator);
+    EXPECT_EQ(r.seed, c.seed);
+    EXPECT_EQ(r.passBegin, 2);
+    EXPECT_EQ(r.passEnd, 5);
+    EXPECT_EQ(r.sppBegin, 2);
+    EXPECT_EQ(r.sppEnd, 5);
+    EXPECT_FALSE(r.complete);
+    EXPECT_EQ(r.seconds, 1.5);
+    EXPECT_EQ(r.nonFinite, 2u);
+    EXPECT_EQ(r.film, c.film);
+    EXPECT_EQ(r.state, c.state);
+    std::remove(p.c_str());
+}
+
+// Every prefix of a checkpoint is refused with a message (never read as data).
+TEST(Checkpoint, EveryTruncationIsRefused) {
+    auto film = SmallFilm(2, 2);
+    const std::string p = TempPath("full.ckpt"), q = TempPath("cut.ckpt");
+    WriteCheckpoint(p, Sample(0, 6, StateOf(*film, 1)));
+    const std::string data = ReadAll(p);
+    for (size_t n = 0; n < data.size(); ++n) {
+        WriteAll(q, data.substr(0, n));
+        try {
+            ReadCheckpoint(q);
+            ADD_FAILURE() << "a checkpoint cut to " << n << " of " << data.size() << " bytes was accepted";
+        } catch (const Error &e) {
+            EXPECT_NE(std::string(e.what()).find(q), std::string::npos) << e.what();
+        }
+    }
+    std::remove(p.c_str());
+    std::remove(q.c_str());
+}
+
+// Every single corrupted byte (magic, version, length, payload, checksum) is refused.
+TEST(Checkpoint, EveryCorruptedByteIsRefused) {
+    auto film = SmallFilm(2, 2);
+    const std::string p = TempPath("full2.ckpt"), q = TempPath("bad.ckpt");
+    WriteCheckpoint(p, Sample(0, 6, StateOf(*film, 1)));
+    const std::string data = ReadAll(p);
+    int refused = 0;
+    for (size_t i = 0; i < data.size(); ++i) {
+        std::string bad = data;
+        bad[i] = char(bad[i] ^ 0x10);
+        WriteAll(q, bad);
+        try {
+            ReadCheckpoint(q);
+            ADD_FAILURE() << "byte " << i << " flipped was accepted";
+        } catch (const Error &) {
+            ++refused;
+        }
+    }
+    EXPECT_EQ(refused, int(data.size()));
+    std::remove(p.c_str());
+    std::remove(q.c_str());
+}
+
+TEST(Checkpoint, NotACheckpoint) {
+    const std::string p = TempPath("image.exr");
+    WriteAll(p, "\x76\x2f\x31\x01 an EXR header, not a checkpoint");
+    EXPECT_FALSE(IsCheckpointFile(p));
+    EXPECT_THROW(ReadCheckpoint(p), Error);
+    EXPECT_THROW(ReadCheckpoint(TempPath("missing.ckpt")), Error);
+    std::remove(p.c_str());
+}
+
+TEST(Checkpoint, MergeSumsDisjointRangesInAnyOrder) {
+    auto film = SmallFilm();
+    std::vector<Checkpoint> parts = {Sample(3, 6, StateOf(*film, 4)), Sample(0, 1, StateOf(*film, 1)),
+                                     Sample(1, 3, StateOf(*film, 2))};
+    Checkpoint m = MergeCheckpoints(parts, {"c", "a", "b"});
+    EXPECT_EQ(m.passBegin, 0);
+    EXPECT_EQ(m.passEnd, 6);
+    EXPECT_EQ(m.sppEnd, 6);
+    EXPECT_TRUE(m.complete);
+    EXPECT_EQ(m.seconds, 4.5);
+    EXPECT_EQ(m.nonFinite, 6u);
+    EXPECT_EQ(m.film, StateOf(*film, 7));
+    film->loadState(m.film);  // a state of this film
+}
+
+TEST(Checkpoint, MergeRefusesGapsOverlapsForeignRendersAndState) {
+    auto film = SmallFilm();
+    const std::string s = StateOf(*film, 1);
+    auto error = [](std::vector<Checkpoint> parts) {
+        try {
+            MergeCheckpoints(parts, {"one", "two"});
+        } catch (const Error &e) {
+            return std::string(e.what());
+        }
+        return std::string();
+    };
+    EXPECT_NE(error({Sample(0, 2, s), Sample(3, 6, s)}).find("gap"), std::string::npos);
+    EXPECT_NE(error({Sample(0, 3, s), Sample(2, 6, s)}).find("overlap"), std::string::npos);
+    EXPECT_NE(error({Sample(1, 3, s), Sample(3, 6, s)}).find("pass 0"), std::string::npos);
+    Checkpoint other = Sample(2, 6, s);
+    other.seed = 8;
+    EXPECT_NE(error({Sample(0, 2, s), other}).find("another render"), std::string::npos);
+    other = Sample(2, 6, s);
+    other.identity += "x";
+    EXPECT_NE(error({Sample(0, 2, s), other}).find("another render"), std::string::npos);
+    Checkpoint withState = Sample(2, 6, s);
+    withState.state = "chains";
+    EXPECT_NE(error({Sample(0, 2, s), withState}).find("depend on each other"), std::string::npos);
+    auto bigger = SmallFilm(5, 3);
+    EXPECT_NE(error({Sample(0, 2, s), Sample(2, 6, StateOf(*bigger, 1))}).find("different films"), std::string::npos);
+}
+
+TEST(FilmState, RoundTripAndRefusals) {
+    auto film = SmallFilm();
+    const std::string s = StateOf(*film, 0.5);
+    film->loadState(s);
+    EXPECT_EQ(film->saveState(), s);
+    auto other = SmallFilm(3, 4);
+    EXPECT_THROW(other->loadState(s), Error);  // other bounds
+    auto moreLayers = SmallFilm();
+    moreLayers->addLayer("dx");
+    EXPECT_THROW(moreLayers->loadState(s), Error);  // other layers
+    EXPECT_THROW(film->loadState(s.substr(0, s.size() - 8)), Error);
+    EXPECT_THROW(film->loadState("FILM"), Error);
+}
+
+}  // namespace

@@ -23,6 +23,7 @@ for b in gradus imgtool; do
   [ -x "$bin/$b" ] || { echo "FAIL: $bin/$b not built"; exit 1; }
 done
 
+[ "$(id -u)" = 0 ] || { echo "FAIL: runs slurmctld and slurmd as SlurmUser=root: run it as root"; exit 1; }
 cluster_install
 rc=$?
 if [ $rc = 77 ]; then
@@ -31,6 +32,10 @@ if [ $rc = 77 ]; then
 fi
 [ $rc = 0 ] || exit 1
 
+# All waits end within 900 s of here (CTest's TIMEOUT is 1200 s).
+deadline=$((SECONDS + 900))
+# Under /tmp, not the build tree: MUNGE's and slurmd's Unix socket paths must stay short
+# (108 bytes at most).
 work=$(mktemp -d /tmp/gradus-slurm-test.XXXXXX)
 chmod 755 "$work"  # munged's socket lives below it
 status=1
@@ -64,6 +69,8 @@ job_state() {
 # wait_job ID SECONDS: waits until job ID (every task of an array) completed; fails on any other end.
 wait_job() {
   local id=$1 limit=$2 start=$SECONDS s
+  # Never past the test's own deadline, so that the cleanup runs before CTest's TIMEOUT kills it.
+  [ $((deadline - SECONDS)) -ge "$limit" ] || limit=$((deadline - SECONDS))
   while :; do
     s=$(job_state "$id")
     case " $s" in
@@ -119,7 +126,7 @@ for integrator in path gpt; do
   [ -f "$out/final.exr" ] || fail "$integrator: no $out/final.exr"
   for k in 0 1 2 3; do [ -f "$out/part_$k.ckpt" ] || fail "$integrator: no part_$k.ckpt"; done
 
-  "$bin/gradus" "$scene" "${opts[@]}" --nthreads 2 --quiet --outfile "$work/single_$integrator.exr" ||
+  timeout 300 "$bin/gradus" "$scene" "${opts[@]}" --nthreads 2 --quiet --outfile "$work/single_$integrator.exr" ||
     fail "$integrator: the single-process render failed"
   # Every layer: the image and, for gpt, primal, dx, dy, their variances and reconstructions.
   layers=()

@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # A private one-node Slurm cluster on localhost, for tests (sourced by bash, as root).
 #
 #   cluster_install    installs Slurm and MUNGE from Debian when missing; returns 77 when it can't
@@ -96,8 +97,8 @@ cluster_start() {
   munge -n --socket="$d/munge-run/munge.socket" | unmunge --socket="$d/munge-run/munge.socket" >/dev/null ||
     { cluster_log "munge/unmunge round trip failed"; return 1; }
 
-  local port=0 try
-  for try in $(seq 1 50); do
+  local port=0 _try
+  for _try in $(seq 1 50); do
     port=$((20000 + RANDOM % 20000))
     port_free $port && port_free $((port + 1)) && break
     port=0

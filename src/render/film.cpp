@@ -173,18 +173,37 @@ Image Film::toImage() const {
 }
 
 // ---------------------------------------------------------------- checkpoints
+// State layout: "FILM", version, pixel bounds, layer names, then the arrays
+// (main sums, weights, splats, counts, then per layer its values and its
+// splats), each as a byte 0 (all zero, no data) or 1 followed by its doubles.
+// Most layers of most integrators never receive splats: their zero arrays
+// cost one byte.
 namespace {
 
 constexpr uint32_t kFilmStateMagic = 0x4d4c4946;  // "FILM"
-constexpr uint32_t kFilmStateVersion = 1;
+constexpr uint32_t kFilmStateVersion = 2;
 static_assert(sizeof(Spectrum) == 3 * sizeof(double), "film states store Spectrum as three doubles");
 
 void PutU32(std::string *s, uint32_t v) { s->append(reinterpret_cast<const char *>(&v), 4); }
-void PutBytes(std::string *s, const void *p, size_t n) { s->append(static_cast<const char *>(p), n); }
 
-// Length of the header of a film state (everything before the doubles), or
-// throws; *doubles receives the number of doubles the header announces.
-size_t FilmStateHeader(const std::string &s, size_t *doubles, Bounds2i *b, std::vector<std::string> *names) {
+void PutArray(std::string *s, const void *p, size_t doubles) {
+    const double *d = static_cast<const double *>(p);
+    bool zero = true;
+    for (size_t i = 0; i < doubles && zero; ++i) zero = d[i] == 0 && !std::signbit(d[i]);
+    s->push_back(zero ? 0 : 1);
+    if (!zero) s->append(static_cast<const char *>(p), doubles * sizeof(double));
+}
+
+struct ParsedState {
+    Bounds2i bounds;
+    std::vector<std::string> names;
+    size_t headerBytes = 0;
+    // Per array: offset of its doubles (or npos when all zero) and their count.
+    std::vector<std::pair<size_t, size_t>> arrays;
+};
+
+ParsedState ParseFilmState(const std::string &s) {
+    ParsedState ps;
     size_t at = 0;
     auto need = [&](size_t n) {
         if (s.size() - at < n) throw Error("film state: truncated");
@@ -200,23 +219,37 @@ size_t FilmStateHeader(const std::string &s, size_t *doubles, Bounds2i *b, std::
     if (u32() != kFilmStateVersion) throw Error("film state: unknown version");
     int32_t c[4];
     for (int32_t &v : c) v = int32_t(u32());
-    b->pMin = {c[0], c[1]};
-    b->pMax = {c[2], c[3]};
-    if (b->width() <= 0 || b->height() <= 0 || b->area() > (int64_t(1) << 34)) throw Error("film state: bad bounds");
+    Bounds2i &b = ps.bounds;
+    b.pMin = {c[0], c[1]};
+    b.pMax = {c[2], c[3]};
+    if (b.width() <= 0 || b.height() <= 0 || b.area() > (int64_t(1) << 34)) throw Error("film state: bad bounds");
     uint32_t nl = u32();
     if (nl > 4096) throw Error("film state: bad layer count");
-    names->clear();
     for (uint32_t i = 0; i < nl; ++i) {
         uint32_t len = u32();
         need(len);
-        names->emplace_back(s.data() + at, len);
+        ps.names.emplace_back(s.data() + at, len);
         at += len;
     }
-    const uint64_t n = uint64_t(b->area());
-    *doubles = size_t(n * (3 + 1 + 3 + 1) + uint64_t(nl) * n * 6);
-    if ((s.size() - at) / sizeof(double) != *doubles || (s.size() - at) % sizeof(double))
-        throw Error("film state: size does not match its header");
-    return at;
+    ps.headerBytes = at;
+    const size_t n = size_t(b.area());
+    std::vector<size_t> sizes = {3 * n, n, 3 * n, n};
+    for (uint32_t i = 0; i < nl; ++i) sizes.insert(sizes.end(), {3 * n, 3 * n});
+    for (size_t count : sizes) {
+        need(1);
+        const char kind = s[at++];
+        if (kind == 0) {
+            ps.arrays.push_back({std::string::npos, count});
+        } else if (kind == 1) {
+            need(count * sizeof(double));
+            ps.arrays.push_back({at, count});
+            at += count * sizeof(double);
+        } else {
+            throw Error("film state: bad array tag");
+        }
+    }
+    if (at != s.size()) throw Error("film state: size does not match its header");
+    return ps;
 }
 
 }  // namespace
@@ -224,7 +257,6 @@ size_t FilmStateHeader(const std::string &s, size_t *doubles, Bounds2i *b, std::
 std::string Film::saveState() const {
     std::string s;
     const size_t n = size_t(bounds_.area());
-    s.reserve(64 + size_t(n) * sizeof(double) * (8 + 6 * layers_.size()));
     PutU32(&s, kFilmStateMagic);
     PutU32(&s, kFilmStateVersion);
     for (int v : {bounds_.pMin.x, bounds_.pMin.y, bounds_.pMax.x, bounds_.pMax.y}) PutU32(&s, uint32_t(v));
@@ -233,53 +265,50 @@ std::string Film::saveState() const {
         PutU32(&s, uint32_t(name.size()));
         s += name;
     }
-    PutBytes(&s, sum_.data(), n * sizeof(Spectrum));
-    PutBytes(&s, weight_.data(), n * sizeof(double));
-    PutBytes(&s, splat_.data(), n * sizeof(Spectrum));
-    PutBytes(&s, count_.data(), n * sizeof(double));
+    PutArray(&s, sum_.data(), 3 * n);
+    PutArray(&s, weight_.data(), n);
+    PutArray(&s, splat_.data(), 3 * n);
+    PutArray(&s, count_.data(), n);
     for (size_t l = 0; l < layers_.size(); ++l) {
-        PutBytes(&s, layers_[l].data(), n * sizeof(Spectrum));
-        PutBytes(&s, layerSplats_[l].data(), n * sizeof(Spectrum));
+        PutArray(&s, layers_[l].data(), 3 * n);
+        PutArray(&s, layerSplats_[l].data(), 3 * n);
     }
     return s;
 }
 
 void Film::loadState(const std::string &state) {
-    size_t doubles;
-    Bounds2i b;
-    std::vector<std::string> names;
-    size_t at = FilmStateHeader(state, &doubles, &b, &names);
-    if (!(b.pMin == bounds_.pMin) || !(b.pMax == bounds_.pMax))
+    ParsedState ps = ParseFilmState(state);
+    if (!(ps.bounds.pMin == bounds_.pMin) || !(ps.bounds.pMax == bounds_.pMax))
         throw Error("film state: its pixel bounds differ from this film's");
-    if (names != layerNames_) throw Error("film state: its layers differ from this render's");
-    const size_t n = size_t(bounds_.area());
-    auto get = [&](void *dst, size_t bytes) {
-        std::memcpy(dst, state.data() + at, bytes);
-        at += bytes;
-    };
-    get(sum_.data(), n * sizeof(Spectrum));
-    get(weight_.data(), n * sizeof(double));
-    get(splat_.data(), n * sizeof(Spectrum));
-    get(count_.data(), n * sizeof(double));
-    for (size_t l = 0; l < layers_.size(); ++l) {
-        get(layers_[l].data(), n * sizeof(Spectrum));
-        get(layerSplats_[l].data(), n * sizeof(Spectrum));
+    if (ps.names != layerNames_) throw Error("film state: its layers differ from this render's");
+    std::vector<void *> dst = {sum_.data(), weight_.data(), splat_.data(), count_.data()};
+    for (size_t l = 0; l < layers_.size(); ++l) dst.insert(dst.end(), {layers_[l].data(), layerSplats_[l].data()});
+    for (size_t k = 0; k < dst.size(); ++k) {
+        const auto &a = ps.arrays[k];
+        if (a.first == std::string::npos) std::memset(dst[k], 0, a.second * sizeof(double));
+        else std::memcpy(dst[k], state.data() + a.first, a.second * sizeof(double));
     }
 }
 
 std::string Film::AddStates(const std::string &a, const std::string &b) {
-    size_t da, db;
-    Bounds2i ba, bb;
-    std::vector<std::string> na, nb;
-    size_t ha = FilmStateHeader(a, &da, &ba, &na), hb = FilmStateHeader(b, &db, &bb, &nb);
-    if (ha != hb || a.compare(0, ha, b, 0, hb) != 0) throw Error("film states of different films (bounds or layers differ)");
-    std::string out = a;
-    for (size_t i = 0; i < da; ++i) {
-        double x, y;
-        std::memcpy(&x, a.data() + ha + i * sizeof(double), sizeof(double));
-        std::memcpy(&y, b.data() + hb + i * sizeof(double), sizeof(double));
-        x += y;
-        std::memcpy(&out[ha + i * sizeof(double)], &x, sizeof(double));
+    ParsedState pa = ParseFilmState(a), pb = ParseFilmState(b);
+    if (pa.headerBytes != pb.headerBytes || a.compare(0, pa.headerBytes, b, 0, pb.headerBytes) != 0)
+        throw Error("film states of different films (bounds or layers differ)");
+    std::string out = a.substr(0, pa.headerBytes);
+    std::vector<double> sum;
+    for (size_t k = 0; k < pa.arrays.size(); ++k) {
+        const size_t n = pa.arrays[k].second;
+        sum.assign(n, 0.0);
+        for (const auto *src : {&pa.arrays[k], &pb.arrays[k]}) {
+            if (src->first == std::string::npos) continue;
+            const std::string &bytes = src == &pa.arrays[k] ? a : b;
+            for (size_t i = 0; i < n; ++i) {
+                double v;
+                std::memcpy(&v, bytes.data() + src->first + i * sizeof(double), sizeof v);
+                sum[i] += v;
+            }
+        }
+        PutArray(&out, sum.data(), n);
     }
     return out;
 }

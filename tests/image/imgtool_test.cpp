@@ -302,9 +302,13 @@ TEST(Imgtool, MergeCheckpoints) {
         // A film state of 2 x 1 pixels, no layers: header, then the doubles.
         const Float crop[4] = {0, 1, 0, 1};
         Film film(Point2i{2, 1}, crop, CreateFilter(EntityDesc()), "x.exr", 1);
+        // All four arrays (sums, weights, splats, counts) set to v: tag 1 and the doubles.
         std::string s = film.saveState();
-        const size_t n = 2 * 8, header = s.size() - n * sizeof(double);
-        for (size_t i = 0; i < n; ++i) std::memcpy(&s[header + i * 8], &v, 8);
+        s.resize(s.size() - 4);
+        for (size_t count : {6, 2, 6, 2}) {
+            s.push_back(1);
+            for (size_t i = 0; i < count; ++i) s.append(reinterpret_cast<const char *>(&v), 8);
+        }
         c.film = s;
         return c;
     };

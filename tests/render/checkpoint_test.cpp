@@ -34,13 +34,21 @@ std::unique_ptr<Film> SmallFilm(int w = 4, int h = 3) {
     return f;
 }
 
-// A film state with every double set to v (header of `film`'s state kept).
+// The state of `film` after every accumulator was set to v (through a film
+// tile would need a sampler; the layout is documented in film.cpp: header,
+// then per array a tag byte and its doubles).
 std::string StateOf(const Film &film, double v) {
-    std::string s = film.saveState();
-    const size_t doubles = size_t(film.pixelBounds().area()) * (8 + 6 * film.numLayers());
-    const size_t header = s.size() - doubles * sizeof(double);
-    for (size_t i = 0; i < doubles; ++i) std::memcpy(&s[header + i * sizeof(double)], &v, sizeof v);
-    return s;
+    std::string s = film.saveState();  // all arrays zero: header + one tag byte per array
+    const size_t n = size_t(film.pixelBounds().area());
+    std::vector<size_t> sizes = {3 * n, n, 3 * n, n};
+    for (int l = 0; l < film.numLayers(); ++l) sizes.insert(sizes.end(), {3 * n, 3 * n});
+    std::string out = s.substr(0, s.size() - sizes.size());
+    for (size_t count : sizes) {
+        out.push_back(v == 0 ? 0 : 1);
+        if (v != 0)
+            for (size_t i = 0; i < count; ++i) out.append(reinterpret_cast<const char *>(&v), sizeof v);
+    }
+    return out;
 }
 
 Checkpoint Sample(int a, int b, const std::string &film) {

@@ -192,6 +192,15 @@ class Loader {
             if (u32(16) != 0x4E4F534Au) throw Error(at0(), ".glb: the first chunk is not JSON");
             if (jsonLen > bytes.size() - 20) throw Error(at0(), ".glb: the JSON chunk runs past the end of the file");
             json_.assign(reinterpret_cast<const char *>(bytes.data()) + 20, jsonLen);
+            // tinygltf 2.8 bounds the BIN chunk's length without its 8-byte header
+            // and then reads up to 8 bytes past the end of the file: check it here.
+            const size_t binAt = 20 + size_t(jsonLen);
+            if (binAt < bytes.size()) {
+                if (bytes.size() - binAt < 8) throw Error(at0(), ".glb: truncated chunk header after the JSON chunk");
+                if (u32(binAt) > bytes.size() - binAt - 8)
+                    throw Error(at0(), ".glb: the BIN chunk (" + std::to_string(u32(binAt)) +
+                                           " bytes) runs past the end of the file");
+            }
         } else {
             json_.assign(bytes.begin(), bytes.end());
         }

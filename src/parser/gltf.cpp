@@ -18,6 +18,8 @@
 #include <set>
 #include <sstream>
 
+#include <sys/stat.h>
+
 #include <tiny_gltf.h>
 
 #include "core/error.h"
@@ -131,6 +133,12 @@ std::vector<unsigned char> ReadBytes(const std::string &path, std::string *err) 
 bool FsFileExists(const std::string &path, void *) { return std::ifstream(path).good(); }
 std::string FsExpand(const std::string &path, void *) { return path; }  // no ~ or $VAR expansion
 bool FsRead(std::vector<unsigned char> *out, std::string *err, const std::string &path, void *) {
+    // Buffers and images are regular files (a device such as /dev/zero would be read forever).
+    struct stat st;
+    if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
+        if (err) *err += "\"" + path + "\" is not a regular file";
+        return false;
+    }
     std::string e;
     *out = ReadBytes(path, &e);
     if (!e.empty()) {
@@ -221,7 +229,10 @@ class Loader {
             ok = false;
             err = e.what();
         }
-        if (!ok) throw Error(at0(), "not a valid glTF 2.0 file: " + Trim(err.empty() ? warn : err));
+        if (!ok) {
+            const std::string msg = Trim(err.empty() ? warn : err);
+            throw Error(locateLoaderMessage(msg), "not a valid glTF 2.0 file: " + msg);
+        }
         checkExtensions();
     }
 
@@ -251,6 +262,25 @@ class Loader {
         if (!json_.empty()) {
             auto lc = JsonLocator(json_).locate(pointer);
             l.line = lc.first, l.column = lc.second;
+        }
+        return l;
+    }
+    // tinygltf's messages: JSON syntax errors carry "line L, column C"
+    // (nlohmann); missing buffers and images name "buffer[i]" / "image[i]".
+    FileLoc locateLoaderMessage(const std::string &msg) const {
+        FileLoc l = at0();
+        int line = 0, col = 0;
+        size_t p = msg.find("line ");
+        if (p != std::string::npos && std::sscanf(msg.c_str() + p, "line %d, column %d", &line, &col) == 2 && line > 0) {
+            l.line = line, l.column = std::max(1, col);
+            return l;
+        }
+        for (const char *kind : {"buffer", "image"}) {
+            size_t q = msg.find(std::string(kind) + "[");
+            int idx = -1;
+            if (q != std::string::npos && std::sscanf(msg.c_str() + q + std::strlen(kind), "[%d]", &idx) == 1 && idx >= 0 &&
+                !json_.empty())
+                return at("/" + std::string(kind) + "s/" + std::to_string(idx) + "/uri");
         }
         return l;
     }
@@ -376,6 +406,11 @@ class Loader {
         const int csize = ComponentSize(a.componentType);
         if (!csize) fail(ptr + "/componentType", "invalid componentType " + std::to_string(a.componentType));
         const int nc = NumComponents(a.type);
+        // Accessors without a buffer view are zeros (plus sparse values): their
+        // size is bounded here, as the others are by their buffers.
+        if (a.bufferView < 0 && a.count > (size_t(1) << 24))
+            fail(ptr + "/count", "accessor without bufferView has count " + std::to_string(a.count) +
+                                     " (at most 2^24 zero-initialised elements are read)");
         if (a.count == 0 || a.count > (size_t(1) << 31))
             fail(ptr + "/count", "accessor count " + std::to_string(a.count) + " is out of range [1, 2^31]");
         AccessorData d;

@@ -250,17 +250,18 @@ TEST_F(CliTest, FuzzRegressionsEndCleanly) {
     const fs::path dir = fs::path(GRADUS_SOURCE_DIR) / "tests/fuzz/regressions";
     int n = 0;
     for (const auto &e : fs::directory_iterator(dir)) {
-        if (e.path().extension() != ".pbrt") continue;
+        const std::string ext = e.path().extension().string();
+        if (ext != ".pbrt" && ext != ".gltf") continue;
         ++n;
         RunResult r = run("'" + e.path().string() + "' --spp 1 --seed 7 --nthreads 1 --quiet --outfile out.exr");
         EXPECT_TRUE(r.status == 0 || r.status == 1) << e.path() << ": " << r.err;
         if (r.status == 1) {
-            EXPECT_NE(r.err.find(".pbrt:"), std::string::npos) << e.path() << ": " << r.err;
+            EXPECT_NE(r.err.find(ext + ":"), std::string::npos) << e.path() << ": " << r.err;
             continue;
         }
         gradus::Image img = gradus::ReadImage((dir_ / "out.exr").string());
         for (float v : img.data()) ASSERT_TRUE(std::isfinite(v)) << e.path();
         fs::remove(dir_ / "out.exr");
     }
-    EXPECT_GE(n, 7);
+    EXPECT_GE(n, 9);
 }

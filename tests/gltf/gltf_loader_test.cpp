@@ -488,3 +488,12 @@ INSTANTIATE_TEST_SUITE_P(Files, GltfMalformed, ::testing::ValuesIn(MalformedCase
 
 }  // namespace
 }  // namespace gradus::gltftest
+
+// scenes/cornell-box.glb is the generator's cornell.glb, kept in the project
+// for users: it must not drift from what make_gltf.py writes.
+TEST(GltfScenes, ShippedCornellBoxIsTheGeneratorsOutput) {
+    const std::string shipped = ReadText(std::string(GRADUS_SOURCE_DIR) + "/scenes/cornell-box.glb");
+    const std::string generated = ReadText(Data("cornell.glb"));
+    ASSERT_FALSE(generated.empty());
+    EXPECT_TRUE(shipped == generated) << "regenerate it: python3 tests/gltf/make_gltf.py DIR && cp DIR/cornell.glb scenes/cornell-box.glb";
+}

@@ -492,6 +492,7 @@ INSTANTIATE_TEST_SUITE_P(Files, GltfMalformed, ::testing::ValuesIn(MalformedCase
 // scenes/cornell-box.glb is the generator's cornell.glb, kept in the project
 // for users: it must not drift from what make_gltf.py writes.
 TEST(GltfScenes, ShippedCornellBoxIsTheGeneratorsOutput) {
+    using namespace gradus::gltftest;
     const std::string shipped = ReadText(std::string(GRADUS_SOURCE_DIR) + "/scenes/cornell-box.glb");
     const std::string generated = ReadText(Data("cornell.glb"));
     ASSERT_FALSE(generated.empty());

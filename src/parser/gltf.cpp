@@ -569,21 +569,20 @@ class Loader {
     static void addInt(ParamSet &ps, const std::string &name, int v, const FileLoc &loc) {
         addNumbers(ps, "integer", name, {double(v)}, loc);
     }
-    static void addString(ParamSet &ps, const std::string &name, const std::string &v, const FileLoc &loc) {
+    static void addStrings(ParamSet &ps, const char *type, const std::string &name, const std::string &v,
+                           const FileLoc &loc) {
         Param p;
-        p.type = "string";
+        p.type = type;
         p.name = name;
         p.loc = loc;
         p.strings = {v};
         ps.add(std::move(p));
     }
+    static void addString(ParamSet &ps, const std::string &name, const std::string &v, const FileLoc &loc) {
+        addStrings(ps, "string", name, v, loc);
+    }
     static void addTextureRef(ParamSet &ps, const std::string &name, const std::string &tex, const FileLoc &loc) {
-        Param p;
-        p.type = "texture";
-        p.name = name;
-        p.loc = loc;
-        p.strings = {tex};
-        ps.add(std::move(p));
+        addStrings(ps, "texture", name, tex, loc);
     }
     static void addBool(ParamSet &ps, const std::string &name, bool v, const FileLoc &loc) {
         Param p;

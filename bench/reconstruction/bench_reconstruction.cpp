@@ -57,8 +57,20 @@ void CGIteration(benchmark::State &state) {
     state.SetItemsProcessed(state.iterations() * state.range(0));
 }
 
+// L1Default's IRLS with other schedules: IRLS iterations x CG iterations per
+// solve (ranges 0 and 1), to see which schedules reach the reference
+// schedule's objective in less time.
+void L1Schedule(benchmark::State &state) {
+    ReconstructionOptions o = ReconstructionOptions::L1Default();
+    o.irlsIterations = int(state.range(0));
+    o.cgIterations = int(state.range(1));
+    Run(state, o);
+}
+
 }  // namespace
 
+BENCHMARK(L1Schedule)->ArgsProduct({{12, 14, 16, 18, 20, 24}, {6, 8, 10}})->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime()->Iterations(1);
+BENCHMARK_CAPTURE(Run, Hybrid, ReconstructionOptions::Hybrid())->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 BENCHMARK(CGIteration)->Arg(1)->Arg(21)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 BENCHMARK_CAPTURE(Run, L2Exact, ReconstructionOptions::L2Exact())->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
 BENCHMARK_CAPTURE(Run, L2CGJacobi, [] {

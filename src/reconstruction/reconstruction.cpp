@@ -59,11 +59,76 @@ ReconstructionOptions ReconstructionOptions::Weighted() {
     return o;
 }
 
+ReconstructionOptions ReconstructionOptions::Hybrid(double alpha) {
+    ReconstructionOptions o;
+    o.norm = ReconstructionNorm::Hybrid;
+    o.alpha = alpha;
+    return o;
+}
+
 ReconstructionNorm ParseReconstructionNorm(const std::string &name) {
     if (name == "l2" || name == "L2") return ReconstructionNorm::L2;
     if (name == "l1" || name == "L1") return ReconstructionNorm::L1;
     if (name == "weighted") return ReconstructionNorm::Weighted;
-    throw Error("unknown reconstruction norm '" + name + "' (valid: l2, l1, weighted)");
+    if (name == "hybrid") return ReconstructionNorm::Hybrid;
+    throw Error("unknown reconstruction norm '" + name + "' (valid: l2, l1, weighted, hybrid)");
+}
+
+std::vector<float> CombineScales(const std::vector<float> &fine, const std::vector<float> &coarse, int W, int H,
+                                 int C, double sigma) {
+    const size_t N = size_t(W) * H, rowLen = size_t(W) * C;
+    if (fine.size() != N * C || coarse.size() != N * C) throw Error("reconstruction: CombineScales: size mismatch");
+    if (!(sigma >= 0) || !std::isfinite(sigma)) throw Error("reconstruction: lowpass sigma must be finite and >= 0");
+    std::vector<float> d(N * C);
+    for (size_t i = 0; i < N * C; ++i) d[i] = coarse[i] - fine[i];
+    if (sigma > 0) {
+        // Normalised Gaussian taps to 3 sigma.
+        const int R = std::max(1, int(std::ceil(3 * sigma)));
+        std::vector<float> k(2 * R + 1);
+        double ks = 0;
+        for (int j = -R; j <= R; ++j) ks += std::exp(-0.5 * j * j / (sigma * sigma));
+        for (int j = -R; j <= R; ++j) k[j + R] = float(std::exp(-0.5 * j * j / (sigma * sigma)) / ks);
+        // Half-sample symmetric extension (x[-1] = x[0], x[n] = x[n-1]): the
+        // blur matrix is then symmetric with unit row sums, so it keeps the sum.
+        auto mirror = [](int i, int n) {
+            const int p = 2 * n;
+            i %= p;
+            if (i < 0) i += p;
+            return i < n ? i : p - 1 - i;
+        };
+        std::vector<float> tmp(N * C);
+        // Horizontal: each row padded by R mirrored pixels, then contiguous sums.
+        tbb::parallel_for(tbb::blocked_range<int>(0, H, 8), [&](const tbb::blocked_range<int> &rows) {
+            std::vector<float> pad(size_t(W + 2 * R) * C);
+            for (int y = rows.begin(); y < rows.end(); ++y) {
+                const float *src = &d[size_t(y) * rowLen];
+                for (int x = -R; x < W + R; ++x)
+                    for (int c = 0; c < C; ++c) pad[size_t(x + R) * C + c] = src[size_t(mirror(x, W)) * C + c];
+                float *out = &tmp[size_t(y) * rowLen];
+                std::fill(out, out + rowLen, 0.f);
+                for (int j = 0; j <= 2 * R; ++j) {
+                    const float kj = k[j];
+                    const float *in = &pad[size_t(j) * C];
+                    for (size_t i = 0; i < rowLen; ++i) out[i] += kj * in[i];
+                }
+            }
+        });
+        // Vertical: each output row is a weighted sum of whole (mirrored) rows.
+        tbb::parallel_for(tbb::blocked_range<int>(0, H, 8), [&](const tbb::blocked_range<int> &rows) {
+            for (int y = rows.begin(); y < rows.end(); ++y) {
+                float *out = &d[size_t(y) * rowLen];
+                std::fill(out, out + rowLen, 0.f);
+                for (int j = -R; j <= R; ++j) {
+                    const float kj = k[j + R];
+                    const float *in = &tmp[size_t(mirror(y + j, H)) * rowLen];
+                    for (size_t i = 0; i < rowLen; ++i) out[i] += kj * in[i];
+                }
+            }
+        });
+    }
+    std::vector<float> out(N * C);
+    for (size_t i = 0; i < N * C; ++i) out[i] = fine[i] + d[i];
+    return out;
 }
 
 const char *ReconstructionNormName(ReconstructionNorm norm) {
@@ -71,6 +136,7 @@ const char *ReconstructionNormName(ReconstructionNorm norm) {
     case ReconstructionNorm::L2: return "l2";
     case ReconstructionNorm::L1: return "l1";
     case ReconstructionNorm::Weighted: return "weighted";
+    case ReconstructionNorm::Hybrid: return "hybrid";
     }
     return "?";
 }
@@ -158,6 +224,18 @@ std::vector<float> ToInterleaved(const std::vector<float> &planar, int C, size_t
 }  // namespace
 
 ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionOptions &opt) {
+    if (opt.norm == ReconstructionNorm::Hybrid) {
+        // L1 at fine scales, the primal's coarse scales (reconstruction.h).
+        const auto h0 = std::chrono::steady_clock::now();
+        ReconstructionOptions o1 = opt;
+        o1.norm = ReconstructionNorm::L1;
+        ReconstructionResult r = Reconstruct(in, o1);
+        r.image = CombineScales(r.image, in.primal, r.width, r.height, r.channels, opt.lowpassSigma);
+        r.stats.method = "hybrid (l1-irls + lowpass of primal - l1)";
+        r.stats.objective = 0;  // neither norm's minimiser
+        r.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - h0).count();
+        return r;
+    }
     const auto t0 = std::chrono::steady_clock::now();
     if (in.width <= 0 || in.height <= 0)
         throw Error("reconstruction: image size " + std::to_string(in.width) + "x" +

@@ -10,11 +10,15 @@ using namespace gradus::gpttest;
 TEST(GPT, OutputLayersAndDefaultReconstruction) {
     Image img = Render(ShiftScene("Integrator \"gpt\""), 4, 1);
     for (const char *l : {"primal", "dx", "dy", "primal_var", "dx_var", "dy_var", "reconstructed_l1",
-                          "reconstructed_l2"})
+                          "reconstructed_l2", "reconstructed_hybrid"})
         EXPECT_GE(img.channelIndex(std::string(l) + ".R"), 0) << l;
     EXPECT_EQ(img.channelIndex("gd.primal.R"), -1) << "internal layers must not reach the output";
-    Image rgb = img.layerRGB(""), l1 = img.layerRGB("reconstructed_l1");
-    EXPECT_EQ(rgb.data(), l1.data());
+    // The default is the hybrid: L1 with the primal's coarse scales.
+    Image rgb = img.layerRGB(""), h = img.layerRGB("reconstructed_hybrid");
+    EXPECT_EQ(rgb.data(), h.data());
+    EXPECT_EQ(img.metadata["reconstruction"], "hybrid");
+    Image l1 = img.layerRGB("reconstructed_l1");
+    EXPECT_NE(rgb.data(), l1.data());
 }
 
 TEST(GPT, ShiftStatisticsCountEveryType) {

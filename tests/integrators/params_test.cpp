@@ -204,7 +204,7 @@ TEST(IntegratorTables, BadEnumerationIsLocated) {
     }
     if (Registered("gpt")) {
         EXPECT_EQ(CreateError("gpt", Desc().string("reconstruction", "l3", Loc(4, 5))),
-                  "test.pbrt:4:5: unknown \"reconstruction\" \"l3\" (valid: l1, l2, weighted)");
+                  "test.pbrt:4:5: unknown \"reconstruction\" \"l3\" (valid: hybrid, l1, l2, weighted)");
     }
 }
 

@@ -25,7 +25,7 @@
 //   integer pixelbounds []           accepted (use --cropwindow)
 // (gradient family, integrators/gradient/gradient_params.h):
 //   float shiftthreshold 0.001       roughness below which a vertex is "specular"
-//   string reconstruction "l1"       l1 | l2 | weighted: the image in the unprefixed R,G,B
+//   string reconstruction "hybrid"   hybrid | l1 | l2 | weighted: the image in the unprefixed R,G,B
 //   float alpha 0.2                  screened-Poisson primal weight
 //   string pixelfilter "box"         box only (a sample counts in its own pixel); film is not supported yet
 // (gbdpt):

@@ -18,7 +18,7 @@
 //   integer pixelbounds []           accepted (use --cropwindow)
 // (gradient family, integrators/gradient/gradient_params.h):
 //   float shiftthreshold 0.001       roughness below which a vertex is not reconnected
-//   string reconstruction "l1"       l1 | l2 | weighted: the image in the unprefixed R,G,B
+//   string reconstruction "hybrid"   hybrid | l1 | l2 | weighted: the image in the unprefixed R,G,B
 //   float alpha 0.2                  screened-Poisson primal weight
 //   string pixelfilter "film"        film (the scene's PixelFilter, so gpt estimates the same image as
 //                                    path; 9x lower relMSE than box against triangle-filtered references)

@@ -176,10 +176,17 @@ void WriteGradientOutput(const GradientImages &g, ReconstructionNorm norm, doubl
     Image i1 = ResultToImage(r1), i2 = ResultToImage(r2);
     img.setLayerRGB("reconstructed_l1", i1);
     img.setLayerRGB("reconstructed_l2", i2);
+    // Hybrid: the L1 solution above with the primal's coarse scales (reconstruction.h).
+    ReconstructionResult rh = r1;
+    rh.image = CombineScales(r1.image, g.primal, r1.width, r1.height, r1.channels,
+                             ReconstructionOptions::Hybrid().lowpassSigma);
+    Image ih = ResultToImage(rh);
+    img.setLayerRGB("reconstructed_hybrid", ih);
     const Image *chosen = &i1;
     Image iw;
     ReconstructionStats sw;
     if (norm == ReconstructionNorm::L2) chosen = &i2;
+    if (norm == ReconstructionNorm::Hybrid) chosen = &ih;
     if (norm == ReconstructionNorm::Weighted) {
         ReconstructionResult rw = Reconstruct(g, ReconstructionOptions::Weighted());
         sw = rw.stats;

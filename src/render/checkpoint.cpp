@@ -38,7 +38,9 @@ class Writer {
 
 class Reader {
   public:
-    Reader(const std::string &s, const std::string &file) : s_(s), file_(file) {}
+    // Reads s[begin, end).
+    Reader(const std::string &s, size_t begin, size_t end, const std::string &file)
+        : s_(s), file_(file), at_(begin), end_(end) {}
     template <typename T>
     T num() {
         need(sizeof(T));
@@ -54,21 +56,22 @@ class Reader {
         at_ += n;
         return v;
     }
-    bool done() const { return at_ == s_.size(); }
+    bool done() const { return at_ == end_; }
 
   private:
     void need(uint64_t n) const {
-        if (s_.size() - at_ < n) throw Error(file_ + ": checkpoint payload is inconsistent (a field runs past its end)");
+        if (end_ - at_ < n) throw Error(file_ + ": checkpoint payload is inconsistent (a field runs past its end)");
     }
     const std::string &s_;
     const std::string &file_;
-    size_t at_ = 0;
+    size_t at_, end_;
 };
 
-std::string Payload(const Checkpoint &c) {
+// The payload as pieces (the film and state strings are not copied): the
+// fixed fields, then each string with its length.
+std::vector<std::pair<const char *, size_t>> PayloadPieces(const Checkpoint &c, std::string *fixed,
+                                                           uint64_t lengths[4]) {
     Writer w;
-    w.str(c.identity);
-    w.str(c.integrator);
     w.num<uint64_t>(c.seed);
     w.num<int32_t>(c.passBegin);
     w.num<int32_t>(c.passEnd);
@@ -77,9 +80,14 @@ std::string Payload(const Checkpoint &c) {
     w.num<uint8_t>(c.complete ? 1 : 0);
     w.num<double>(c.seconds);
     w.num<uint64_t>(c.nonFinite);
-    w.str(c.film);
-    w.str(c.state);
-    return std::move(w.s);
+    *fixed = std::move(w.s);
+    lengths[0] = c.identity.size(), lengths[1] = c.integrator.size(), lengths[2] = c.film.size(),
+    lengths[3] = c.state.size();
+    return {{reinterpret_cast<const char *>(&lengths[0]), 8}, {c.identity.data(), c.identity.size()},
+            {reinterpret_cast<const char *>(&lengths[1]), 8}, {c.integrator.data(), c.integrator.size()},
+            {fixed->data(), fixed->size()},
+            {reinterpret_cast<const char *>(&lengths[2]), 8}, {c.film.data(), c.film.size()},
+            {reinterpret_cast<const char *>(&lengths[3]), 8}, {c.state.data(), c.state.size()}};
 }
 
 [[noreturn]] void SysFail(const std::string &what, const std::string &path) {
@@ -89,12 +97,18 @@ std::string Payload(const Checkpoint &c) {
 }  // namespace
 
 void WriteCheckpoint(const std::string &path, const Checkpoint &c) {
-    const std::string payload = Payload(c);
+    std::string fixed;
+    uint64_t lengths[4];
+    const auto pieces = PayloadPieces(c, &fixed, lengths);
+    uint64_t size = 0, hash = HashBytes(nullptr, 0);
+    for (const auto &p : pieces) {
+        size += p.second;
+        hash = HashBytes(p.first, p.second, hash);
+    }
     Writer head;
     head.s.append(kMagic, 8);
     head.num<uint32_t>(kVersion);
-    head.num<uint64_t>(payload.size());
-    const uint64_t hash = HashBytes(payload.data(), payload.size());
+    head.num<uint64_t>(size);
     const std::string tmp = path + ".tmp";
     int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     if (fd < 0) SysFail("create", tmp);
@@ -113,7 +127,7 @@ void WriteCheckpoint(const std::string &path, const Checkpoint &c) {
         }
     };
     writeAll(head.s.data(), head.s.size());
-    writeAll(payload.data(), payload.size());
+    for (const auto &p : pieces) writeAll(p.first, p.second);
     writeAll(reinterpret_cast<const char *>(&hash), sizeof hash);
     if (::fsync(fd) != 0) {
         ::close(fd);
@@ -154,12 +168,10 @@ Checkpoint ReadCheckpoint(const std::string &path) {
     if (len > data.size() || data.size() - 20 < len || data.size() - 20 - len != 8)
         throw Error(path + ": truncated or padded checkpoint (" + std::to_string(data.size()) + " bytes, the header says " +
                     std::to_string(len + 28) + ")");
-    const std::string payload = data.substr(20, len);
     uint64_t stored;
     std::memcpy(&stored, data.data() + 20 + len, 8);
-    if (HashBytes(payload.data(), payload.size()) != stored)
-        throw Error(path + ": corrupted checkpoint (checksum mismatch)");
-    Reader r(payload, path);
+    if (HashBytes(data.data() + 20, len) != stored) throw Error(path + ": corrupted checkpoint (checksum mismatch)");
+    Reader r(data, 20, 20 + len, path);
     Checkpoint c;
     c.identity = r.str();
     c.integrator = r.str();

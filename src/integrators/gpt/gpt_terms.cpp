@@ -138,7 +138,7 @@ Spectrum GradientPathTracer::divergedNextEvent(const OffsetPath &o, const LightC
     if (!(*ny > 0)) return Spectrum(0);
     *by = lc.delta ? 0 : o.bsdf.pdf(woY, wiY);
     Spectrum fy = o.bsdf.f(woY, wiY) * AbsDot(wiY, o.isect.shading.n);
-    if (!fy.isBlack() && !Ly.isBlack() && scene_.unoccluded(o.isect, pLy)) return o.beta * fy * Ly * (*J / lc.nx);
+    if (!fy.isBlack() && !Ly.isBlack() && ShiftEdgeVisible(scene_, o.isect, pLy)) return o.beta * fy * Ly * (*J / lc.nx);
     return Spectrum(0);
 }
 
@@ -160,7 +160,7 @@ Spectrum GradientPathTracer::offsetNextEvent(const OffsetPath &o, const LightCho
         *ny = lc.nx;
         *by = lc.delta ? 0 : bsdf.pdf(o.wo, ls.wi);
         if (lc.visible) return o.beta * fy * ls.L / lc.nx;
-        if (!fy.isBlack() && lc.fx.isBlack() && !ls.L.isBlack() && scene_.unoccluded(cur_.isect, ls.pLight))
+        if (!fy.isBlack() && lc.fx.isBlack() && !ls.L.isBlack() && ShiftEdgeVisible(scene_, cur_.isect, ls.pLight))
             return o.beta * fy * ls.L / lc.nx;
         return Spectrum(0);
     }
@@ -197,7 +197,7 @@ void GradientPathTracer::nextEventTerms(Sampler &sampler) {
     lc.nx = pmf * ls.pdf;
     lc.bx = lc.delta ? 0 : bsdf.pdf(wo, ls.wi);
     lc.fx = bsdf.f(wo, ls.wi) * AbsDot(ls.wi, isect.shading.n);
-    lc.visible = !lc.fx.isBlack() && !ls.L.isBlack() && scene_.unoccluded(isect, ls.pLight);
+    lc.visible = !lc.fx.isBlack() && !ls.L.isBlack() && ShiftEdgeVisible(scene_, isect, ls.pLight);
     Spectrum Cx = lc.visible ? beta_ * lc.fx * ls.L / lc.nx : Spectrum(0);
     if (lc.visible) primal_ += Cx * (lc.delta ? 1 : PowerHeuristic(1, lc.nx, 1, lc.bx));
     for (int k = 0; k < kNumNeighbours; ++k) {

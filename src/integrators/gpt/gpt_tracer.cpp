@@ -65,7 +65,7 @@ void GradientPathTracer::reconnectOffset(OffsetPath &o, const BSDFSample &bs, co
         o.kill(st_, ShiftFailure::Geometry);
         return;
     }
-    bool visible = next.found ? scene_.unoccluded(o.isect, next.isect) : !scene_.occluded(o.isect.spawnRay(rc.wi));
+    bool visible = next.found ? ShiftEdgeVisible(scene_, o.isect, next.isect) : !scene_.occluded(o.isect.spawnRay(rc.wi));
     if (!visible) {
         o.kill(st_, ShiftFailure::Occluded);
         return;

@@ -326,7 +326,18 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
         if (IsDeltaLight(l->flags)) feat.deltaLights = true;
         scene->lights.push_back(l);
     }
-    for (auto &l : scene->lights) l->preprocess(scene->bounds);
+    // Lights at infinity need the scene's bounding sphere (light-tracing
+    // densities 1 / (pi r^2)); a world without shapes gets a unit box around
+    // the camera instead of an empty one (r = 0 and a NaN centre made every
+    // vcm sample non-finite: bench/stress empty_env).
+    Bounds3 lightBounds = scene->bounds;
+    if (lightBounds.empty()) {
+        const Point3 eye = desc.camera.cameraFromWorld.inverse().applyPoint(Point3(0, 0, 0));
+        const Point3 c = eye.isFinite() ? eye : Point3(0, 0, 0);
+        lightBounds.expand(c - Vec3(1, 1, 1));
+        lightBounds.expand(c + Vec3(1, 1, 1));
+    }
+    for (auto &l : scene->lights) l->preprocess(lightBounds);
     feat.numLights = int(scene->lights.size());
     feat.specularSurfaces = feat.minRoughness == 0;
     feat.nearSpecularSurfaces = feat.minRoughness < 1e-3;

@@ -156,3 +156,27 @@ TEST(VCM, ModesAgreeWithBdpt) {
 
 }  // namespace
 }  // namespace gradus
+
+// Regression (bench/stress empty_env): a world without shapes under a
+// uniform environment of radiance 1. The environment's light-tracing disk came
+// from empty scene bounds (radius 0, NaN centre) and every vcm sample was
+// non-finite; now every integrator sees exactly 1 (a white furnace).
+TEST(VCM, EmptyWorldUnderAnEnvironmentIsExactlyOne) {
+    const std::string scene = R"(
+LookAt 0 0 0  0 0 1  0 1 0
+Camera "perspective" "float fov" [60]
+Sampler "random"
+PixelFilter "box" "float xwidth" [0.5] "float ywidth" [0.5]
+Film "image" "integer xresolution" [16] "integer yresolution" [16]
+WorldBegin
+LightSource "infinite" "rgb L" [1 1 1]
+WorldEnd
+)";
+    for (const char *integrator : {"vcm", "bdpt", "mbdpt", "gbdpt"}) {
+        gradus::test::TestRender r =
+            gradus::test::RenderTestDesc(gradus::ParseString(scene, "env.pbrt", "."), 4, 0, 0, integrator);
+        EXPECT_EQ(r.stats.nonFinite, 0u) << integrator;
+        gradus::Image rgb = r.image.layerRGB("");
+        for (float v : rgb.data()) ASSERT_NEAR(v, 1.0, 1e-6) << integrator;
+    }
+}

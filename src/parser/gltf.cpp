@@ -238,7 +238,6 @@ class Loader {
 
     void addContent(const Transform &worldFromAsset, bool useCamera, bool wholeScene) {
         firstShape_ = desc_->shapes.size();
-        firstLight_ = desc_->lights.size();
         loadImages();
         loadMaterials();
         traverse(worldFromAsset);
@@ -247,7 +246,6 @@ class Loader {
     }
 
     bool hasLights() const { return emissive_ || punctual_; }
-    const tg::Model &model() const { return model_; }
     Float cameraAspect() const { return cameraAspect_; }
 
   private:
@@ -785,7 +783,6 @@ class Loader {
             int s = sceneIndex = model_.defaultScene >= 0 ? model_.defaultScene : 0;
             if (s >= int(model_.scenes.size())) fail("/scene", "scene " + std::to_string(s) + " does not exist");
             roots = model_.scenes[s].nodes;
-            sceneName_ = model_.scenes[s].name;
         } else {
             std::vector<bool> child(model_.nodes.size(), false);
             for (const auto &n : model_.nodes)
@@ -1013,7 +1010,6 @@ class Loader {
     }
 
     void placeMeshes() {
-        int emissiveCount = 0;
         for (auto &mu : meshUses_) {
             const int mi = mu.first;
             const auto &uses = mu.second;
@@ -1054,7 +1050,6 @@ class Loader {
                         sd.areaLight = int(desc_->areaLights.size());
                         desc_->areaLights.push_back(std::move(al));
                         emissive_ = true;
-                        ++emissiveCount;
                     }
                     desc_->shapes.push_back(std::move(sd));
                 }
@@ -1149,9 +1144,8 @@ class Loader {
     std::map<int, std::vector<NodeUse>> meshUses_;
     std::vector<NodeUse> cameraNodes_;
     std::set<std::string> noted_;
-    std::string sceneName_;
     Bounds3 worldBounds_;
-    size_t firstShape_ = 0, firstLight_ = 0;
+    size_t firstShape_ = 0;
     bool emissive_ = false, punctual_ = false;
     Float cameraAspect_ = 0;
 };

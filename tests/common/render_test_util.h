@@ -20,6 +20,27 @@ struct TestRender {
     std::unique_ptr<Integrator> integrator;
 };
 
+// A two-triangle quad with its material (pbrt syntax).
+inline std::string Quad(const std::string &mat, const char *P) {
+    return "AttributeBegin\n" + mat + "\nShape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [" + P +
+           "]\nAttributeEnd\n";
+}
+
+// The walls of the closed box [-1,1] x [0,2] x [-1,1.2] (grey, a red and a
+// green side) and a diffuse sphere on its floor, in world-block syntax.
+inline std::string ClosedBoxWallsAndSphere() {
+    const std::string grey = "Material \"matte\" \"rgb Kd\" [0.7 0.7 0.7]";
+    std::string s = Quad(grey, "-1 0 -1  -1 0 1.2  1 0 1.2  1 0 -1");
+    s += Quad(grey, "-1 2 -1  1 2 -1  1 2 1.2  -1 2 1.2");
+    s += Quad(grey, "-1 0 -1  1 0 -1  1 2 -1  -1 2 -1");
+    s += Quad(grey, "-1 0 1.2  -1 2 1.2  1 2 1.2  1 0 1.2");
+    s += Quad("Material \"matte\" \"rgb Kd\" [0.63 0.065 0.05]", "-1 0 -1  -1 2 -1  -1 2 1.2  -1 0 1.2");
+    s += Quad("Material \"matte\" \"rgb Kd\" [0.14 0.45 0.09]", "1 0 -1  1 0 1.2  1 2 1.2  1 2 -1");
+    s += "AttributeBegin\nMaterial \"matte\" \"rgb Kd\" [0.6 0.6 0.3]\nTranslate 0.4 0.35 -0.3\n"
+         "Shape \"sphere\" \"float radius\" [0.35]\nAttributeEnd\n";
+    return s;
+}
+
 inline RenderJob MakeTestJob(const SceneDesc &desc, int spp, uint64_t seed, const std::string &integrator = "") {
     BuildOptions bo;
     bo.sppOverride = spp;

@@ -14,10 +14,7 @@
 
 namespace gradus::mbdpt_test {
 
-inline std::string Quad(const std::string &mat, const char *P) {
-    return "AttributeBegin\n" + mat + "\nShape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [" + P +
-           "]\nAttributeEnd\n";
-}
+using test::Quad;
 
 // Closed box [-1,1] x [0,2] x [-1,1.2] with a small ceiling light, a diffuse
 // sphere, a glossy sphere and (optionally) a mirror sphere, camera inside the box.
@@ -32,14 +29,7 @@ inline std::string BoxScene(const std::string &integratorLine, int res = 16, boo
     s += "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [12 12 12]\nMaterial \"matte\" \"rgb Kd\" [0 0 0]\n"
          "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-0.25 1.98 -0.25  -0.25 1.98 0.25  0.25 1.98 0.25  0.25 1.98 -0.25]\n"
          "AttributeEnd\n";
-    const std::string grey = "Material \"matte\" \"rgb Kd\" [0.7 0.7 0.7]";
-    s += Quad(grey, "-1 0 -1  -1 0 1.2  1 0 1.2  1 0 -1");
-    s += Quad(grey, "-1 2 -1  1 2 -1  1 2 1.2  -1 2 1.2");
-    s += Quad(grey, "-1 0 -1  1 0 -1  1 2 -1  -1 2 -1");
-    s += Quad(grey, "-1 0 1.2  -1 2 1.2  1 2 1.2  1 0 1.2");
-    s += Quad("Material \"matte\" \"rgb Kd\" [0.63 0.065 0.05]", "-1 0 -1  -1 2 -1  -1 2 1.2  -1 0 1.2");
-    s += Quad("Material \"matte\" \"rgb Kd\" [0.14 0.45 0.09]", "1 0 -1  1 0 1.2  1 2 1.2  1 2 -1");
-    s += "AttributeBegin\nMaterial \"matte\" \"rgb Kd\" [0.6 0.6 0.3]\nTranslate 0.4 0.35 -0.3\nShape \"sphere\" \"float radius\" [0.35]\nAttributeEnd\n";
+    s += test::ClosedBoxWallsAndSphere();
     s += "AttributeBegin\nMaterial \"plastic\" \"rgb Kd\" [0.2 0.3 0.5] \"rgb Ks\" [0.5 0.5 0.5] \"float roughness\" [0.08]\n"
          "Translate -0.45 0.3 -0.4\nShape \"sphere\" \"float radius\" [0.3]\nAttributeEnd\n";
     if (mirror) s += "AttributeBegin\nMaterial \"mirror\"\nTranslate 0 0.2 0.2\nShape \"sphere\" \"float radius\" [0.2]\nAttributeEnd\n";

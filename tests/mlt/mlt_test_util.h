@@ -16,10 +16,7 @@
 
 namespace gradus::mlt_test {
 
-inline std::string Quad(const std::string &mat, const char *P) {
-    return "AttributeBegin\n" + mat + "\nShape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [" + P +
-           "]\nAttributeEnd\n";
-}
+using test::Quad;
 
 // Closed box [-1,1] x [0,2] x [-1,1.2] seen from inside, a ceiling light
 // (`light`: "" none, "open" facing down, "up" facing the ceiling, "sealed"
@@ -45,15 +42,7 @@ inline std::string BoxScene(const std::string &integratorLine, int res = 12, con
              "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3  4 6 5 4 7 6  0 4 5 0 5 1  1 5 6 1 6 2  "
              "2 6 7 2 7 3  3 7 4 3 4 0] \"point P\" [-0.5 -0.05 -0.5  0.5 -0.05 -0.5  0.5 -0.05 0.5  -0.5 -0.05 0.5  "
              "-0.5 0.09 -0.5  0.5 0.09 -0.5  0.5 0.09 0.5  -0.5 0.09 0.5]\nAttributeEnd\n";
-    const std::string grey = "Material \"matte\" \"rgb Kd\" [0.7 0.7 0.7]";
-    s += Quad(grey, "-1 0 -1  -1 0 1.2  1 0 1.2  1 0 -1");
-    s += Quad(grey, "-1 2 -1  1 2 -1  1 2 1.2  -1 2 1.2");
-    s += Quad(grey, "-1 0 -1  1 0 -1  1 2 -1  -1 2 -1");
-    s += Quad(grey, "-1 0 1.2  -1 2 1.2  1 2 1.2  1 0 1.2");
-    s += Quad("Material \"matte\" \"rgb Kd\" [0.63 0.065 0.05]", "-1 0 -1  -1 2 -1  -1 2 1.2  -1 0 1.2");
-    s += Quad("Material \"matte\" \"rgb Kd\" [0.14 0.45 0.09]", "1 0 -1  1 0 1.2  1 2 1.2  1 2 -1");
-    s += "AttributeBegin\nMaterial \"matte\" \"rgb Kd\" [0.6 0.6 0.3]\nTranslate 0.4 0.35 -0.3\n"
-         "Shape \"sphere\" \"float radius\" [0.35]\nAttributeEnd\n";
+    s += test::ClosedBoxWallsAndSphere();
     s += "AttributeBegin\nMaterial \"plastic\" \"rgb Kd\" [0.2 0.3 0.5] \"rgb Ks\" [0.5 0.5 0.5] "
          "\"float roughness\" [0.08]\nTranslate -0.45 0.3 -0.4\nShape \"sphere\" \"float radius\" [0.3]\n"
          "AttributeEnd\n";

@@ -17,26 +17,13 @@ cluster_pids=()
 
 cluster_log() { echo "[local_cluster] $*"; }
 
-# wait_for SECONDS DESCRIPTION COMMAND...: polls COMMAND every half second until it succeeds.
-wait_for() {
-  local limit=$1 what=$2 start=$SECONDS
-  shift 2
-  until "$@" >/dev/null 2>&1; do
-    if [ $((SECONDS - start)) -ge "$limit" ]; then
-      cluster_log "timed out after ${limit}s waiting for $what"
-      return 1
-    fi
-    sleep 0.5
-  done
-}
-
-# wait_daemon PID SECONDS DESCRIPTION COMMAND...: as wait_for, but gives up as soon as the
-# daemon PID has exited.
+# wait_daemon PID SECONDS DESCRIPTION COMMAND...: polls COMMAND every half second until it
+# succeeds; gives up after SECONDS, or as soon as the daemon PID has exited (PID "": none).
 wait_daemon() {
   local pid=$1 limit=$2 what=$3 start=$SECONDS
   shift 3
   until "$@" >/dev/null 2>&1; do
-    if pid_gone "$pid"; then
+    if [ -n "$pid" ] && pid_gone "$pid"; then
       cluster_log "the daemon (pid $pid) exited while waiting for $what"
       return 1
     fi
@@ -47,6 +34,9 @@ wait_daemon() {
     sleep 0.5
   done
 }
+
+# wait_for SECONDS DESCRIPTION COMMAND...: wait_daemon without a daemon to watch.
+wait_for() { wait_daemon "" "$@"; }
 
 cluster_install() {
   local missing=0 p

@@ -13,6 +13,16 @@ class AreaLight;
 // surface they leave (set once per scene by the scene builder).
 extern Float gRayEpsilon;
 
+// True when d lies in the tangent plane of a surface with normal n (|cos| <
+// 1e-6; false for n = 0, points not on a surface). Visibility along a
+// surface's own plane is not decided by the ray tracer, and the geometry term
+// of such an edge is ~0: connections and shifts give these edges no light.
+inline bool InTangentPlane(const Normal3 &n, const Vec3 &d) {
+    const Vec3 v(n);
+    const Float n2 = v.lengthSquared();
+    return n2 > 0 && Dot(v, d) * Dot(v, d) < Float(1e-12) * n2 * d.lengthSquared();
+}
+
 struct Interaction {
     Point3 p;
     Normal3 n;  // geometric normal (unit); zero for points in space / on point lights

@@ -400,8 +400,7 @@ bool EdgeConnectible(const BidirContext &ctx, const PathVertex &a, const PathVer
     // decided by the ray tracer: light crossed a closed face through such
     // connections (bench/stress camera_in_box). Left out of the estimate and of
     // every MIS sum alike, as near-coincident vertices are.
-    constexpr Float kMinCos2 = 1e-12;
-    auto grazing = [&](const PathVertex &v) { return v.onSurface() && Sqr(Dot(Vec3(v.ng), d)) < kMinCos2 * d2; };
+    auto grazing = [&](const PathVertex &v) { return v.onSurface() && InTangentPlane(v.ng, d); };
     return !grazing(a) && !grazing(b);
 }
 

@@ -58,20 +58,13 @@ struct LightChoice {
     bool visible = false;
 };
 
-// Visibility of an edge for G-PT's shadow and reconnection rays. An edge in
-// the tangent plane of a surface end (|cos| < 1e-6) carries a geometry term of
-// ~0, but visibility along a surface's own plane is not decided by the ray
-// tracer: offsets saw a light outside a closed box through such edges
-// (bench/stress camera_in_box, 6e-32 in the gradients). They carry no light,
-// as in the bidirectional connections (EdgeConnectible).
+// Visibility of an edge for G-PT's shadow and reconnection rays: edges in the
+// tangent plane of a surface end carry no light (InTangentPlane), as in the
+// bidirectional connections; offsets saw a light outside a closed box through
+// a face's own plane before (bench/stress camera_in_box, 6e-32 in the gradients).
 inline bool ShiftEdgeVisible(const Scene &scene, const Interaction &a, const Interaction &b) {
     const Vec3 d = b.p - a.p;
-    const Float d2 = d.lengthSquared();
-    auto grazing = [&](const Interaction &v) {
-        const Vec3 n(v.n);
-        return n.lengthSquared() > 0 && Sqr(Dot(n, d)) < Float(1e-12) * n.lengthSquared() * d2;
-    };
-    return !grazing(a) && !grazing(b) && scene.unoccluded(a, b);
+    return !InTangentPlane(a.n, d) && !InTangentPlane(b.n, d) && scene.unoccluded(a, b);
 }
 
 // One camera sample of G-PT: the base path (next-event estimation + BSDF

@@ -22,7 +22,7 @@ inline const std::vector<std::string> &Integrators() {
 // per-pixel image), maxdepth 5; specular-box adds a glass sphere, a glossy
 // metal sphere and a mirror panel.
 inline const std::vector<std::string> &Scenes() {
-    static const std::vector<std::string> names = {"diffuse-box", "specular-box"};
+    static const std::vector<std::string> names = {"diffuse-box", "specular-box", "outdoor"};
     return names;
 }
 

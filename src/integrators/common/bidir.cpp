@@ -133,6 +133,7 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
                 Float q = std::max<Float>(0.05, 1 - rel);
                 if (uRR < q) break;
                 beta = beta / (1 - q);
+                v.rrScale = float(1 / (1 - q));
             }
         }
         ray = isect.spawnRay(bs.wi);
@@ -226,8 +227,13 @@ int GenerateCameraSubpath(const BidirContext &ctx, const Ray &ray, Sampler &samp
     v.pdfFwd = 1;
     bsdfs[0] = BSDF();
     Float pdfPos, pdfDir;
+    // A ray through the film's filter margin (sample bounds beyond the raster)
+    // has pdfDir 0: the subpath is still traced (its radiance reaches the
+    // image's border pixels through the filter), and x_1's pdfFwd 0 tells the
+    // MIS that light tracing cannot produce the path (OtherStrategies). It
+    // used to stop here, and the margin's samples added zero radiance with
+    // full filter weight: a 2-pixel frame up to 30% dark with a radius-2 filter.
     ctx.camera->pdfWe(ray, &pdfPos, &pdfDir);
-    if (pdfDir == 0) return 1;
     return RandomWalk(ctx, ray, Spectrum(1), pdfDir, sampler, arena, TransportMode::Radiance, 1, maxVertices, path,
                       bsdfs);
 }
@@ -471,6 +477,9 @@ Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathVi
         int sp = s + t - i;
         if (sp == 1 && i == 1) continue;  // (1,1) is not evaluated
         if (i == 1 && !set.lightTracing) continue;  // (s + t - 1, 1) not in play
+        // x_1 seen through the filter margin, outside the raster (pdfFwd 0,
+        // GenerateCameraSubpath): light tracing cannot reach that direction.
+        if (i == 1 && Cv(1).pdfFwd == 0 && Cv(0).type == VertexType::Camera) continue;
         if (camDelta(i) || Cv(i - 1).delta()) continue;
         if (!EdgeConnectible(ctx, Cv(i), Cv(i - 1))) continue;
         sumRi += mis(ri * (i == 1 ? relLT : relOther));
@@ -541,8 +550,8 @@ bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera,
         L = qs.throughput() * EvalBSDF(qs, *qb, sampled, TransportMode::Importance) * (cws.We / cws.pdf) *
             AbsDot(cws.wi, Vec3(qs.ns));
         if (L.isBlack()) return false;
-        res->shadowRayTraced = true;
-        if (!scene.unoccluded(AsInteraction(qs), cws.pLens)) return false;
+        res->shadowRayTraced = !u.knownVisible;
+        if (!u.knownVisible && !scene.unoccluded(AsInteraction(qs), cws.pLens)) return false;
         res->splat = true;
         res->pRaster = cws.pRaster;
     } else if (s == 1) {
@@ -556,8 +565,8 @@ bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera,
         if (!EdgeConnectible(ctx, sampled, pt)) return false;
         L = pt.throughput() * EvalBSDF(pt, *pb, sampled, TransportMode::Radiance) * Lw * AbsDot(ls.wi, Vec3(pt.ns));
         if (L.isBlack()) return false;
-        res->shadowRayTraced = true;
-        if (!scene.unoccluded(AsInteraction(pt), ls.pLight)) return false;
+        res->shadowRayTraced = !u.knownVisible;
+        if (!u.knownVisible && !scene.unoccluded(AsInteraction(pt), ls.pLight)) return false;
     } else {
         const PathVertex &qs = light.v[s - 1], &pt = camera.v[t - 1];
         const BSDF *qb = light.bsdf ? &light.bsdf[s - 1] : nullptr;
@@ -575,8 +584,8 @@ bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera,
         d = d / std::sqrt(d2);
         L *= AbsDot(Vec3(qs.ns), d) * AbsDot(Vec3(pt.ns), d) / d2;
         if (L.isBlack()) return false;
-        res->shadowRayTraced = true;
-        if (!scene.unoccluded(AsInteraction(qs), AsInteraction(pt))) return false;
+        res->shadowRayTraced = !u.knownVisible;
+        if (!u.knownVisible && !scene.unoccluded(AsInteraction(qs), AsInteraction(pt))) return false;
     }
     if (L.isBlack()) return false;
     Float w = MISWeight(ctx, light, camera, s, t, haveSampled ? &sampled : nullptr);

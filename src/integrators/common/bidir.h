@@ -147,6 +147,9 @@ struct ConnectSamples {
     Float uLightSelect = 0;  // s = 1: light choice
     Point2 uLight;           // s = 1: point on the light
     Point2 uLens;            // t = 1: lens point
+    // The connection edge is known to be unoccluded (a shifted path that
+    // reuses its base's edge, G-BDPT): no shadow ray is traced.
+    bool knownVisible = false;
 };
 
 struct ConnectResult {

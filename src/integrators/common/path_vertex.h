@@ -57,6 +57,11 @@ struct PathVertex {
     float b1 = 0, b2 = 0;     // triangle barycentrics (RebuildBSDF)
     VertexType type = VertexType::Surface;
     uint8_t flags = 0;
+    // 1 / continuation probability of Russian roulette applied to the
+    // throughput after this vertex (1: no roulette here). Shifts that re-derive
+    // an offset's throughput from BSDF ratios multiply it back in (the offset
+    // reuses the base's roulette decisions; camera_shift.cpp). Fits the padding.
+    float rrScale = 1;
 
     PathVertex() : material(nullptr) {}
 

@@ -141,7 +141,10 @@ void VCMCameraB(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, in
             continue;
         }
         const int m = u - 2;
-        const bool cm = (m == 0 ? w.connecting : !z[m].delta()) && !z[m + 1].delta() && EdgeConnectible(ctx, z[m], z[m + 1]);
+        // m = 0 is light tracing; impossible for a ray through the filter margin
+        // (z_1's pdfFwd 0, GenerateCameraSubpath).
+        const bool cm = (m == 0 ? w.connecting && z[1].pdfFwd != 0 : !z[m].delta()) && !z[m + 1].delta() &&
+                        EdgeConnectible(ctx, z[m], z[m + 1]);
         const bool gm = w.merging && m >= 1 && IsMergeable(z[m], &zb[m]);
         B[u] = (cm ? 1 : 0) + (gm ? Mis(w.eta * Remap(z[m].pdfRev), w.power) : 0) +
                Mis(Remap(z[m].pdfRev) / Remap(z[m].pdfFwd), w.power) * B[u - 1];
@@ -155,7 +158,7 @@ VCMCameraTerms VCMCameraAt(const BidirContext &ctx, const PathVertex *z, const B
     // c_{u-1}: camera endpoint z_{u-1}, light endpoint z_u. For u = 1 it is light
     // tracing, which with z_u as the light origin would be (1, 1): not a strategy.
     const bool edge = EdgeConnectible(ctx, zp, zu);
-    c.cPrev = (u - 1 == 0 ? w.connecting : !zp.delta()) && edge;
+    c.cPrev = (u - 1 == 0 ? w.connecting && zu.pdfFwd != 0 : !zp.delta()) && edge;
     c.cPrevEmitter = u - 1 != 0 && c.cPrev;
     c.gPrev = w.merging && u - 1 >= 1 && IsMergeable(zp, &zb[u - 1]);
     c.ownU = Remap(zu.pdfFwd);

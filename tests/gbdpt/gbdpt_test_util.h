@@ -69,4 +69,47 @@ WorldEnd
 )";
 }
 
+// Open scene (no walls): a matte floor, a matte sphere, a glass sphere and a
+// mirror sphere under a constant sky ("infinite"), with a point light (and,
+// optionally, a sun: a distant light). Paths end on the environment
+// (escaped camera subpaths, next-event estimation, light subpaths started at
+// infinity) and at a point, so the environment shift and the reconnection to a
+// point light are exercised by every strategy.
+inline std::string EnvScene(const std::string &integratorLine, int w = 24, int h = 18, bool sun = false) {
+    std::string distant = sun ? R"(LightSource "distant" "point from" [2 6 3] "point to" [0 0 0] "rgb L" [1.5 1.5 1.4])"
+                              : "";
+    return R"(
+LookAt 0 1.4 -3.6  0 0.5 0  0 1 0
+Camera "perspective" "float fov" [45]
+Sampler "random" "integer pixelsamples" [16]
+PixelFilter "box"
+Film "image" "integer xresolution" [)" + std::to_string(w) + R"(] "integer yresolution" [)" + std::to_string(h) + R"(]
+  "string filename" ["unused.exr"]
+)" + integratorLine + R"(
+WorldBegin
+LightSource "infinite" "rgb L" [0.5 0.55 0.7]
+LightSource "point" "point from" [-0.6 1.6 -0.6] "rgb I" [1.2 1.1 1.0]
+)" + distant + R"(
+Material "matte" "rgb Kd" [0.6 0.6 0.55]
+Shape "trianglemesh" "integer indices" [0 1 2 0 2 3]
+  "point P" [-3 0 -3  -3 0 3  3 0 3  3 0 -3]
+AttributeBegin
+  Material "matte" "rgb Kd" [0.6 0.25 0.15]
+  Translate -0.55 0.3 0.2
+  Shape "sphere" "float radius" [0.3]
+AttributeEnd
+AttributeBegin
+  Material "glass"
+  Translate 0.4 0.4 -0.1
+  Shape "sphere" "float radius" [0.4]
+AttributeEnd
+AttributeBegin
+  Material "mirror"
+  Translate 0.1 0.25 0.8
+  Shape "sphere" "float radius" [0.25]
+AttributeEnd
+WorldEnd
+)";
+}
+
 }  // namespace gradus::gbdpttest

@@ -12,12 +12,23 @@ namespace gradus {
 std::unique_ptr<Integrator> CreateGBDPTIntegrator(const EntityDesc &d) { return std::make_unique<GBDPTIntegrator>(d); }
 
 namespace {
+// Why a gradient sample fell back to a zero offset with the base's BDPT weight.
+enum Fallback {
+    FallbackShift,         // the camera-subpath shift failed at or before the connection vertex
+    FallbackOffsetZero,    // the offset's connection is occluded or carries nothing
+    FallbackLightTracing,  // the light-tracing-path shift failed (case iii)
+    NumFallbacks
+};
+const char *const kFallbackNames[NumFallbacks] = {"camera-subpath shift failed before the connection",
+                                                  "offset connection occluded or black",
+                                                  "light-tracing path shift failed"};
 }  // namespace
 
 struct GBDPTIntegrator::ThreadState {
     SubpathShiftStats shift;
     // By case (i), (ii), (iii): base connections, gradient samples, shifted ones.
     uint64_t cases[3] = {}, caseAttempts[3] = {}, caseSuccesses[3] = {};
+    uint64_t fallbacks[NumFallbacks] = {};
 };
 struct GBDPTIntegrator::Store {
     tbb::enumerable_thread_specific<ThreadState> threads;
@@ -36,13 +47,8 @@ ParamTable<GBDPTSettings> Table() {
     BidirParamOptions b;
     b.strategyLayers = false;  // Eq. 8 uses the balance heuristic
     b.noSpatial = "is not supported by gbdpt (its MIS needs a position-free light choice)";
-    b.rrDepth = -1;
-    b.noRoulette = "Russian roulette is not supported by gbdpt yet (shifts would need the continuation "
-                   "probabilities)";
-    t.append(BidirParams(b));
-    GradientParamOptions g;
-    g.noFilmFilter = "is not supported by gbdpt yet";
-    t.append(GradientParams(g));
+    t.append(BidirParams(b));  // rrdepth 3 as bdpt: offsets reuse the base's roulette (camera_shift.cpp)
+    t.append(GradientParams());  // pixelfilter film (the scene's filter, as bdpt) or box
     t.enumeration<bool>("shift", &S::manifold, "manifold", {{"manifold", true}, {"halfvector", false}},
                         "camera subpath shift: manifold walk (Sec. 3.1) or half-vector copy (Kettunen et al. 2015)");
     t.boolean("lighttracing", &S::lightTracing, true,
@@ -64,7 +70,7 @@ void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     bctx_.init(scene, lightSampler_, MISHeuristic::Balance);  // Eq. 8 uses the balance heuristic
     // "lighttracing false": the t = 1 strategies are neither sampled nor in any MIS sum.
     bctx_.strategies.lightTracing = set_.lightTracing;
-    bctx_.rrDepth = set_.rrDepth;  // -1 (the table allows no other)
+    bctx_.rrDepth = set_.rrDepth;
     mscene_ = std::make_unique<EmbreeManifoldScene>(scene);
     sctx_.bidir = &bctx_;
     sctx_.mscene = mscene_.get();
@@ -77,7 +83,10 @@ void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     sctx_.walk.relativeTolerance = 1e-5;
     // Light-tracing (case iii) primal and gradients are GradientFilm splats:
     // merged in tile order, so images do not depend on the thread count.
-    initGradients(film, false, true);
+    // Camera samples go through the scene's pixel filter (pixelfilter "film",
+    // as bdpt); light-tracing splats land in the pixel of their raster point,
+    // exactly like bdpt's (the film does not filter splats).
+    initGradients(film, set_.filmFilter, true);
     splatScale_ = LightTracingSplatScale(film);
     store_->threads.clear();
 }
@@ -85,7 +94,9 @@ void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
 void GBDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const {
     bool inside[kNumNeighbours];
     Point2i p = rec.pixel();
-    for (int k = 0; k < kNumNeighbours; ++k) inside[k] = pairInside(p, k);
+    // Box: only pairs of film pixels need gradients. Film filter: samples of
+    // pixels around the film reach it too (targets outside are dropped).
+    for (int k = 0; k < kNumNeighbours; ++k) inside[k] = set_.filmFilter || pairInside(p, k);
     std::vector<GradientSplat> splats;
     GradientSample s = sample(cs, sampler, arena, inside, &splats);
     gfilm_.record(rec, s);
@@ -197,6 +208,7 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                         Float wg = set_.mis == GBDPTSettings::MIS::Combined ? CombinedWeight(wx, wy, rho) : 0.5 * wx;  // Eq. 8 / Eq. 9
                         g.diff[k] = (fy - r.unweighted) * wg;
                     } else {
+                        ++ts.fallbacks[FallbackLightTracing];
                         g.diff[k] = r.unweighted * -wx;  // fallback: zero offset, BDPT weight
                     }
                 }
@@ -216,7 +228,14 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                 ++ts.caseAttempts[cas];
                 ConnectResult ry;
                 bool oky = false;
-                if (kc <= sh.validUpTo && sh.r >= 0 && kc > sh.r && !(s == 1 && !useLp)) {
+                // Next-event estimation of an infinite light: the offset samples the
+                // light with the base's numbers, which give the same light and
+                // direction from any point (the light choice is position-free):
+                // the environment shift, |T'| = 1, equal light densities, so rho
+                // is the camera subpath's (as for a shared light point).
+                const bool envNEE = s == 1 && !useLp;
+                if (kc > sh.validUpTo) ++ts.fallbacks[FallbackShift];
+                if (kc <= sh.validUpTo && sh.r >= 0 && kc > sh.r && !envNEE) {
                     // Past the reconnection the offset's connection is the base's
                     // (same vertices, same shadow ray): only the camera-side
                     // throughput and the offset's MIS densities differ.
@@ -232,11 +251,17 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                     oky = !ry.unweighted.isBlack() && ry.weight > 0;
                 } else if (kc <= sh.validUpTo) {
                     SubpathView yv = sh.y.view();
+                    // At and after the reconnection vertex (kc >= r) the offset's
+                    // vertex is the base's and so is the connection edge: the
+                    // base's shadow ray already found it unoccluded.
+                    ConnectSamples uy = u;
+                    uy.knownVisible = sh.r >= 0 && kc >= sh.r;
                     if (useLp)
-                        oky = ConnectLightPoint(sctx_, lp, yv, t, &ry);
-                    else if (!(s == 1))  // infinite-light NEE: not shifted (fallback)
-                        oky = ConnectBDPT(bctx_, lightView, yv, s, t, u, &ry);
+                        oky = ConnectLightPoint(sctx_, lp, yv, t, &ry, uy.knownVisible);
+                    else
+                        oky = ConnectBDPT(bctx_, lightView, yv, s, t, uy, &ry);
                     oky = oky && !ry.unweighted.isBlack() && ry.weight > 0;
+                    if (!oky) ++ts.fallbacks[FallbackOffsetZero];
                 }
                 if (oky) {
                     ++ts.caseSuccesses[cas];
@@ -259,9 +284,10 @@ void GBDPTIntegrator::finish(const Film &film, const RenderStats &stats, Image *
 
 std::string GBDPTIntegrator::statistics() const {
     SubpathShiftStats tot;
-    uint64_t cases[3] = {}, attempts[3] = {}, successes[3] = {};
+    uint64_t cases[3] = {}, attempts[3] = {}, successes[3] = {}, fallbacks[NumFallbacks] = {};
     for (const ThreadState &t : store_->threads) {
         tot.add(t.shift);
+        for (int i = 0; i < NumFallbacks; ++i) fallbacks[i] += t.fallbacks[i];
         for (int i = 0; i < 3; ++i) {
             cases[i] += t.cases[i];
             attempts[i] += t.caseAttempts[i];
@@ -279,6 +305,11 @@ std::string GBDPTIntegrator::statistics() const {
         std::snprintf(buf, sizeof buf, "  case %s: base paths %llu, gradient samples %llu, shifted %llu (%.2f%%)\n",
                       names[i], (unsigned long long)cases[i], (unsigned long long)attempts[i],
                       (unsigned long long)successes[i], attempts[i] ? 100.0 * successes[i] / attempts[i] : 0.0);
+        s += buf;
+    }
+    s += "  fallbacks (zero offset, BDPT weight) by cause:\n";
+    for (int i = 0; i < NumFallbacks; ++i) {
+        std::snprintf(buf, sizeof buf, "    %-58s %llu\n", kFallbackNames[i], (unsigned long long)fallbacks[i]);
         s += buf;
     }
     s += tot.formatWalks(sctx_.trySpecular);

@@ -10,7 +10,14 @@
 // light-tracing paths (t = 1, case (iii)) are shifted one by one (lines 9-11).
 // Gradients use the combined MIS of Eq. 8 (or Eq. 9); failed shifts and
 // blocked/black offsets fall back to the base's BDPT weight with a zero offset
-// (Sec. 4); blocked base paths are not shifted. The primal gets the usual
+// (Sec. 4); blocked base paths are not shifted. Every strategy of a path must
+// shift or fall back alike (else its Eq. 8 weights do not sum to one): a path
+// ending at infinity (escaped camera subpath, next-event estimation of an
+// infinite or distant light, light subpath started there) keeps the
+// direction towards it in all of them (environment shift, |T'| = 1), and one
+// ending at a point light reconnects to the point in all of them. Russian
+// roulette: offsets reuse the base's decisions, so the 1/q factors are the
+// base's and cancel in f(y)/f(x) (camera_shift.cpp). The primal gets the usual
 // BDPT weight (line 15). Light-tracing values are splatted at their raster
 // position and normalised like BDPT's splats (by the number of bidirectional
 // samples, line 16); the screened-Poisson reconstruction runs in finish()
@@ -20,14 +27,15 @@
 // always the balance heuristic, as Eq. 8 assumes):
 //   integer maxdepth 5               maximum path depth (edges - 1)
 //   string lightsamplestrategy "power"  uniform | power (position-free, as the MIS assumes)
-//   integer rrdepth -1               off; Russian roulette is not supported by gbdpt yet
-//                                    (shifts would need the continuation probabilities)
+//   integer rrdepth 3                Russian roulette after this many bounces (-1: off); the
+//                                    offsets reuse the base's decisions (camera_shift.cpp)
 //   integer pixelbounds []           accepted (use --cropwindow)
 // (gradient family, integrators/gradient/gradient_params.h):
 //   float shiftthreshold 0.001       roughness below which a vertex is "specular"
 //   string reconstruction "hybrid"   hybrid | l1 | l2 | weighted: the image in the unprefixed R,G,B
 //   float alpha 0.2                  screened-Poisson primal weight
-//   string pixelfilter "box"         box only (a sample counts in its own pixel); film is not supported yet
+//   string pixelfilter "film"        film: the scene's PixelFilter (as bdpt; light-tracing
+//                                    splats land in their pixel, as bdpt's); box: own pixel only
 // (gbdpt):
 //   string shift "manifold"          manifold (Sec. 3.1) | halfvector (Kettunen et al. 2015)
 //   bool lighttracing true           false: no light-tracing paths (t = 1 strategies are

@@ -34,7 +34,7 @@ bool SampleLightPoint(const SubpathShiftContext &ctx, const PathVertex &pt, Floa
 }
 
 bool ConnectLightPoint(const SubpathShiftContext &ctx, const LightPoint &lp, SubpathView cam, int t,
-                       ConnectResult *res) {
+                       ConnectResult *res, bool knownVisible) {
     *res = ConnectResult();
     const BidirContext &bc = *ctx.bidir;
     const PathVertex &pt = cam.v[t - 1];
@@ -64,8 +64,8 @@ bool ConnectLightPoint(const SubpathShiftContext &ctx, const LightPoint &lp, Sub
     }
     Spectrum L = pt.throughput() * EvalBSDF(pt, *pb, s, TransportMode::Radiance) * Li * AbsDot(wi, Vec3(pt.ns));
     if (L.isBlack()) return false;
-    res->shadowRayTraced = true;
-    if (!bc.scene->unoccluded(VertexIt(pt), Interaction(s.p, s.ng, -wi))) return false;
+    res->shadowRayTraced = !knownVisible;
+    if (!knownVisible && !bc.scene->unoccluded(VertexIt(pt), Interaction(s.p, s.ng, -wi))) return false;
     s.pdfFwd = PdfLightOrigin(bc, s, pt);
     Float w = MISWeight(bc, SubpathView{&s, nullptr, 1}, cam, 1, t, &s);
     res->weight = w;

@@ -21,8 +21,9 @@ struct LightPoint {
     bool delta = false, infinite = false;
 };
 bool SampleLightPoint(const SubpathShiftContext &ctx, const PathVertex &pt, Float uSel, Point2 u, LightPoint *lp);
-// f / p_base (unweighted) and the BDPT weight of strategy (1, t) on `cam`.
+// f / p_base (unweighted) and the BDPT weight of strategy (1, t) on `cam`;
+// knownVisible: the edge is the base's (no shadow ray).
 bool ConnectLightPoint(const SubpathShiftContext &ctx, const LightPoint &lp, SubpathView cam, int t,
-                       ConnectResult *res);
+                       ConnectResult *res, bool knownVisible = false);
 
 }  // namespace gradus

@@ -111,6 +111,7 @@ void SetSurfaceVertex(const SurfaceInteraction &si, const BSDF &bsdf, const Path
     v->geomId = si.geomId;
     v->primId = si.primId;
     v->flags = xv.flags;
+    v->rrScale = xv.rrScale;
     v->setThroughput(beta);
 }
 
@@ -180,7 +181,11 @@ void TraceFirstChain(const SubpathShiftContext &ctx, const ShiftSubpath &x, cons
         Spectrum factor;
         Float ratio;
         if (!PropagateHalfVector(x.b[i], xv.wo, wiX, x.deltaSample[i], by, o->woY, &wiY, &factor, &ratio, st)) break;
-        o->beta *= factor;
+        // The base's roulette factor after x_i (rrScale): the offset reuses the
+        // decision, so its throughput carries the same 1/q as the base's and
+        // the factors cancel in f(y)/f(x); rho (Eq. 8) compares densities
+        // without roulette on both sides, as BDPT's weights do.
+        o->beta *= factor * xv.rrScale;
         o->R *= ratio;
         ray = isect.spawnRay(wiY);
     }
@@ -198,8 +203,21 @@ bool ShiftToReconnection(const SubpathShiftContext &ctx, const ShiftSubpath &x, 
     for (int j = i + 1; j < rec; ++j)
         if (!x.deltaSample[j]) ok = false;
     if (!ok) ++st->unsupportedChains;
-    if (xr.isInfiniteLight()) ok = false;
+    if (xr.isInfiniteLight() && k > 0) ok = false;  // no manifold walk towards infinity
     if (!ok) return false;
+    if (xr.isInfiniteLight()) {
+        // Environment shift: the offset keeps the base's direction towards the
+        // point at infinity, |d omega_y / d omega_x| = 1 (shift.h), if it escapes.
+        st->shift.attempt(ShiftType::Environment);
+        *wiY = -Vec3(xr.wo);
+        *J = 1;
+        SurfaceInteraction hit;
+        if (TraceSurface(scene, VertexIt(yi).spawnRay(*wiY), &hit)) {
+            st->shift.fail(ShiftFailure::Occluded);
+            return false;
+        }
+        return true;
+    }
     if (k == 0) {
         ReconnectionShift rc;
         if (!ReconnectToVertex(scene, xi.p, VertexIt(yi), xr, &st->shift, &rc)) return false;
@@ -249,7 +267,7 @@ bool AppendWalkedInterior(const ShiftSubpath &x, int i, int rec, const WalkedInt
         out->rho[i + 1 + j] = o->R;
         BSDFSample sy;
         DeltaLobe(walked.bsdf[j], si.wo, trj, TransportMode::Radiance, &sy);
-        o->beta *= sy.f * (AbsDot(sy.wi, Vec3(walked.bsdf[j].ns())) / sx.pdf);
+        o->beta *= sy.f * (AbsDot(sy.wi, Vec3(walked.bsdf[j].ns())) / sx.pdf) * xv.rrScale;
         o->R *= sy.pdf / sx.pdf;
     }
     return true;
@@ -264,7 +282,10 @@ void CopyBaseTail(const ShiftSubpath &x, int rec, const OffsetState &o, CameraSh
     PathVertex &v = y.v[rec];
     v = xr;
     Point3 prevP = y.v[rec - 1].p;
-    v.wo = Normalize(prevP - xr.p);
+    if (xr.isInfiniteLight())
+        v.p = prevP - Vec3(xr.wo);  // same direction (wo, ng = -d), a point along it as escaped vertices store
+    else
+        v.wo = Normalize(prevP - xr.p);
     v.setThroughput(o.beta);
     y.b[rec] = x.b[rec];
     y.deltaSample[rec] = x.deltaSample[rec];
@@ -276,7 +297,7 @@ void CopyBaseTail(const ShiftSubpath &x, int rec, const OffsetState &o, CameraSh
         Spectrum fyr = x.b[rec].f(v.wo, wi);
         Float pyr = x.b[rec].pdf(v.wo, wi), pxr = x.b[rec].pdf(xr.wo, wi);
         if (pxr > 0) {
-            Spectrum betaN = o.beta * fyr * (AbsDot(wi, Vec3(xr.ns)) / pxr);
+            Spectrum betaN = o.beta * fyr * (AbsDot(wi, Vec3(xr.ns)) / pxr) * xr.rrScale;
             scale = SafeDiv(betaN, x.v[rec + 1].throughput());
             Rn = o.R * pyr / pxr;
         }
@@ -308,9 +329,9 @@ void ReconnectSecondChain(const SubpathShiftContext &ctx, const ShiftSubpath &x,
         st->shift.fail(ShiftFailure::Geometry);
         return;
     }
-    if (rec - i - 1 == 0) st->shift.success(ShiftType::Reconnection);
+    if (rec - i - 1 == 0) st->shift.success(x.v[rec].isInfiniteLight() ? ShiftType::Environment : ShiftType::Reconnection);
     // Eq. 5 factor of vertex i and its gradient-MIS ratio J p_y / p_x.
-    o->beta *= fy * (AbsDot(wiY, Vec3(y.b[i].ns())) * J / px);
+    o->beta *= fy * (AbsDot(wiY, Vec3(y.b[i].ns())) * J / px) * xi.rrScale;  // roulette: see TraceFirstChain
     o->R *= J * py / px;
     if (!AppendWalkedInterior(x, i, rec, walked, out, o)) return;
     CopyBaseTail(x, rec, *o, out);

@@ -39,6 +39,21 @@ bool ShiftChain(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s
     const Scene &scene = *ctx.bidir->scene;
     const PathVertex &x1 = light.v[s - 1], &xc = light.v[c];
     const int k = s - 2 - c;
+    if (k == 0 && xc.isInfiniteLight()) {
+        // Environment shift (as the camera subpath's): the offset b keeps the
+        // direction towards the light at infinity, J = 1, if it escapes.
+        st->shift.attempt(ShiftType::Environment);
+        SurfaceInteraction hit;
+        if (TraceSurface(scene, Interaction(yHit.p, yHit.n, woY1).spawnRay(wiX1), &hit)) {
+            st->shift.fail(ShiftFailure::Occluded);
+            return false;
+        }
+        st->shift.success(ShiftType::Environment);
+        ch->J = 1;
+        ch->wiY1 = wiX1;
+        ch->towardCamX = ch->towardCamY = -wiX1;
+        return true;
+    }
     if (k == 0) {
         ReconnectionShift rc;
         if (!ReconnectToVertex(scene, x1.p, Interaction(yHit.p, yHit.n, woY1), xc, &st->shift, &rc)) return false;
@@ -96,7 +111,19 @@ bool ShiftChain(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s
 // the solid-angle density of the light path's direction there.
 void EvalAtChainEnd(const ShiftSubpath &light, int c, const Vec3 &towardCam, Spectrum *f, Float *pdf) {
     const PathVertex &xc = light.v[c];
-    if (xc.type == VertexType::Light) {
+    if (xc.isInfiniteLight()) {  // the same direction for base and offset: equal factors
+        *f = Spectrum(1);
+        *pdf = 1;
+    } else if (xc.type == VertexType::Light && xc.isDeltaLight()) {
+        // Point or spot light: intensity towards the camera side (radiance
+        // arriving at unit distance) and the emission's directional density.
+        LightLiSample ls;
+        Float pp;
+        *f = xc.light->sampleLi(Interaction(xc.p + towardCam, Vec3(0, 0, 0), Vec3(0, 0, 0)), Point2(0.5, 0.5), &ls)
+                 ? ls.L
+                 : Spectrum(0);
+        xc.light->pdfLe(Ray(xc.p, towardCam), xc.ng, &pp, pdf);
+    } else if (xc.type == VertexType::Light) {
         const AreaLight *al = static_cast<const AreaLight *>(xc.light);
         *f = al->L(Interaction(xc.p, xc.ng, towardCam), towardCam);
         Float pp;
@@ -134,6 +161,8 @@ Float OffsetWeight(const BidirContext &bc, const ShiftSubpath &light, int s, int
     }
     PathVertex *yv = light.v;
     BSDF *yb = light.b;
+    // An infinite light's origin moves with b, so that it lies in the same direction.
+    if (xc.isInfiniteLight()) yv[c].p = yHit.p + (light.v[c].p - light.v[c + 1].p);
     for (int j = 0; j < k; ++j) {
         PathVertex &v = yv[s - 2 - j];
         const SurfaceInteraction &si = ch.walked.si[j];
@@ -186,8 +215,13 @@ bool ShiftLightTracingPath(const SubpathShiftContext &ctx, const ShiftSubpath &l
     const int k = s - 2 - c;  // interior (ideal specular) vertices
     if (k > 0 && (!ctx.manifold || !ctx.trySpecular)) return false;
     const PathVertex &xc = light.v[c];
-    if (xc.isInfiniteLight()) return false;
-    if (xc.type == VertexType::Light && !(xc.light && (xc.light->flags & LIGHT_AREA))) return false;
+    // Light vertices as c: area lights (reconnection or walk), infinite and
+    // distant lights (environment shift) and point/spot lights (reconnection to
+    // the point) when the chain is empty.
+    const bool envC = xc.isInfiniteLight(), pointC = xc.type == VertexType::Light && !envC && xc.isDeltaLight();
+    if ((envC || pointC) && k > 0) return false;
+    if (xc.type == VertexType::Light && !envC && !pointC && !(xc.light && (xc.light->flags & LIGHT_AREA))) return false;
+    if (pointC && !xc.light) return false;
 
     ++st->shift.offsetPaths;
     Ray r1, ray;
@@ -242,11 +276,18 @@ bool ShiftLightTracingPath(const SubpathShiftContext &ctx, const ShiftSubpath &l
     Vec3 ynN = k > 0 ? Vec3(ch.walked.si[0].n) : Vec3(xc.ng);
     Float G1x = EdgeGeometry(x1.p, xn.p, Vec3(xn.ng), xn.onSurface());
     Float G1y = EdgeGeometry(isect.p, ynP, ynN, xn.onSurface());
+    if (envC) G1x = G1y = 1;  // b's direction towards infinity is the variable (J = 1)
     // Vertex after c towards b: base light.v[c + 1], offset the last walked vertex or y1.
     const PathVertex &xa = light.v[c + 1];
     Point3 yaP = k > 0 ? ch.offChain.v[k].sp.p : isect.p;
     Vec3 yaN = k > 0 ? Vec3(ch.walked.si[k - 1].n) : Vec3(isect.n);
     Float Gcx = EdgeGeometry(xc.p, xa.p, Vec3(xa.ng), true), Gcy = EdgeGeometry(xc.p, yaP, yaN, true);
+    if (envC) {
+        // From infinity the density of b is the disk's positional one projected
+        // on b: |cos_b| without a distance (GenerateLightSubpath).
+        Gcx = AbsDot(wiX1, Vec3(xa.ng));
+        Gcy = AbsDot(wiX1, yaN);
+    }
     Float denR = Fx * ch.discX * G1y * pcX * Gcx;
     *rho = denR > 0 ? Fy * ch.J * ch.discY * G1x * pcY * Gcy / denR : 0;
 

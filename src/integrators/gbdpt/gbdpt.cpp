@@ -51,6 +51,10 @@ ParamTable<GBDPTSettings> Table() {
     t.append(GradientParams());  // pixelfilter film (the scene's filter, as bdpt) or box
     t.enumeration<bool>("shift", &S::manifold, "manifold", {{"manifold", true}, {"halfvector", false}},
                         "camera subpath shift: manifold walk (Sec. 3.1) or half-vector copy (Kettunen et al. 2015)");
+    t.enumeration<ManifoldSolver>("manifoldsolver", &S::solver, "ceres",
+                                  {{"ceres", ManifoldSolver::CeresTiny}, {"newton", ManifoldSolver::Newton}},
+                                  "solver of the manifold walks: ceres::TinySolver (Levenberg-Marquardt) or the "
+                                  "direct Newton walk (the same residual and Jacobian)");
     t.boolean("lighttracing", &S::lightTracing, true,
               "false: no light-tracing paths, in no MIS weight either (Table 1 \"w/o LTP\")");
     t.enumeration<S::MIS>("mis", &S::mis, "combined", {{"combined", S::GBDPTSettings::MIS::Combined}, {"simple", S::MIS::Simple}},
@@ -81,6 +85,7 @@ void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     // Triangle hits come from Embree in single precision: positions are good to
     // ~1e-7 relative, so the double-precision walk tolerance (1e-7) is loosened.
     sctx_.walk.relativeTolerance = 1e-5;
+    sctx_.walk.solver = set_.solver;
     // Light-tracing (case iii) primal and gradients are GradientFilm splats:
     // merged in tile order, so images do not depend on the thread count.
     // Camera samples go through the scene's pixel filter (pixelfilter "film",
@@ -297,6 +302,7 @@ std::string GBDPTIntegrator::statistics() const {
     ShiftStats ss;
     ss.add(tot.shift);
     std::string s = ss.format(std::string("G-BDPT shifts (") + (set_.manifold ? "manifold" : "halfvector") +
+                              (set_.manifold ? (set_.solver == ManifoldSolver::CeresTiny ? " walk, ceres" : " walk, newton") : "") +
                               ", threshold " + std::to_string(set_.shiftThreshold) + ")");
     char buf[256];
     const char *names[3] = {"(i)   camera subpath, both chains", "(ii)  camera subpath, first chain",

@@ -42,6 +42,8 @@
 //                                    neither sampled nor counted in any MIS weight, primal
 //                                    and gradients; Table 1 "w/o LTP")
 //   string mis "combined"            combined (Eq. 8) | simple (Eq. 9)
+//   string manifoldsolver "ceres"    ceres (ceres::TinySolver, Levenberg-Marquardt) | newton
+//                                    (the direct Newton walk): the solver of the manifold walks
 // Output layers: primal, dx, dy, *_var, reconstructed_l1, reconstructed_l2
 // (and reconstructed_weighted).
 #pragma once
@@ -63,6 +65,7 @@ namespace gradus {
 struct GBDPTSettings : BidirSettings, GradientSettings {
     enum class MIS { Combined, Simple };
     bool manifold;  // shift "manifold" (else "halfvector")
+    ManifoldSolver solver;
     bool lightTracing;
     MIS mis;
 };

@@ -1,5 +1,7 @@
 #include "integrators/common/bidir.h"
 
+#include <type_traits>
+
 #include "core/error.h"
 #include "core/stats.h"
 #include "render/render_loop.h"
@@ -167,8 +169,11 @@ bool IsMergeable(const PathVertex &v, const BSDF *bsdf) {
 
 void AllocSubpath(Arena &arena, int n, PathVertex **v, BSDF **b) {
     *v = static_cast<PathVertex *>(arena.alloc(sizeof(PathVertex) * n, alignof(PathVertex)));
+    // Not constructed: the walks assign every vertex and BSDF they create (and
+    // only those are read); constructing maxdepth + 2 BSDFs per subpath cost
+    // 4.6% of G-BDPT's time at maxdepth 65.
+    static_assert(std::is_trivially_copyable_v<BSDF> && std::is_trivially_copyable_v<PathVertex>);
     *b = static_cast<BSDF *>(arena.alloc(sizeof(BSDF) * n, alignof(BSDF)));
-    for (int i = 0; i < n; ++i) new (&(*b)[i]) BSDF();
 }
 
 bool SampleLensVertex(const BidirContext &ctx, const PathVertex &qs, Point2 u, PathVertex *v, CameraWiSample *cws) {

@@ -127,7 +127,8 @@ Interaction AsInteraction(const PathVertex &v);
 // Solid-angle density at `from` towards `to` -> area density at `to` (Veach 1997,
 // Eq. 8.10); towards an infinite-light vertex it stays directional.
 Float ConvertDensity(Float pdf, const PathVertex &from, const PathVertex &to);
-// Arena storage for a subpath of n vertices with empty BSDFs.
+// Arena storage for a subpath of n vertices and BSDFs, uninitialised: the
+// subpath generators fill every vertex and BSDF they create (index < n returned).
 void AllocSubpath(Arena &arena, int n, PathVertex **v, BSDF **b);
 // A lens vertex sampled towards surface vertex qs (light tracing, t = 1):
 // throughput We / pdf, pdfFwd 1.

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <vector>
 #include <cstdio>
 
 #include "core/error.h"
@@ -36,39 +38,77 @@ void GradientFilm::init(Film &film, bool useFilmFilter, bool lightTracing) {
         for (int i = 0; i < NumLayers; ++i) splatLayer_[i] = film.addLayer(std::string("gd.lt.") + (names[i] + 3));
 }
 
-void GradientFilm::add(SampleRecorder &rec, int layer, int layerSq, const Spectrum &v, Point2i offset) const {
-    if (!filter_) {
-        rec.addLayer(layer_[layer], v, offset);
-        rec.addLayer(layer_[layerSq], v * v, offset);
-        return;
-    }
-    // Pixels q whose centre lies within the filter radius of the sample.
-    const Vec2 r = filter_->radius;
-    Point2 pd(rec.pFilm().x - 0.5, rec.pFilm().y - 0.5);
-    int x0 = int(std::ceil(pd.x - r.x)), x1 = int(std::floor(pd.x + r.x));
-    int y0 = int(std::ceil(pd.y - r.y)), y1 = int(std::floor(pd.y + r.y));
-    Point2i p = rec.pixel();
-    for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) {
-            Float h = filter_->evaluate(Point2(x - pd.x, y - pd.y)) * filterNorm_;
-            if (h == 0) continue;
-            Spectrum hv = v * h;
-            Point2i at{x - p.x + offset.x, y - p.y + offset.y};
-            rec.addLayer(layer_[layer], hv, at);
-            rec.addLayer(layer_[layerSq], hv * hv, at);
+namespace {
+// The pixels a sample reaches through the filter (offsets from its pixel) and
+// their normalised weights h(q - s) / integral, evaluated once per sample for
+// all its layers (the primal and four differences: 5x fewer filter
+// evaluations than per layer). Up to 9 x 9 pixels in place, wider on the heap.
+class Footprint {
+  public:
+    Footprint(const Filter &f, Float norm, Point2 pFilm, Point2i pixel) {
+        const Vec2 r = f.radius;
+        Point2 pd(pFilm.x - 0.5, pFilm.y - 0.5);
+        int x0 = int(std::ceil(pd.x - r.x)), x1 = int(std::floor(pd.x + r.x));
+        int y0 = int(std::ceil(pd.y - r.y)), y1 = int(std::floor(pd.y + r.y));
+        int cap = std::max(0, (x1 - x0 + 1) * (y1 - y0 + 1));
+        if (cap > kLocal) {
+            heapQ_.resize(cap);
+            heapH_.resize(cap);
+            q_ = heapQ_.data();
+            h_ = heapH_.data();
         }
-}
+        for (int y = y0; y <= y1; ++y)
+            for (int x = x0; x <= x1; ++x) {
+                Float h = f.evaluate(Point2(x - pd.x, y - pd.y)) * norm;
+                if (h == 0) continue;
+                q_[n_] = Point2i{x - pixel.x, y - pixel.y};
+                h_[n_++] = h;
+            }
+    }
+    int size() const { return n_; }
+    Point2i offset(int i) const { return q_[i]; }
+    Float weight(int i) const { return h_[i]; }
+
+  private:
+    static constexpr int kLocal = 81;
+    Point2i localQ_[kLocal];
+    Float localH_[kLocal];
+    Point2i *q_ = localQ_;
+    Float *h_ = localH_;
+    std::vector<Point2i> heapQ_;
+    std::vector<Float> heapH_;
+    int n_ = 0;
+};
+}  // namespace
 
 void GradientFilm::record(SampleRecorder &rec, const GradientSample &s) const {
     if (!s.primal.isFinite()) return;
-    add(rec, Primal, PrimalSq, s.primal, {0, 0});
+    // Box: the sample's own pixel. Film filter: the pixels q whose centre lies
+    // within the filter radius of the sample, with weight h(q - s).
+    std::optional<Footprint> fp;
+    if (filter_) fp.emplace(*filter_, filterNorm_, rec.pFilm(), rec.pixel());
+    auto put = [&](int layer, int layerSq, const Spectrum &v, Point2i offset) {
+        if (!fp) {
+            rec.addLayer(layer_[layer], v, offset);
+            rec.addLayer(layer_[layerSq], v * v, offset);
+            return;
+        }
+        if (v.isBlack()) return;  // adds nothing to either layer
+        for (int i = 0; i < fp->size(); ++i) {
+            Spectrum hv = v * fp->weight(i);
+            Point2i at{fp->offset(i).x + offset.x, fp->offset(i).y + offset.y};
+            rec.addLayer(layer_[layer], hv, at);
+            rec.addLayer(layer_[layerSq], hv * hv, at);
+        }
+    };
+    put(Primal, PrimalSq, s.primal, {0, 0});
     for (int k = 0; k < kNumNeighbours; ++k) {
         if (!s.active[k] || !s.diff[k].isFinite()) continue;
         Point2i off = kNeighbourOffsets[k];
         bool forward = off.x + off.y > 0;
         Spectrum v = forward ? s.diff[k] : s.diff[k] * -1.0;
         Point2i at = forward ? Point2i{0, 0} : off;
-        add(rec, kDiffLayers_[k][0], kDiffLayers_[k][1], v, at);
+        put(kDiffLayers_[k][0], kDiffLayers_[k][1], v, at);
     }
 }
 

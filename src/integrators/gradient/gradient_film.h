@@ -69,7 +69,6 @@ class GradientFilm {
     // Layers (value, square) of each neighbour's difference: +x is dx at p; -x
     // is dx at p-(1,0) with the sign flipped (I(p) - I(p-1)). Same for y.
     static constexpr int kDiffLayers_[kNumNeighbours][2] = {{DxF, DxFSq}, {DxB, DxBSq}, {DyF, DyFSq}, {DyB, DyBSq}};
-    void add(SampleRecorder &rec, int layer, int layerSq, const Spectrum &v, Point2i offset) const;
     void addSplats(const Film &film, double samplesPerPixel, GradientImages *g) const;
     int layer_[NumLayers] = {};
     int splatLayer_[NumLayers] = {};  // light-tracing splats (same meaning as layer_)

@@ -46,7 +46,6 @@ ParamTable<GBDPTSettings> Table() {
     ParamTable<S> t("gbdpt");
     BidirParamOptions b;
     b.strategyLayers = false;  // Eq. 8 uses the balance heuristic
-    b.noSpatial = "is not supported by gbdpt (its MIS needs a position-free light choice)";
     t.append(BidirParams(b));  // rrdepth 3 as bdpt: offsets reuse the base's roulette (camera_shift.cpp)
     t.append(GradientParams());  // pixelfilter film (the scene's filter, as bdpt) or box
     t.enumeration<bool>("shift", &S::manifold, "manifold", {{"manifold", true}, {"halfvector", false}},

@@ -26,7 +26,8 @@
 // Parameters (bidirectional family, integrators/common/bidir_family.h; MIS
 // always the balance heuristic, as Eq. 8 assumes):
 //   integer maxdepth 5               maximum path depth (edges - 1)
-//   string lightsamplestrategy "power"  uniform | power (position-free, as the MIS assumes)
+//   string lightsamplestrategy "power"  uniform | power | spatial (= power, as bdpt: position-free,
+//                                    as the MIS and the shifts of next-event estimation assume)
 //   integer rrdepth 3                Russian roulette after this many bounces (-1: off); the
 //                                    offsets reuse the base's decisions (camera_shift.cpp)
 //   integer pixelbounds []           accepted (use --cropwindow)

@@ -502,3 +502,60 @@ TEST(GBDPTShift, RouletteFactorsCancelInTheShiftRatio) {
     EXPECT_GT(compared, 1000);
     std::printf("%d shifted subpaths with roulette factors, %d throughput ratios compared\n", withRoulette, compared);
 }
+
+// Incremental offset weights (bidir.h MISSplit): for strategies whose camera
+// endpoint lies at least 3 vertices past the reconnection r, the offset's BDPT
+// weight from the base's split parts at r + 1 and the offset's prefix sum
+// equals the full O(n) MISWeight of the offset, for every light subpath
+// length, with and without light tracing.
+TEST(GBDPTShift, IncrementalOffsetWeightsEqualFullWeights) {
+    for (bool lightTracing : {true, false}) {
+        Fixture f(lightTracing ? "Integrator \"gbdpt\" \"integer maxdepth\" [12]"
+                               : "Integrator \"gbdpt\" \"integer maxdepth\" [12] \"bool lighttracing\" \"false\"");
+        const SubpathShiftContext &sc = f.g->shiftContext();
+        const BidirContext &bc = f.g->bidirContext();
+        std::unique_ptr<Sampler> sampler = f.job.sampler->clone();
+        Arena arena;
+        const int maxV = 12;
+        int compared = 0;
+        for (int trial = 0; trial < 3000; ++trial) {
+            Point2i px{1 + trial % 21, 1 + (trial / 21) % 15};
+            sampler->startPixelSample(px, trial, 0);
+            CameraSample cs{Point2(px.x + sampler->get1D(), px.y + sampler->get1D()), sampler->get2D()};
+            Ray ray;
+            bc.camera->generateRay(cs, &ray);
+            ShiftSubpath x, L;
+            for (ShiftSubpath *p : {&x, &L}) {
+                p->v = new (arena.alloc(sizeof(PathVertex) * maxV, alignof(PathVertex))) PathVertex[maxV];
+                p->b = new (arena.alloc(sizeof(BSDF) * maxV, alignof(BSDF))) BSDF[maxV];
+                p->deltaSample = static_cast<uint8_t *>(arena.alloc(maxV));
+            }
+            x.n = GenerateCameraSubpath(bc, ray, *sampler, arena, maxV, x.v, x.b);
+            L.n = GenerateLightSubpath(bc, *sampler, arena, maxV - 1, L.v, L.b);
+            PrepareSubpath(sc, &x);
+            PrepareSubpath(sc, &L);
+            CameraShift sh;
+            SubpathShiftStats st;
+            ShiftCameraSubpath(sc, x, cs, {0, 1}, arena, &sh, &st);
+            const int m = sh.r + 1;
+            if (sh.r < 0 || m + 2 > sh.validUpTo) continue;
+            const Float Q = CameraPrefixSum(bc, bc.strategies, sh.y.view(), m);
+            for (int t = m + 3; t <= sh.validUpTo + 1; ++t)
+                for (int s = 0; s <= L.n; ++s) {
+                    if (s >= 1 && (!IsDiffuseVertex(sc, x.v[t - 1], &x.b[t - 1]) || x.v[t - 1].type != VertexType::Surface))
+                        continue;
+                    if (s >= 2 && !IsDiffuseVertex(sc, L.v[s - 1], &L.b[s - 1])) continue;
+                    if (s == 0 && !(EmitterOf(bc, x.v[t - 1]))) continue;
+                    MISSplit parts;
+                    Float wx = MISWeight(bc, bc.strategies, L.view(), x.view(), s, t, nullptr, m, &parts);
+                    Float wy = MISWeight(bc, L.view(), sh.y.view(), s, t, nullptr);
+                    ASSERT_TRUE(parts.valid);
+                    EXPECT_NEAR(parts.weight(Q) / wy, 1.0, 1e-9) << "s " << s << " t " << t << " r " << sh.r;
+                    EXPECT_NEAR(wx, MISWeight(bc, L.view(), x.view(), s, t, nullptr), 1e-15);
+                    ++compared;
+                }
+        }
+        EXPECT_GT(compared, 300) << "light tracing " << lightTracing;
+        std::printf("light tracing %d: %d offset weights compared\n", int(lightTracing), compared);
+    }
+}

@@ -423,7 +423,8 @@ namespace {
 // weighted is a merge at camera[t-1] (VCM), so light[s-1] is not known to be
 // connectible and its delta flag counts.
 Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s,
-                      int t, const PathVertex *sampled, bool mergeMode, Float *ptRevOut) {
+                      int t, const PathVertex *sampled, bool mergeMode, Float *ptRevOut, int split = -1,
+                      MISSplit *parts = nullptr) {
     auto Lv = [&](int i) -> const PathVertex & { return (s == 1 && i == 0 && sampled) ? *sampled : light.v[i]; };
     auto Cv = [&](int i) -> const PathVertex & { return (t == 1 && i == 0 && sampled) ? *sampled : camera.v[i]; };
     auto Lb = [&](int i) -> const BSDF * { return light.bsdf ? &light.bsdf[i] : nullptr; };
@@ -475,6 +476,10 @@ Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathVi
     // Strategies with fewer camera vertices: (s + t - i, i), connection edge C[i] -- C[i-1].
     Float ri = 1;
     for (int i = t - 1; i > 0; --i) {
+        if (i == split && parts) {  // the camera terms with endpoints above `split`, and their ratio product
+            parts->shared = sumRi;
+            parts->product = mis(ri);
+        }
         // ri is the ratio of the connection with camera endpoint C[i]: merging at C[i]
         // (not at the light origin x_0, which C[t-1] is when s = 0).
         if (eta > 0 && !(s == 0 && i == t - 1) && IsMergeable(Cv(i), Cb(i))) sumRi += mis(eta * remap(camRev(i)) * ri);
@@ -489,6 +494,7 @@ Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathVi
         if (!EdgeConnectible(ctx, Cv(i), Cv(i - 1))) continue;
         sumRi += mis(ri * (i == 1 ? relLT : relOther));
     }
+    const Float camSum = sumRi;
     // Strategies with fewer light vertices: (i, s + t - i), connection edge L[i-1] -- L[i].
     ri = 1;
     for (int i = s - 1; i >= 0; --i) {
@@ -502,18 +508,46 @@ Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathVi
         if (i > 0 && !EdgeConnectible(ctx, Lv(i - 1), Lv(i))) continue;
         sumRi += mis(ri * relOther);  // t' = s + t - i >= 2
     }
+    if (parts) parts->shared += sumRi - camSum;  // + the light-side terms
     return sumRi;
 }
 
 }  // namespace
 
 Float MISWeight(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s, int t,
-                const PathVertex *sampled) {
+                const PathVertex *sampled, int split, MISSplit *parts) {
     GRADUS_CHECK(!set.lightTracing || set.lightTracingSamples > 0);
+    if (parts) *parts = MISSplit();
     if (t == 1 && !set.lightTracing) return 0;  // not in play
     if (s + t == 2) return 1;
+    GRADUS_CHECK(!parts || (!set.merging && split >= 1 && split + 2 <= t - 1));
     Float ptRev;
-    return 1 / (1 + OtherStrategies(ctx, set, light, camera, s, t, sampled, false, &ptRev));
+    Float w = 1 / (1 + OtherStrategies(ctx, set, light, camera, s, t, sampled, false, &ptRev, split, parts));
+    if (parts) parts->valid = true;
+    return w;
+}
+
+Float CameraPrefixSum(const BidirContext &ctx, const StrategySet &set, SubpathView camera, int split) {
+    GRADUS_CHECK(!set.merging && split >= 1 && split < camera.n);
+    // The camera loop of OtherStrategies over i = split .. 1 with ri starting
+    // at 1: Q = sum_i allowed_i prod_{j=i}^{split} rho_j, rho_j = pdfRev_j /
+    // pdfFwd_j (Veach 1997 Eq. 10.9; Dirac densities remapped to 1). Stored
+    // pdfRev are exact here: vertices below split + 1 are never a connection's
+    // endpoint or its predecessor for the strategies MISSplit serves.
+    const bool power = ctx.heuristic == MISHeuristic::Power;
+    auto mis = [&](Float r) { return power ? r * r : r; };
+    auto remap = [](Float f) { return f != 0 ? f : Float(1); };
+    const PathVertex *c = camera.v;
+    Float ri = 1, sum = 0;
+    for (int i = split; i > 0; --i) {
+        ri *= remap(c[i].pdfRev) / remap(c[i].pdfFwd);
+        if (i == 1 && !set.lightTracing) continue;  // (s + t - 1, 1) not in play
+        if (i == 1 && c[1].pdfFwd == 0 && c[0].type == VertexType::Camera) continue;  // filter margin
+        if (c[i].delta() || c[i - 1].delta()) continue;
+        if (!EdgeConnectible(ctx, c[i], c[i - 1])) continue;
+        sum += mis(ri * (i == 1 ? set.lightTracingSamples : Float(1)));
+    }
+    return sum;
 }
 
 Float MergeWeight(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s,
@@ -593,7 +627,9 @@ bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera,
         if (!u.knownVisible && !scene.unoccluded(AsInteraction(qs), AsInteraction(pt))) return false;
     }
     if (L.isBlack()) return false;
-    Float w = MISWeight(ctx, light, camera, s, t, haveSampled ? &sampled : nullptr);
+    Float w = MISWeight(ctx, ctx.strategies, light, camera, s, t, haveSampled ? &sampled : nullptr,
+                        u.misParts && u.misSplit >= 1 && u.misSplit + 2 <= t - 1 ? u.misSplit : -1,
+                        u.misParts && u.misSplit >= 1 && u.misSplit + 2 <= t - 1 ? u.misParts : nullptr);
     res->weight = w;
     res->unweighted = L;
     res->L = L * w;

@@ -151,6 +151,10 @@ struct ConnectSamples {
     // The connection edge is known to be unoccluded (a shifted path that
     // reuses its base's edge, G-BDPT): no shadow ray is traced.
     bool knownVisible = false;
+    // Optional: the weight's parts for camera subpaths that share this one's
+    // vertices from misSplit + 1 on (MISSplit; used when misSplit + 2 <= t - 1).
+    int misSplit = -1;
+    struct MISSplit *misParts = nullptr;
 };
 
 struct ConnectResult {
@@ -175,7 +179,7 @@ bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera,
 // (s = 1) or camera[t-1] (t = 1) when the connection sampled a new endpoint
 // (nullptr: use the subpath's).
 Float MISWeight(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s, int t,
-                const PathVertex *sampled);
+                const PathVertex *sampled, int split = -1, struct MISSplit *parts = nullptr);
 // Weight of merging at camera[t-1] with a light subpath whose vertex after
 // light[s-1] landed there (VCM; s >= 1, t >= 2, set.merging), for the path
 // light[0..s-1] camera[t-1..0]: N p_VM over the connections and merges of that
@@ -187,6 +191,27 @@ inline Float MISWeight(const BidirContext &ctx, SubpathView light, SubpathView c
                        const PathVertex *sampled) {
     return MISWeight(ctx, ctx.strategies, light, camera, s, t, sampled);
 }
+
+// Incremental weights of camera subpaths that differ only below a vertex
+// (G-BDPT's offsets share the base's vertices from the reconnection on).
+// With rho_j = pdfRev_j / pdfFwd_j, MISWeight's camera terms of strategy (s, t)
+// split at m (m + 2 <= t - 1, no merging) into those with endpoints above m,
+// which involve only vertices m + 1 .. t - 1 and the light subpath, and
+// prod_{j=m+1}^{t-1} rho_j times CameraPrefixSum(camera, m):
+//   w_st = 1 / (1 + shared + product * CameraPrefixSum(m))   (Veach Eq. 10.9).
+// A camera subpath y that agrees with x in positions, flags and BSDFs from
+// vertex m on and in pdfFwd and pdfRev from m + 1 on has x's shared and
+// product, so its weight costs O(1) per strategy once CameraPrefixSum(y, m) is
+// known (G-BDPT's offsets with reconnection vertex r: m = r + 1).
+struct MISSplit {
+    Float shared = 0;   // light terms + camera terms with endpoint index > m (mis applied)
+    Float product = 0;  // mis(prod_{j=m+1}^{t-1} rho_j)
+    bool valid = false;
+    Float weight(Float prefixSum) const { return 1 / (1 + shared + product * prefixSum); }
+};
+Float MISWeight(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s, int t,
+                const PathVertex *sampled, int split, MISSplit *parts);
+Float CameraPrefixSum(const BidirContext &ctx, const StrategySet &set, SubpathView camera, int split);
 
 // True when strategy (s, t) of the full path could produce it: both endpoints
 // connectible and the connection edge not degenerate - not shorter than

@@ -29,6 +29,7 @@ struct GBDPTIntegrator::ThreadState {
     // By case (i), (ii), (iii): base connections, gradient samples, shifted ones.
     uint64_t cases[3] = {}, caseAttempts[3] = {}, caseSuccesses[3] = {};
     uint64_t fallbacks[NumFallbacks] = {};
+    uint64_t incrementalWeights = 0;  // offset BDPT weights from the base's MISSplit (O(1))
 };
 struct GBDPTIntegrator::Store {
     tbb::enumerable_thread_specific<ThreadState> threads;
@@ -149,6 +150,19 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
             }
         }
 
+    // Incremental offset weights (bidir.h MISSplit): the offsets reconnect at
+    // the same vertex r (c, or the half-vector shift's first diffuse pair, a
+    // function of the base), share the base's vertices from r on and its
+    // densities from r + 2 on; for kc >= r + 3 an offset's BDPT weight is
+    // 1 / (1 + shared + product Q_y) with the base's parts split at r + 1 and
+    // the offset's prefix sum Q_y, computed once per offset.
+    int rShared = -1;
+    for (int k = 0; k < kNumNeighbours; ++k)
+        if (inside[k] && shifts[k].r >= 0) rShared = shifts[k].r;
+    const int misSplit = rShared >= 0 ? rShared + 1 : -1;
+    Float prefixY[kNumNeighbours];
+    bool havePrefix[kNumNeighbours] = {};
+
     PathVertex lens = cam.v[0];
     lens.setThroughput(Spectrum(1));
     lens.pdfFwd = 1;
@@ -174,17 +188,21 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
             ConnectResult r;
             LightPoint lp;
             bool useLp = false, ok;
+            MISSplit parts;
+            u.misSplit = misSplit;
+            u.misParts = &parts;
             if (s == 1) {
                 ok = SampleLightPoint(sctx_, cam.v[t - 1], u.uLightSelect, u.uLight, &lp);
                 if (ok && !lp.infinite) {
                     useLp = true;
-                    ok = ConnectLightPoint(sctx_, lp, camView, t, &r);
+                    ok = ConnectLightPoint(sctx_, lp, camView, t, &r, false, misSplit, &parts);
                 } else {
                     ok = ConnectBDPT(bctx_, lightView, camView, s, t, u, &r);
                 }
             } else {
                 ok = ConnectBDPT(bctx_, lightView, camView, s, t, u, &r);
             }
+            u.misParts = nullptr;
             if (!ok) continue;  // blocked or black base path: nothing to shift (Sec. 4)
             const Spectrum fx = r.unweighted * w;
             // BDPT weight over the strategies in play (bctx_.strategies: without
@@ -239,13 +257,22 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                 // is the camera subpath's (as for a shared light point).
                 const bool envNEE = s == 1 && !useLp;
                 if (kc > sh.validUpTo) ++ts.fallbacks[FallbackShift];
-                if (kc <= sh.validUpTo && sh.r >= 0 && kc > sh.r && !envNEE) {
+                const bool reuse = kc <= sh.validUpTo && sh.r >= 0 && kc > sh.r;
+                const bool incremental = reuse && parts.valid && sh.r == rShared;
+                if (reuse && (incremental || !envNEE)) {
                     // Past the reconnection the offset's connection is the base's
-                    // (same vertices, same shadow ray): only the camera-side
-                    // throughput and the offset's MIS densities differ.
+                    // (same vertices, same light sample, same shadow ray): only the
+                    // camera-side throughput and the offset's MIS densities differ.
                     SubpathView yv = sh.y.view();
                     ry.unweighted = r.unweighted * SafeDiv(sh.y.v[kc].throughput(), cam.v[kc].throughput());
-                    if (useLp) {
+                    if (incremental) {
+                        if (!havePrefix[k]) {
+                            prefixY[k] = CameraPrefixSum(bctx_, bctx_.strategies, yv, misSplit);
+                            havePrefix[k] = true;
+                        }
+                        ry.weight = parts.weight(prefixY[k]);
+                        ++ts.incrementalWeights;
+                    } else if (useLp) {
                         PathVertex sv = lp.v;
                         sv.pdfFwd = PdfLightOrigin(bctx_, sv, sh.y.v[kc]);
                         ry.weight = MISWeight(bctx_, SubpathView{&sv, nullptr, 1}, yv, 1, t, &sv);
@@ -288,9 +315,10 @@ void GBDPTIntegrator::finish(const Film &film, const RenderStats &stats, Image *
 
 std::string GBDPTIntegrator::statistics() const {
     SubpathShiftStats tot;
-    uint64_t cases[3] = {}, attempts[3] = {}, successes[3] = {}, fallbacks[NumFallbacks] = {};
+    uint64_t cases[3] = {}, attempts[3] = {}, successes[3] = {}, fallbacks[NumFallbacks] = {}, incremental = 0;
     for (const ThreadState &t : store_->threads) {
         tot.add(t.shift);
+        incremental += t.incrementalWeights;
         for (int i = 0; i < NumFallbacks; ++i) fallbacks[i] += t.fallbacks[i];
         for (int i = 0; i < 3; ++i) {
             cases[i] += t.cases[i];
@@ -312,6 +340,9 @@ std::string GBDPTIntegrator::statistics() const {
                       (unsigned long long)successes[i], attempts[i] ? 100.0 * successes[i] / attempts[i] : 0.0);
         s += buf;
     }
+    std::snprintf(buf, sizeof buf, "  offset BDPT weights from the base's split sums (O(1), kc >= r + 3): %llu\n",
+                  (unsigned long long)incremental);
+    s += buf;
     s += "  fallbacks (zero offset, BDPT weight) by cause:\n";
     for (int i = 0; i < NumFallbacks; ++i) {
         std::snprintf(buf, sizeof buf, "    %-58s %llu\n", kFallbackNames[i], (unsigned long long)fallbacks[i]);

@@ -34,7 +34,7 @@ bool SampleLightPoint(const SubpathShiftContext &ctx, const PathVertex &pt, Floa
 }
 
 bool ConnectLightPoint(const SubpathShiftContext &ctx, const LightPoint &lp, SubpathView cam, int t,
-                       ConnectResult *res, bool knownVisible) {
+                       ConnectResult *res, bool knownVisible, int misSplit, MISSplit *misParts) {
     *res = ConnectResult();
     const BidirContext &bc = *ctx.bidir;
     const PathVertex &pt = cam.v[t - 1];
@@ -67,7 +67,9 @@ bool ConnectLightPoint(const SubpathShiftContext &ctx, const LightPoint &lp, Sub
     res->shadowRayTraced = !knownVisible;
     if (!knownVisible && !bc.scene->unoccluded(VertexIt(pt), Interaction(s.p, s.ng, -wi))) return false;
     s.pdfFwd = PdfLightOrigin(bc, s, pt);
-    Float w = MISWeight(bc, SubpathView{&s, nullptr, 1}, cam, 1, t, &s);
+    const bool split = misParts && misSplit >= 1 && misSplit + 2 <= t - 1;
+    Float w = MISWeight(bc, bc.strategies, SubpathView{&s, nullptr, 1}, cam, 1, t, &s, split ? misSplit : -1,
+                        split ? misParts : nullptr);
     res->weight = w;
     res->unweighted = L;
     res->L = L * w;

@@ -22,8 +22,9 @@ struct LightPoint {
 };
 bool SampleLightPoint(const SubpathShiftContext &ctx, const PathVertex &pt, Float uSel, Point2 u, LightPoint *lp);
 // f / p_base (unweighted) and the BDPT weight of strategy (1, t) on `cam`;
-// knownVisible: the edge is the base's (no shadow ray).
+// knownVisible: the edge is the base's (no shadow ray); misParts: the weight's
+// parts split at misSplit (bidir.h MISSplit, if misSplit + 2 <= t - 1).
 bool ConnectLightPoint(const SubpathShiftContext &ctx, const LightPoint &lp, SubpathView cam, int t,
-                       ConnectResult *res, bool knownVisible = false);
+                       ConnectResult *res, bool knownVisible = false, int misSplit = -1, MISSplit *misParts = nullptr);
 
 }  // namespace gradus

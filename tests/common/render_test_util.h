@@ -20,6 +20,16 @@ struct TestRender {
     std::unique_ptr<Integrator> integrator;
 };
 
+// The lines before WorldBegin of the small test scenes: camera, random
+// sampler (16 spp), box filter, a w x h film and the integrator line.
+inline std::string TestSceneHeader(const std::string &lookAt, int fovDegrees, int w, int h,
+                                   const std::string &integratorLine) {
+    return "LookAt " + lookAt + "\nCamera \"perspective\" \"float fov\" [" + std::to_string(fovDegrees) +
+           "]\nSampler \"random\" \"integer pixelsamples\" [16]\nPixelFilter \"box\"\n"
+           "Film \"image\" \"integer xresolution\" [" + std::to_string(w) + "] \"integer yresolution\" [" +
+           std::to_string(h) + "]\n  \"string filename\" [\"unused.exr\"]\n" + integratorLine + "\n";
+}
+
 // A two-triangle quad with its material (pbrt syntax).
 inline std::string Quad(const std::string &mat, const char *P) {
     return "AttributeBegin\n" + mat + "\nShape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [" + P +

@@ -27,14 +27,7 @@ inline Image Render(const std::string &text, int spp, uint64_t seed, const std::
 inline std::string BoxScene(const std::string &integratorLine, int w = 24, int h = 18, bool glossy = false) {
     std::string mirror = glossy ? R"(Material "metal" "float roughness" [0.0005] "bool remaproughness" "false")"
                                 : R"(Material "mirror")";
-    return R"(
-LookAt 0 1.1 -3.4  0 0.8 0  0 1 0
-Camera "perspective" "float fov" [45]
-Sampler "random" "integer pixelsamples" [16]
-PixelFilter "box"
-Film "image" "integer xresolution" [)" + std::to_string(w) + R"(] "integer yresolution" [)" + std::to_string(h) + R"(]
-  "string filename" ["unused.exr"]
-)" + integratorLine + R"(
+    return test::TestSceneHeader("0 1.1 -3.4  0 0.8 0  0 1 0", 45, w, h, integratorLine) + R"(
 WorldBegin
 AttributeBegin
   AreaLightSource "diffuse" "rgb L" [6 6 6]
@@ -78,14 +71,7 @@ WorldEnd
 inline std::string EnvScene(const std::string &integratorLine, int w = 24, int h = 18, bool sun = false) {
     std::string distant = sun ? R"(LightSource "distant" "point from" [2 6 3] "point to" [0 0 0] "rgb L" [1.5 1.5 1.4])"
                               : "";
-    return R"(
-LookAt 0 1.4 -3.6  0 0.5 0  0 1 0
-Camera "perspective" "float fov" [45]
-Sampler "random" "integer pixelsamples" [16]
-PixelFilter "box"
-Film "image" "integer xresolution" [)" + std::to_string(w) + R"(] "integer yresolution" [)" + std::to_string(h) + R"(]
-  "string filename" ["unused.exr"]
-)" + integratorLine + R"(
+    return test::TestSceneHeader("0 1.4 -3.6  0 0.5 0  0 1 0", 45, w, h, integratorLine) + R"(
 WorldBegin
 LightSource "infinite" "rgb L" [0.5 0.55 0.7]
 LightSource "point" "point from" [-0.6 1.6 -0.6] "rgb I" [1.2 1.1 1.0]

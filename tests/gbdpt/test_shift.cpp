@@ -31,6 +31,15 @@ struct Fixture {
 
 Vec3 Perturb(const Vec3 &w, const Vec3 &t, Float eps) { return Normalize(w + t * eps); }
 
+// Arena storage for a subpath of up to n vertices (constructed, n = 0).
+ShiftSubpath ArenaSubpath(Arena &arena, int n) {
+    ShiftSubpath p;
+    p.v = new (arena.alloc(sizeof(PathVertex) * n, alignof(PathVertex))) PathVertex[n];
+    p.b = new (arena.alloc(sizeof(BSDF) * n, alignof(BSDF))) BSDF[n];
+    p.deltaSample = static_cast<uint8_t *>(arena.alloc(n));
+    return p;
+}
+
 // Traces from `p` along `d` through ideal specular glass (refraction) until a
 // non-specular surface; returns the chain points (start, interior..., end).
 bool TraceGlassChain(const Scene &scene, const EmbreeManifoldScene &ms, const Point3 &p, const Vec3 &n, Vec3 d,
@@ -179,11 +188,8 @@ TEST(GBDPTShift, EyeAreaFactorMatchesFiniteDifferences) {
 // The light subpath that makes strategy (s, n - s) of a camera path x[0..n-1]
 // ending on an emitter: the reversed tail x[n-1] .. x[n-s], densities swapped.
 ShiftSubpath ReversedTail(const BidirContext &bc, const ShiftSubpath &x, int s, Arena &arena) {
-    ShiftSubpath L;
+    ShiftSubpath L = ArenaSubpath(arena, s);
     L.n = s;
-    L.v = new (arena.alloc(sizeof(PathVertex) * s, alignof(PathVertex))) PathVertex[s];
-    L.b = new (arena.alloc(sizeof(BSDF) * s, alignof(BSDF))) BSDF[s];
-    L.deltaSample = static_cast<uint8_t *>(arena.alloc(s));
     const int n = x.n;
     for (int j = 0; j < s; ++j) {
         const PathVertex &c = x.v[n - 1 - j];
@@ -234,10 +240,7 @@ void CheckCombinedWeightsSumToOne(const std::string &line, bool lightTracing, bo
         Ray ray;
         bc.camera->generateRay(cs, &ray);
         const int maxV = 6;
-        ShiftSubpath x;
-        x.v = new (arena.alloc(sizeof(PathVertex) * maxV, alignof(PathVertex))) PathVertex[maxV];
-        x.b = new (arena.alloc(sizeof(BSDF) * maxV, alignof(BSDF))) BSDF[maxV];
-        x.deltaSample = static_cast<uint8_t *>(arena.alloc(maxV));
+        ShiftSubpath x = ArenaSubpath(arena, maxV);
         x.n = GenerateCameraSubpath(bc, ray, *sampler, arena, maxV - 1, x.v, x.b);
         // Point-light paths: cut the camera subpath after its k-th vertex
         // (k drawn from the trial index) if that one is diffuse.
@@ -374,10 +377,7 @@ TEST(GBDPTShift, CameraShiftIsInvertibleAndWeightsPair) {
             Ray ray;
             bc.camera->generateRay(cs, &ray);
             const int maxV = 7;
-            ShiftSubpath x;
-            x.v = new (arena.alloc(sizeof(PathVertex) * maxV, alignof(PathVertex))) PathVertex[maxV];
-            x.b = new (arena.alloc(sizeof(BSDF) * maxV, alignof(BSDF))) BSDF[maxV];
-            x.deltaSample = static_cast<uint8_t *>(arena.alloc(maxV));
+            ShiftSubpath x = ArenaSubpath(arena, maxV);
             x.n = GenerateCameraSubpath(bc, ray, *sampler, arena, maxV, x.v, x.b);
             PrepareSubpath(sc, &x);
             CameraShift fwd, back;
@@ -460,12 +460,7 @@ TEST(GBDPTShift, RouletteFactorsCancelInTheShiftRatio) {
         CameraSample cs{Point2(px.x + sampler->get1D(), px.y + sampler->get1D()), sampler->get2D()};
         Ray ray;
         rr.camera->generateRay(cs, &ray);
-        ShiftSubpath x, xs;
-        for (ShiftSubpath *p : {&x, &xs}) {
-            p->v = new (arena.alloc(sizeof(PathVertex) * maxV, alignof(PathVertex))) PathVertex[maxV];
-            p->b = new (arena.alloc(sizeof(BSDF) * maxV, alignof(BSDF))) BSDF[maxV];
-            p->deltaSample = static_cast<uint8_t *>(arena.alloc(maxV));
-        }
+        ShiftSubpath x = ArenaSubpath(arena, maxV), xs = ArenaSubpath(arena, maxV);
         x.n = GenerateCameraSubpath(rr, ray, *sampler, arena, maxV, x.v, x.b);
         PrepareSubpath(sc, &x);
         xs.n = x.n;
@@ -524,12 +519,7 @@ TEST(GBDPTShift, IncrementalOffsetWeightsEqualFullWeights) {
             CameraSample cs{Point2(px.x + sampler->get1D(), px.y + sampler->get1D()), sampler->get2D()};
             Ray ray;
             bc.camera->generateRay(cs, &ray);
-            ShiftSubpath x, L;
-            for (ShiftSubpath *p : {&x, &L}) {
-                p->v = new (arena.alloc(sizeof(PathVertex) * maxV, alignof(PathVertex))) PathVertex[maxV];
-                p->b = new (arena.alloc(sizeof(BSDF) * maxV, alignof(BSDF))) BSDF[maxV];
-                p->deltaSample = static_cast<uint8_t *>(arena.alloc(maxV));
-            }
+            ShiftSubpath x = ArenaSubpath(arena, maxV), L = ArenaSubpath(arena, maxV);
             x.n = GenerateCameraSubpath(bc, ray, *sampler, arena, maxV, x.v, x.b);
             L.n = GenerateLightSubpath(bc, *sampler, arena, maxV - 1, L.v, L.b);
             PrepareSubpath(sc, &x);

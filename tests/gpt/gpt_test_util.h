@@ -22,14 +22,7 @@ inline Image Render(const std::string &text, int spp, uint64_t seed, const std::
 // a near-specular rough glass sphere (half-vector refraction), an area light
 // and a point light.
 inline std::string ShiftScene(const std::string &integratorLine, int w = 20, int h = 16) {
-    return R"(
-LookAt 0 1 -3.2  0 0.7 0  0 1 0
-Camera "perspective" "float fov" [50]
-Sampler "random" "integer pixelsamples" [16]
-PixelFilter "box"
-Film "image" "integer xresolution" [)" + std::to_string(w) + R"(] "integer yresolution" [)" + std::to_string(h) + R"(]
-  "string filename" ["unused.exr"]
-)" + integratorLine + R"(
+    return test::TestSceneHeader("0 1 -3.2  0 0.7 0  0 1 0", 50, w, h, integratorLine) + R"(
 WorldBegin
 LightSource "infinite" "rgb L" [0.3 0.35 0.4]
 LightSource "point" "point from" [0.9 1.7 -1.2] "rgb I" [0.6 0.6 0.6]

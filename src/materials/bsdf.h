@@ -53,6 +53,9 @@ class BxDF {
     // Lowest roughness (microfacet alpha) among the lobes: 0 for perfectly specular,
     // 1 (or more) for diffuse. Shift mappings classify vertices with it.
     virtual Float roughness() const = 0;
+    // eta_inside / eta_outside of a refracting interface (inside = -z); 1 when
+    // nothing refracts. Shifts that copy a refraction's half vector need it.
+    virtual Float eta() const { return 1; }
 
   protected:
     // For composite BxDFs whose lobes are known only after construction.
@@ -73,6 +76,7 @@ class BSDF {
     bool isSpecular() const { return (flags() & (BSDF_DIFFUSE | BSDF_GLOSSY)) == 0; }
     bool hasNonSpecular() const { return flags() & (BSDF_DIFFUSE | BSDF_GLOSSY); }
     Float roughness() const { return bxdf_ ? bxdf_->roughness() : 0; }
+    Float eta() const { return bxdf_ ? bxdf_->eta() : 1; }  // BxDF::eta
     RoughnessClass roughnessClass(Float shiftThreshold) const;
 
     Vec3 toLocal(const Vec3 &v) const { return frame_.toLocal(v); }

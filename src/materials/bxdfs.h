@@ -87,6 +87,7 @@ class SpecularDielectric : public BxDF {
     bool sample(const Vec3 &wo, Float uc, Point2 u, TransportMode mode, BSDFSample *s) const override;
     Float pdf(const Vec3 &, const Vec3 &, TransportMode) const override { return 0; }
     Float roughness() const override { return 0; }
+    Float eta() const override { return eta_; }
 
   private:
     Spectrum R_, T_;
@@ -121,6 +122,7 @@ class MicrofacetDielectric : public BxDF {
     bool sample(const Vec3 &wo, Float uc, Point2 u, TransportMode mode, BSDFSample *s) const override;
     Float pdf(const Vec3 &wo, const Vec3 &wi, TransportMode mode) const override;
     Float roughness() const override { return d_.alphaMin(); }
+    Float eta() const override { return hasT_ ? eta_ : 1; }
 
   private:
     // Probability of choosing reflection given the microfacet normal.

@@ -24,9 +24,15 @@ inline Image Render(const std::string &text, int spp, uint64_t seed, const std::
 // Box scene (open towards the camera): matte walls, a small area light under
 // the ceiling, a glass sphere (caustic: light -> glass -> floor seen by light
 // tracing, and camera -> glass -> floor -> light) and a mirror sphere.
-inline std::string BoxScene(const std::string &integratorLine, int w = 24, int h = 18, bool glossy = false) {
+// roughGlass: the glass sphere is near-specular rough glass (roughness 0.0005,
+// below the shift threshold: half-vector refraction in the first chain).
+inline std::string BoxScene(const std::string &integratorLine, int w = 24, int h = 18, bool glossy = false,
+                            bool roughGlass = false) {
     std::string mirror = glossy ? R"(Material "metal" "float roughness" [0.0005] "bool remaproughness" "false")"
                                 : R"(Material "mirror")";
+    std::string glass = roughGlass
+                            ? R"(Material "glass" "float uroughness" [0.0005] "float vroughness" [0.0005] "bool remaproughness" "false")"
+                            : R"(Material "glass")";
     return test::TestSceneHeader("0 1.1 -3.4  0 0.8 0  0 1 0", 45, w, h, integratorLine) + R"(
 WorldBegin
 AttributeBegin
@@ -49,7 +55,7 @@ Material "matte" "rgb Kd" [0.15 0.5 0.2]
 Shape "trianglemesh" "integer indices" [0 1 2 0 2 3]
   "point P" [1.2 0 -1.5  1.2 2 -1.5  1.2 2 1.2  1.2 0 1.2]
 AttributeBegin
-  Material "glass"
+  )" + glass + R"(
   Translate 0.35 0.4 0.1
   Shape "sphere" "float radius" [0.4]
 AttributeEnd

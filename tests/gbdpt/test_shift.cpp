@@ -22,8 +22,9 @@ namespace {
 struct Fixture {
     RenderJob job;
     GBDPTIntegrator *g = nullptr;
-    explicit Fixture(const std::string &line = "Integrator \"gbdpt\"", int w = 24, int h = 18, bool env = false)
-        : job(MakeJob(env ? EnvScene(line, w, h) : BoxScene(line, w, h), 1, 0)) {
+    explicit Fixture(const std::string &line = "Integrator \"gbdpt\"", int w = 24, int h = 18, bool env = false,
+                     bool roughGlass = false)
+        : job(MakeJob(env ? EnvScene(line, w, h) : BoxScene(line, w, h, false, roughGlass), 1, 0)) {
         job.integrator->preprocess(*job.scene, *job.film);
         g = dynamic_cast<GBDPTIntegrator *>(job.integrator.get());
     }
@@ -363,13 +364,16 @@ TEST(GBDPTShift, CombinedWeightsSumToOneWithoutLightTracing) {
 // (so w_ij,st(x) + w_ji,st(y) = (p_st(x) + |T'| p_st(y)) / sum_k [...], which
 // sums to one over the strategies of a path).
 TEST(GBDPTShift, CameraShiftIsInvertibleAndWeightsPair) {
-    for (const char *line : {"Integrator \"gbdpt\"", "Integrator \"gbdpt\" \"string shift\" \"halfvector\""}) {
-        Fixture f(line);
+    // Third run: near-specular rough glass (half-vector refraction in the first chain).
+    for (int config = 0; config < 3; ++config) {
+        const char *line = config == 1 ? "Integrator \"gbdpt\" \"string shift\" \"halfvector\"" : "Integrator \"gbdpt\"";
+        const bool roughGlass = config == 2;
+        Fixture f(line, 24, 18, false, roughGlass);
         const SubpathShiftContext &sc = f.g->shiftContext();
         const BidirContext &bc = f.g->bidirContext();
         std::unique_ptr<Sampler> sampler = f.job.sampler->clone();
         Arena arena;
-        int pairs = 0, chains = 0, weights = 0, asymmetric = 0;
+        int pairs = 0, chains = 0, weights = 0, asymmetric = 0, glossyRefractions = 0;
         for (int trial = 0; trial < 3000; ++trial) {
             Point2i px{1 + trial % 21, 1 + (trial / 21) % 15};
             sampler->startPixelSample(px, trial, 0);
@@ -407,6 +411,9 @@ TEST(GBDPTShift, CameraShiftIsInvertibleAndWeightsPair) {
                 EXPECT_NEAR(prod, 1.0, 5e-3) << line << " vertex " << k;
             }
             for (int j = fwd.r + 1; j < x.n; ++j) EXPECT_EQ(fwd.y.v[j].p, x.v[j].p);
+            for (int k = 1; k + 1 < fwd.r; ++k)
+                glossyRefractions += !x.deltaSample[k] && x.b[k] && !IsDiffuseVertex(f.g->shiftContext(), x.v[k], &x.b[k]) &&
+                                     Transmits(x.v[k].wo, Normalize(x.v[k + 1].p - x.v[k].p), Vec3(x.b[k].ns()));
             bool chain = false;
             for (int k = 1; k < fwd.r; ++k) chain |= x.deltaSample[k] != 0;
             chains += chain;
@@ -430,11 +437,15 @@ TEST(GBDPTShift, CameraShiftIsInvertibleAndWeightsPair) {
         EXPECT_GT(pairs, 300) << line;
         EXPECT_LE(asymmetric, pairs / 100) << line;
         EXPECT_GT(weights, 300) << line;
-        if (std::string(line) == "Integrator \"gbdpt\"") {
+        if (config == 0) {
             EXPECT_GT(chains, 5) << "paths with specular chains";
         }
-        std::printf("%s: %d shifted pairs (%d with specular chains), %d weight pairs, %d one-sided\n", line, pairs,
-                    chains, weights, asymmetric);
+        if (roughGlass) {
+            EXPECT_GT(glossyRefractions, 5) << "pairs through the rough glass's half-vector refraction";
+        }
+        std::printf("%s%s: %d shifted pairs (%d with specular chains, %d glossy refractions), %d weight pairs, %d "
+                    "one-sided\n",
+                    line, roughGlass ? " (rough glass)" : "", pairs, chains, glossyRefractions, weights, asymmetric);
     }
 }
 

@@ -75,12 +75,21 @@ bool PropagateHalfVector(const BSDF &bx, const Vec3 &woX, const Vec3 &wiX, bool 
         *factor = sy.f * (AbsDot(sy.wi, Vec3(by.ns())) / sx.pdf);
         *ratio = sy.pdf / sx.pdf;
     } else {
-        if (Transmits(woX, wiX, Vec3(bx.ns()))) {  // glossy refraction: not supported by the copy
-            st->fail(ShiftFailure::Geometry);
-            return false;
+        // Glossy refraction keeps the generalised half vector (Walter et al. 2007;
+        // shift.h) with eta = eta on wi's side / wo's side; an interface whose
+        // index the BSDF does not report (eta 1) cannot be copied.
+        Float eta = 1;
+        const Vec3 woL = bx.toLocal(woX);
+        if (Transmits(woX, wiX, Vec3(bx.ns()))) {
+            const Float e = bx.eta();
+            if (e == 1) {
+                st->fail(ShiftFailure::Geometry);
+                return false;
+            }
+            eta = woL.z > 0 ? e : 1 / e;
         }
         HalfVectorShift hv;
-        if (!ShiftHalfVector(bx.toLocal(woX), bx.toLocal(wiX), by.toLocal(woY), 1, &hv)) {
+        if (!ShiftHalfVector(woL, bx.toLocal(wiX), by.toLocal(woY), eta, &hv)) {
             st->fail(ShiftFailure::Geometry);
             return false;
         }

@@ -79,15 +79,18 @@ std::vector<float> CombineScales(const std::vector<float> &fine, const std::vect
     const size_t N = size_t(W) * H, rowLen = size_t(W) * C;
     if (fine.size() != N * C || coarse.size() != N * C) throw Error("reconstruction: CombineScales: size mismatch");
     if (!(sigma >= 0) || !std::isfinite(sigma)) throw Error("reconstruction: lowpass sigma must be finite and >= 0");
-    std::vector<float> d(N * C);
-    for (size_t i = 0; i < N * C; ++i) d[i] = coarse[i] - fine[i];
+    // In double: with values near the float limit (clamped film sums of extreme
+    // scenes, +-3.4e38) coarse - fine overflows float and the blur turned the
+    // infinities into NaN; the result is clamped back into the float range.
+    std::vector<double> d(N * C);
+    for (size_t i = 0; i < N * C; ++i) d[i] = double(coarse[i]) - double(fine[i]);
     if (sigma > 0) {
         // Normalised Gaussian taps to 3 sigma.
         const int R = std::max(1, int(std::ceil(3 * sigma)));
-        std::vector<float> k(2 * R + 1);
+        std::vector<double> k(2 * R + 1);
         double ks = 0;
         for (int j = -R; j <= R; ++j) ks += std::exp(-0.5 * j * j / (sigma * sigma));
-        for (int j = -R; j <= R; ++j) k[j + R] = float(std::exp(-0.5 * j * j / (sigma * sigma)) / ks);
+        for (int j = -R; j <= R; ++j) k[j + R] = std::exp(-0.5 * j * j / (sigma * sigma)) / ks;
         // Half-sample symmetric extension (x[-1] = x[0], x[n] = x[n-1]): the
         // blur matrix is then symmetric with unit row sums, so it keeps the sum.
         auto mirror = [](int i, int n) {
@@ -96,19 +99,19 @@ std::vector<float> CombineScales(const std::vector<float> &fine, const std::vect
             if (i < 0) i += p;
             return i < n ? i : p - 1 - i;
         };
-        std::vector<float> tmp(N * C);
+        std::vector<double> tmp(N * C);
         // Horizontal: each row padded by R mirrored pixels, then contiguous sums.
         tbb::parallel_for(tbb::blocked_range<int>(0, H, 8), [&](const tbb::blocked_range<int> &rows) {
-            std::vector<float> pad(size_t(W + 2 * R) * C);
+            std::vector<double> pad(size_t(W + 2 * R) * C);
             for (int y = rows.begin(); y < rows.end(); ++y) {
-                const float *src = &d[size_t(y) * rowLen];
+                const double *src = &d[size_t(y) * rowLen];
                 for (int x = -R; x < W + R; ++x)
                     for (int c = 0; c < C; ++c) pad[size_t(x + R) * C + c] = src[size_t(mirror(x, W)) * C + c];
-                float *out = &tmp[size_t(y) * rowLen];
-                std::fill(out, out + rowLen, 0.f);
+                double *out = &tmp[size_t(y) * rowLen];
+                std::fill(out, out + rowLen, 0.0);
                 for (int j = 0; j <= 2 * R; ++j) {
-                    const float kj = k[j];
-                    const float *in = &pad[size_t(j) * C];
+                    const double kj = k[j];
+                    const double *in = &pad[size_t(j) * C];
                     for (size_t i = 0; i < rowLen; ++i) out[i] += kj * in[i];
                 }
             }
@@ -116,18 +119,19 @@ std::vector<float> CombineScales(const std::vector<float> &fine, const std::vect
         // Vertical: each output row is a weighted sum of whole (mirrored) rows.
         tbb::parallel_for(tbb::blocked_range<int>(0, H, 8), [&](const tbb::blocked_range<int> &rows) {
             for (int y = rows.begin(); y < rows.end(); ++y) {
-                float *out = &d[size_t(y) * rowLen];
-                std::fill(out, out + rowLen, 0.f);
+                double *out = &d[size_t(y) * rowLen];
+                std::fill(out, out + rowLen, 0.0);
                 for (int j = -R; j <= R; ++j) {
-                    const float kj = k[j + R];
-                    const float *in = &tmp[size_t(mirror(y + j, H)) * rowLen];
+                    const double kj = k[j + R];
+                    const double *in = &tmp[size_t(mirror(y + j, H)) * rowLen];
                     for (size_t i = 0; i < rowLen; ++i) out[i] += kj * in[i];
                 }
             }
         });
     }
+    constexpr double big = std::numeric_limits<float>::max();
     std::vector<float> out(N * C);
-    for (size_t i = 0; i < N * C; ++i) out[i] = fine[i] + d[i];
+    for (size_t i = 0; i < N * C; ++i) out[i] = float(std::clamp(double(fine[i]) + d[i], -big, big));
     return out;
 }
 

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <iostream>
 #include <random>
 
@@ -173,3 +174,27 @@ TEST(Hybrid, OneOutlierGradientSpreadsNoFurtherThanWithL1) {
 }
 
 }  // namespace
+
+// Values at the float limit (film sums of extreme scenes are clamped to
+// +-FLT_MAX): the fine and coarse images of opposite sign used to overflow to
+// +-Inf in float and the blur made NaN of them (fuzz_scene: a gpt render whose
+// hybrid layer was NaN in every pixel). The result stays finite and within
+// the float range, and ordinary pixels away from the extreme ones are kept.
+TEST(Hybrid, CombineScalesStaysFiniteAtTheFloatLimit) {
+    const int W = 15, H = 14, C = 3;
+    const float big = std::numeric_limits<float>::max();
+    std::vector<float> fine(size_t(W) * H * C, 0.5f), coarse(fine);
+    for (int i = 0; i < W * H; ++i) {
+        if (i % 7 == 0) {
+            fine[size_t(i) * C] = -big;
+            coarse[size_t(i) * C] = big;
+        }
+        if (i % 11 == 0) fine[size_t(i) * C + 1] = big;
+    }
+    std::vector<float> out = CombineScales(fine, coarse, W, H, C, 8.0);
+    int finite = 0;
+    for (float v : out) finite += std::isfinite(v);
+    EXPECT_EQ(finite, int(out.size()));
+    // Channel 2 holds no extreme value: fine = coarse there, so it is unchanged.
+    for (int i = 0; i < W * H; ++i) EXPECT_EQ(out[size_t(i) * C + 2], 0.5f);
+}

@@ -1,4 +1,5 @@
 // Procedural and image textures (pbrt-v3 parameter names and defaults).
+#include <cmath>
 #include <mutex>
 
 #include "materials/material.h"
@@ -102,8 +103,13 @@ inline Float Grad(int h, Float x, Float y, Float z) {
 
 Float Noise(Float x, Float y, Float z) {
     const int *P = Perm().p;
+    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) return 0;
     Float fx = std::floor(x), fy = std::floor(y), fz = std::floor(z);
-    int ix = int(int64_t(fx) & 255), iy = int(int64_t(fy) & 255), iz = int(int64_t(fz) & 255);
+    // Lattice cells modulo 256, reduced in floating point first: a coordinate
+    // beyond the int64 range (a texture scale of 1e30, fuzz_scene) made the
+    // conversion undefined. The same cells as int64(f) & 255 where that exists.
+    auto cell = [](Float f) { return int(int64_t(std::fmod(f, 256.0)) & 255); };
+    int ix = cell(fx), iy = cell(fy), iz = cell(fz);
     Float dx = x - fx, dy = y - fy, dz = z - fz;
     auto h = [&](int a, int b, int c) { return P[P[P[(ix + a) & 255] + ((iy + b) & 255)] + ((iz + c) & 255)]; };
     Float u = Fade(dx), v = Fade(dy), w = Fade(dz);

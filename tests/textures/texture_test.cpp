@@ -194,6 +194,18 @@ TEST(Texture, NoiseProperties) {
     EXPECT_NEAR(mean, 0, 0.02);
     // Continuity: a tiny step changes the value a little.
     EXPECT_NEAR(Noise(0.3, 0.6, 0.9), Noise(0.3 + 1e-7, 0.6, 0.9), 1e-5);
+    // Period 256 of the lattice, negative cells included.
+    EXPECT_NEAR(Noise(-7.3, 2.6, 0.9), Noise(-7.3 + 256, 2.6 - 512, 0.9 + 256), 1e-9);
+}
+
+// Coordinates beyond the int64 range (a texture scale of 1e30 in a fuzzed
+// scene: the lattice cell's conversion was undefined behaviour) and non-finite
+// ones give bounded values; there the integer lattice makes the noise 0.
+TEST(Texture, NoiseOfHugeAndNonFiniteCoordinates) {
+    for (Float big : {2.9e30, -2.9e30, 9.3e18, -1e300})
+        EXPECT_EQ(Noise(big, 0.5, 0.5), Noise(0.0, 0.5, 0.5)) << big;
+    EXPECT_EQ(Noise(std::nan(""), 0.2, 0.3), 0);
+    EXPECT_EQ(Noise(0.1, Infinity, 0.3), 0);
 }
 
 TEST(Texture, ProceduralTexturesBuild) {

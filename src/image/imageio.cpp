@@ -35,6 +35,12 @@
 #define STB_IMAGE_IMPLEMENTATION
 #define STBI_NO_STDIO
 #define STBI_FAILURE_USERMSG
+// Formats gradus does not read (stb detects formats by content, whatever the
+// file's extension): PNM's header parser overflows int on long digit runs
+// (UBSan, fuzz_image campaign), and PSD/PIC are no texture formats of pbrt-v3.
+#define STBI_NO_PNM
+#define STBI_NO_PSD
+#define STBI_NO_PIC
 #include <stb_image.h>
 #pragma GCC diagnostic pop
 

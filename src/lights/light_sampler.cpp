@@ -73,6 +73,9 @@ const Distribution1D &LightSampler::lookup(const Point3 &p) const {
     for (int i = 0; i < 3; ++i) {
         Float ext = g.bounds.pMax[i] - g.bounds.pMin[i];
         Float t = ext > 0 ? (p[i] - g.bounds.pMin[i]) / ext : 0;
+        // Clamped before the integer conversion: points far outside the bounds
+        // (t = 1e73 in a fuzzed scene) made it undefined; NaN goes to voxel 0.
+        t = t > 0 ? std::min<Float>(t, 1) : 0;
         vi[i] = Clamp(int(t * g.res[i]), 0, g.res[i] - 1);
     }
     size_t key = (size_t(vi[2]) * g.res[1] + vi[1]) * g.res[0] + vi[0];

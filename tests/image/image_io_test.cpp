@@ -462,3 +462,21 @@ TEST(ImageIO, CornellReferenceMean) {
     EXPECT_NEAR(sum[1] / n, 0.127568, 1e-4);
     EXPECT_NEAR(sum[2] / n, 0.036110, 1e-4);
 }
+
+// PNM is not a format gradus reads (stb_image detects formats by content; its
+// PNM header parser overflowed int on a long digit run: UBSan in the
+// fuzz_image campaign). A PNM file under an image extension is refused.
+TEST(ImageIO, PnmContentIsRefused) {
+    TempDir dir;
+    std::string f = dir.file("fake.png");
+    {
+        std::ofstream out(f, std::ios::binary);
+        out << "P6\n2222222222222 1\n255\n" << std::string(16, 'x');
+    }
+    try {
+        ReadImage(f);
+        FAIL() << "a PNM file was read";
+    } catch (const Error &e) {
+        EXPECT_NE(std::string(e.what()).find("fake.png"), std::string::npos) << e.what();
+    }
+}

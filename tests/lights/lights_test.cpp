@@ -6,6 +6,7 @@
 
 #include "image/image.h"
 #include "lights/light.h"
+#include "lights/light_sampler.h"
 #include "parser/scene_desc.h"
 #include "samplers/chi2_test.h"
 #include "samplers/rng.h"
@@ -317,6 +318,25 @@ TEST(InfiniteLight, PowerMatchesQuadrature) {
     auto c = CreateInfiniteLight(Transform(), Spectrum(0.5), nullptr);
     c->preprocess(b);
     EXPECT_NEAR(c->power().y(), Pi * 3 * 4 * Pi * 0.5, 1e-9);
+}
+
+// The spatial light choice at points far outside its grid (1e73 and NaN in a
+// fuzzed scene: the voxel index conversion was undefined behaviour) uses the
+// nearest boundary voxel, or voxel 0 for NaN, and returns a valid choice.
+TEST(LightSampler, SpatialChoiceFarOutsideTheBounds) {
+    std::vector<std::shared_ptr<Light>> lights = {MakeLight(R"(LightSource "point" "point from" [-0.5 0 0])"),
+                                                  MakeLight(R"(LightSource "point" "point from" [0.5 0 0])")};
+    Bounds3 b;
+    b.expand(Point3(-1, -1, -1));
+    b.expand(Point3(1, 1, 1));
+    LightSampler ls(lights, "spatial", FileLoc(), b);
+    for (Point3 p : {Point3(1e73, 0, 0), Point3(-1e300, 3e40, -2e19), Point3(std::nan(""), 0, 0)}) {
+        Float pmf = 0;
+        const Light *l = ls.sample(p, 0.5, &pmf);
+        ASSERT_NE(l, nullptr);
+        EXPECT_GT(pmf, 0);
+        EXPECT_LE(pmf, 1);
+    }
 }
 
 }  // namespace

@@ -32,6 +32,16 @@ struct Fixture {
 
 Vec3 Perturb(const Vec3 &w, const Vec3 &t, Float eps) { return Normalize(w + t * eps); }
 
+// Camera sample and ray of trial `trial`: a pixel of the 24x18 test film's
+// interior, the sampler positioned there (same random numbers as before).
+CameraSample TrialSample(Sampler &sampler, const Camera &camera, int trial, Ray *ray) {
+    Point2i px{1 + trial % 21, 1 + (trial / 21) % 15};
+    sampler.startPixelSample(px, trial, 0);
+    CameraSample cs{Point2(px.x + sampler.get1D(), px.y + sampler.get1D()), sampler.get2D()};
+    camera.generateRay(cs, ray);
+    return cs;
+}
+
 // Arena storage for a subpath of up to n vertices (constructed, n = 0).
 ShiftSubpath ArenaSubpath(Arena &arena, int n) {
     ShiftSubpath p;
@@ -235,11 +245,8 @@ void CheckCombinedWeightsSumToOne(const std::string &line, bool lightTracing, bo
     for (const auto &l : f.job.scene->lights)
         if (l->flags & LIGHT_DELTA_POSITION) point = l.get();
     for (int trial = 0; trial < (env ? 200000 : 20000) && paths < 200; ++trial) {
-        Point2i px{1 + trial % 21, 1 + (trial / 21) % 15};
-        sampler->startPixelSample(px, trial, 0);
-        CameraSample cs{Point2(px.x + sampler->get1D(), px.y + sampler->get1D()), sampler->get2D()};
         Ray ray;
-        bc.camera->generateRay(cs, &ray);
+        const CameraSample cs = TrialSample(*sampler, *bc.camera, trial, &ray);
         const int maxV = 6;
         ShiftSubpath x = ArenaSubpath(arena, maxV);
         x.n = GenerateCameraSubpath(bc, ray, *sampler, arena, maxV - 1, x.v, x.b);
@@ -375,11 +382,8 @@ TEST(GBDPTShift, CameraShiftIsInvertibleAndWeightsPair) {
         Arena arena;
         int pairs = 0, chains = 0, weights = 0, asymmetric = 0, glossyRefractions = 0;
         for (int trial = 0; trial < 3000; ++trial) {
-            Point2i px{1 + trial % 21, 1 + (trial / 21) % 15};
-            sampler->startPixelSample(px, trial, 0);
-            CameraSample cs{Point2(px.x + sampler->get1D(), px.y + sampler->get1D()), sampler->get2D()};
             Ray ray;
-            bc.camera->generateRay(cs, &ray);
+            const CameraSample cs = TrialSample(*sampler, *bc.camera, trial, &ray);
             const int maxV = 7;
             ShiftSubpath x = ArenaSubpath(arena, maxV);
             x.n = GenerateCameraSubpath(bc, ray, *sampler, arena, maxV, x.v, x.b);
@@ -466,11 +470,8 @@ TEST(GBDPTShift, RouletteFactorsCancelInTheShiftRatio) {
     const int maxV = 7;
     int compared = 0, withRoulette = 0;
     for (int trial = 0; trial < 4000; ++trial) {
-        Point2i px{1 + trial % 21, 1 + (trial / 21) % 15};
-        sampler->startPixelSample(px, trial, 0);
-        CameraSample cs{Point2(px.x + sampler->get1D(), px.y + sampler->get1D()), sampler->get2D()};
         Ray ray;
-        rr.camera->generateRay(cs, &ray);
+        const CameraSample cs = TrialSample(*sampler, *rr.camera, trial, &ray);
         ShiftSubpath x = ArenaSubpath(arena, maxV), xs = ArenaSubpath(arena, maxV);
         x.n = GenerateCameraSubpath(rr, ray, *sampler, arena, maxV, x.v, x.b);
         PrepareSubpath(sc, &x);
@@ -525,11 +526,8 @@ TEST(GBDPTShift, IncrementalOffsetWeightsEqualFullWeights) {
         const int maxV = 12;
         int compared = 0;
         for (int trial = 0; trial < 3000; ++trial) {
-            Point2i px{1 + trial % 21, 1 + (trial / 21) % 15};
-            sampler->startPixelSample(px, trial, 0);
-            CameraSample cs{Point2(px.x + sampler->get1D(), px.y + sampler->get1D()), sampler->get2D()};
             Ray ray;
-            bc.camera->generateRay(cs, &ray);
+            const CameraSample cs = TrialSample(*sampler, *bc.camera, trial, &ray);
             ShiftSubpath x = ArenaSubpath(arena, maxV), L = ArenaSubpath(arena, maxV);
             x.n = GenerateCameraSubpath(bc, ray, *sampler, arena, maxV, x.v, x.b);
             L.n = GenerateLightSubpath(bc, *sampler, arena, maxV - 1, L.v, L.b);

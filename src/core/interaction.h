@@ -13,6 +13,12 @@ class AreaLight;
 // surface they leave (set once per scene by the scene builder).
 extern Float gRayEpsilon;
 
+// Interfaces (surfaces without a material) are crossed by re-spawning the ray;
+// where the refined double hit and Embree's float triangle disagree by more
+// than the spawn offset (huge triangles), the ray can hit the same interface
+// again and again. Every walk ends after this many consecutive crossings.
+constexpr int kMaxInterfaceCrossings = 64;
+
 // True when d lies in the tangent plane of a surface with normal n (|cos| <
 // 1e-6; false for n = 0, points not on a surface). Visibility along a
 // surface's own plane is not decided by the ray tracer, and the geometry term

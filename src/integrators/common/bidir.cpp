@@ -57,7 +57,7 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
     while (n < maxVertices) {
         SurfaceInteraction isect;
         bool hit = scene.intersect(ray, &isect);
-        for (int k = 0; hit && !isect.material && k < 64; ++k) {  // interfaces: continue straight through
+        for (int k = 0; hit && !isect.material && k < kMaxInterfaceCrossings; ++k) {  // interfaces: continue straight through
             ray = isect.spawnRay(ray.d);
             hit = scene.intersect(ray, &isect);
         }

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "core/stats.h"
+
 namespace gradus::gpt {
 
 ShiftVertexClass GradientPathTracer::classify(bool found, SurfaceInteraction &si, BSDF *b) const {
@@ -165,6 +167,8 @@ void GradientPathTracer::advanceOffset(OffsetPath &o, const BSDFSample &bs, Floa
 }
 
 void GradientPathTracer::trace(Sampler &sampler, int maxDepth, Float rrThreshold) {
+    GRADUS_STAT_COUNTER("G-PT/Paths ended at the interface-crossing limit", nStuck);
+    int crossings = 0;  // consecutive interface crossings of the base path
     for (int bounces = 0;; ++bounces) {
         // Invertibility: a diverged offset vertex must be classified like the base's,
         // or the inverse shift would take a different branch.
@@ -177,6 +181,10 @@ void GradientPathTracer::trace(Sampler &sampler, int maxDepth, Float rrThreshold
             if (o.state == OffsetPath::Diverged && !o.found) o.kill(st_, ShiftFailure::Escaped);
 
         if (!cur_.isect.material) {  // interface: only identical offsets can follow
+            if (++crossings > kMaxInterfaceCrossings) {
+                ++nStuck;
+                break;
+            }
             for (OffsetPath &o : off_)
                 if (o.state == OffsetPath::Diverged || o.state == OffsetPath::Reconnected)
                     o.kill(st_, ShiftFailure::Geometry);
@@ -188,6 +196,7 @@ void GradientPathTracer::trace(Sampler &sampler, int maxDepth, Float rrThreshold
             --bounces;
             continue;
         }
+        crossings = 0;
         if (!cur_.bsdf) break;
         nextEventTerms(sampler);
 

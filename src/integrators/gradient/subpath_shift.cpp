@@ -115,7 +115,7 @@ Spectrum SafeDiv(const Spectrum &a, const Spectrum &b) {
 
 bool TraceSurface(const Scene &scene, Ray ray, SurfaceInteraction *si) {
     bool hit = scene.intersect(ray, si);
-    for (int k = 0; hit && !si->material && k < 64; ++k) {
+    for (int k = 0; hit && !si->material && k < kMaxInterfaceCrossings; ++k) {
         ray = si->spawnRay(ray.d);
         hit = scene.intersect(ray, si);
     }

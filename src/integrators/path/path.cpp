@@ -40,6 +40,7 @@ void PathIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &a
 Spectrum PathIntegrator::Li(const Ray &cameraRay, Sampler &sampler, Arena &arena) const {
     GRADUS_STAT_COUNTER("Path/Paths", nPaths);
     GRADUS_STAT_COUNTER("Path/Path vertices", nVertices);
+    GRADUS_STAT_COUNTER("Path/Paths ended at the interface-crossing limit", nStuck);
     ++nPaths;
     const Scene &scene = *scene_;
     Spectrum L(0), beta(1);
@@ -48,6 +49,7 @@ Spectrum PathIntegrator::Li(const Ray &cameraRay, Sampler &sampler, Arena &arena
     Float prevBsdfPdf = 0;
     Interaction prevIt;
     Float etaScale = 1;
+    int crossings = 0;  // consecutive interface crossings
     for (int bounces = 0;; ++bounces) {
         SurfaceInteraction isect;
         bool found = scene.intersect(ray, &isect);
@@ -85,10 +87,15 @@ Spectrum PathIntegrator::Li(const Ray &cameraRay, Sampler &sampler, Arena &arena
         ++nVertices;
 
         if (!isect.material) {  // interface: continue straight through
+            if (++crossings > kMaxInterfaceCrossings) {
+                ++nStuck;
+                break;
+            }
             ray = isect.spawnRay(ray.d);
             --bounces;
             continue;
         }
+        crossings = 0;
         BSDF bsdf = isect.material->getBSDF(isect, arena, TransportMode::Radiance);
         if (!bsdf) break;
         const Vec3 wo = isect.wo;

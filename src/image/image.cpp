@@ -50,16 +50,26 @@ int Image::channelIndex(const std::string &name) const {
 }
 
 int Image::addChannel(const std::string &name) {
-    int existing = channelIndex(name);
-    if (existing >= 0) return existing;
-    size_t oldN = channels_.size(), newN = oldN + 1;
-    size_t npix = size_t(width_) * size_t(height_);
+    addChannels({name});
+    return channelIndex(name);
+}
+
+void Image::addChannels(const std::vector<std::string> &names) {
+    std::vector<std::string> add;
+    for (const std::string &n : names)
+        if (channelIndex(n) < 0 && std::find(add.begin(), add.end(), n) == add.end()) add.push_back(n);
+    if (add.empty()) return;
+    const size_t oldN = channels_.size(), newN = oldN + add.size();
+    const size_t npix = size_t(width_) * size_t(height_);
     std::vector<float> grown(npix * newN, 0.f);
     for (size_t p = 0; p < npix; ++p)
         std::copy(data_.begin() + p * oldN, data_.begin() + (p + 1) * oldN, grown.begin() + p * newN);
     data_.swap(grown);
-    channels_.push_back(name);
-    return int(oldN);
+    channels_.insert(channels_.end(), add.begin(), add.end());
+}
+
+std::vector<std::string> Image::LayerRGBNames(const std::string &prefix) {
+    return {Join(prefix, "R"), Join(prefix, "G"), Join(prefix, "B")};
 }
 
 std::vector<std::string> Image::layers() const {
@@ -110,9 +120,10 @@ void Image::setLayerRGB(const std::string &prefix, const Image &rgb) {
                     ? rgb
                     : rgb.layerRGB("");
     int sc[3] = {src.channelIndex("R"), src.channelIndex("G"), src.channelIndex("B")};
+    const std::vector<std::string> names = LayerRGBNames(prefix);
+    addChannels(names);
     int dc[3];
-    const char *names[3] = {"R", "G", "B"};
-    for (int c = 0; c < 3; ++c) dc[c] = addChannel(Join(prefix, names[c]));
+    for (int c = 0; c < 3; ++c) dc[c] = channelIndex(names[size_t(c)]);
     size_t npix = size_t(width_) * size_t(height_), nc = channels_.size();
     for (size_t p = 0; p < npix; ++p)
         for (int c = 0; c < 3; ++c) data_[p * nc + dc[c]] = src.data_[p * 3 + sc[c]];

@@ -52,6 +52,11 @@ class Image {
     int channelIndex(const std::string &name) const;
     // Adds a channel (zero-filled) and returns its index; existing name -> its index.
     int addChannel(const std::string &name);
+    // Adds the channels not present yet in one reallocation (the data is
+    // interleaved: adding channels one by one copies the image each time).
+    void addChannels(const std::vector<std::string> &names);
+    // The R, G, B channel names of a layer ("" = unprefixed).
+    static std::vector<std::string> LayerRGBNames(const std::string &prefix);
     // Layer names present: "" for unprefixed R,G,B; "primal" for primal.R etc.
     std::vector<std::string> layers() const;
     // Extracts layer `prefix` ("" = unprefixed) as an RGB image (R,G,B or Y replicated).

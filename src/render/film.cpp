@@ -168,6 +168,10 @@ Image Film::layerImage(int layer) const {
 
 Image Film::toImage() const {
     Image img = mainImage();
+    std::vector<std::string> names;
+    for (int l = 0; l < numLayers(); ++l)
+        for (const std::string &c : Image::LayerRGBNames(layerNames_[l])) names.push_back(c);
+    img.addChannels(names);  // one reallocation for all layers
     for (int l = 0; l < numLayers(); ++l) img.setLayerRGB(layerNames_[l], layerImage(l));
     return img;
 }

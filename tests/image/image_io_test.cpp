@@ -55,6 +55,21 @@ std::string FloatBytes(float v, bool bigEndian) {
 
 }  // namespace
 
+// addChannels: one reallocation for many channels; names present already and
+// repeated names are skipped, order is kept, data survives.
+TEST(Image, AddChannelsAtOnce) {
+    Image img(2, 2, {"R", "G", "B"});
+    img.at(1, 1, 2) = 3.f;
+    img.addChannels({"dx.R", "G", "dx.G", "dx.R", "dy.Y"});
+    ASSERT_EQ(img.channelNames(), (std::vector<std::string>{"R", "G", "B", "dx.R", "dx.G", "dy.Y"}));
+    EXPECT_EQ(img.at(1, 1, 2), 3.f);
+    for (int c = 3; c < 6; ++c) EXPECT_EQ(img.at(1, 1, c), 0.f);
+    EXPECT_EQ(Image::LayerRGBNames("dx"), (std::vector<std::string>{"dx.R", "dx.G", "dx.B"}));
+    EXPECT_EQ(Image::LayerRGBNames(""), (std::vector<std::string>{"R", "G", "B"}));
+    img.addChannels({});
+    EXPECT_EQ(img.numChannels(), 6);
+}
+
 TEST(Image, ChannelsAndLayers) {
     Image img(3, 2, {"R", "G", "B"});
     img.at(2, 1, 1) = 5.f;

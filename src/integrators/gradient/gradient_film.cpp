@@ -202,6 +202,11 @@ void WriteGradientOutput(const GradientImages &g, ReconstructionNorm norm, doubl
     };
     Image img = Image::RGB(g.width, g.height);
     img.metadata = out->metadata;
+    std::vector<std::string> names;  // every layer's channels in one reallocation
+    for (const char *l : {"primal", "dx", "dy", "primal_var", "dx_var", "dy_var", "reconstructed_l1",
+                          "reconstructed_l2", "reconstructed_hybrid"})
+        for (const std::string &c : Image::LayerRGBNames(l)) names.push_back(c);
+    img.addChannels(names);
     img.setLayerRGB("primal", toImage(g.primal));
     img.setLayerRGB("dx", toImage(g.dx));
     img.setLayerRGB("dy", toImage(g.dy));

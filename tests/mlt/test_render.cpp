@@ -4,6 +4,7 @@
 #include <csignal>
 #include <thread>
 
+#include "conformance/conformance_util.h"
 #include "mlt_test_util.h"
 #include "render/render_loop.h"
 
@@ -130,6 +131,56 @@ TEST(MLTRender, ZeroContributionProposalsGiveNoZeroOverZero) {
     }
     Rendered r = Render(BoxScene(MLTLine(kSmall + " \"float largestepprobability\" [0]")), 2, 8);
     EXPECT_NE(r.statistics.find("large steps - of 0"), std::string::npos) << r.statistics;
+}
+
+// bootstrapvertices: N_d per depth as mlt.h states, and chains start at depth
+// d with probability W_d / sum W, W_d = (1 / N_d) sum_k I_dk, an unbiased
+// estimate of depth d's integral whatever N_d is. Each depth's share of the
+// chains, averaged over K seeds, must equal the share under a bootstrap of
+// equal N_d (Welch t per depth, alpha 1e-4 split over the 4 depths). The
+// power check is a start drawn in proportion to I_dk alone (without 1 / N_d):
+// N_d = 500, 333, 250, 200 shifts depth 1's share by ~0.08 (t ~ 10 here).
+TEST(MLTRender, CappedBootstrapKeepsEachDepthsShareOfChains) {
+    const std::string capped = MLTLine(
+        "\"integer maxdepth\" [3] \"integer chains\" [200] \"integer bootstrapsamples\" [5000] "
+        "\"integer bootstrapvertices\" [4000]");
+    const std::string equal =
+        MLTLine("\"integer maxdepth\" [3] \"integer chains\" [200] \"integer bootstrapsamples\" [1000]");
+    Rendered one = Render(BoxScene(capped), 1, 1);
+    EXPECT_EQ(one.mlt().bootstrapStatesPerDepth(), (std::vector<int64_t>{500, 333, 250, 200}));
+    EXPECT_NE(one.statistics.find("bootstrapvertices 4000 gives 500 at depth 0 down to 200 at depth 3"),
+              std::string::npos)
+        << one.statistics;
+    const std::vector<int64_t> N = one.mlt().bootstrapStatesPerDepth();
+    const int K = 60;
+    std::vector<std::vector<double>> shareC(4), shareE(4), shareWrong(4);
+    for (int k = 0; k < K; ++k) {
+        Rendered c = Render(BoxScene(capped), 1, uint64_t(100 + k));
+        Rendered e = Render(BoxScene(equal), 1, uint64_t(5000 + k));
+        const std::vector<int64_t> nc = c.mlt().chainsPerDepth(), ne = e.mlt().chainsPerDepth();
+        ASSERT_EQ(nc.size(), 4u);
+        // The power check's wrong estimator: depth shares reweighted by N_d.
+        double wrongSum = 0;
+        std::vector<double> wrong(4);
+        for (int d = 0; d < 4; ++d) wrongSum += wrong[size_t(d)] = double(nc[size_t(d)]) * double(N[size_t(d)]);
+        for (int d = 0; d < 4; ++d) {
+            shareC[size_t(d)].push_back(double(nc[size_t(d)]) / 200);
+            shareE[size_t(d)].push_back(double(ne[size_t(d)]) / 200);
+            shareWrong[size_t(d)].push_back(wrong[size_t(d)] / wrongSum);
+        }
+    }
+    double worst = 0, power = 0;
+    for (int d = 0; d < 4; ++d) {
+        if (shareE[size_t(d)] == std::vector<double>(size_t(K), 0.0)) continue;  // a depth without light
+        const auto w = conformance::WelchTest(shareC[size_t(d)], shareE[size_t(d)]);
+        const auto p = conformance::WelchTest(shareWrong[size_t(d)], shareE[size_t(d)]);
+        worst = std::max(worst, std::abs(w.t) / conformance::StudentCritical(1e-4 / 4, w.dof));
+        power = std::max(power, std::abs(p.t) / conformance::StudentCritical(1e-4 / 4, p.dof));
+        std::cout << "[ mlt ] depth " << d << ": capped " << w.meanA << " +- " << w.seA << ", equal " << w.meanB
+                  << " +- " << w.seB << ", wrong " << p.meanA << "\n";
+    }
+    EXPECT_LE(worst, 1) << "chain starts of a capped bootstrap differ from an equal one";
+    EXPECT_GT(power, 1) << "power check: starts weighted without 1 / N_d are not detected";
 }
 
 }  // namespace

@@ -27,6 +27,9 @@ ParamTable<MLTSettings> Table() {
     t.integer("maxdepth", &S::maxDepth, 5, "maximum path depth (edges - 1)", AtLeast(0));
     t.integer("bootstrapsamples", &S::bootstrapSamples, 100000, "bootstrap states per depth (b and the chain starts)",
               AtLeast(1));
+    t.integer("bootstrapvertices", &S::bootstrapVertices, 50000000,
+              "cap on the bootstrap's path vertices: deep depths get fewer states (0: no cap, pbrt-v3's bootstrap)",
+              AtLeast(0));
     t.integer("chains", &S::chains, 1000, "Markov chains", AtLeast(1));
     t.integer("mutationsperpixel", &S::mutationsPerPixel, 100, "mutations per pixel when --spp is not given",
               AtLeast(1));
@@ -56,6 +59,20 @@ std::vector<ParamInfo> MLTParameters() { return Table().describe(); }
 MLTIntegrator::MLTIntegrator(const EntityDesc &desc) : set_(Table().parse(desc)), loc_(desc.loc) {}
 
 void MLTIntegrator::preprocess(const Scene &scene, Film &film) {
+    // N_d (mlt.h: bootstrapvertices): an equal share of the vertex cap per
+    // depth, a state of depth d having d + 2 vertices.
+    const int64_t depths = set_.maxDepth + 1;
+    perDepth_.assign(size_t(depths), set_.bootstrapSamples);
+    for (int64_t d = 0; d < depths; ++d)
+        if (set_.bootstrapVertices > 0) {
+            const int64_t share = int64_t(set_.bootstrapVertices) / (depths * (d + 2));
+            perDepth_[size_t(d)] = std::min<int64_t>(set_.bootstrapSamples, std::max<int64_t>(1, share));
+        }
+    rowStart_.assign(size_t(perDepth_[0]) + 1, 0);
+    for (int64_t k = 0, m = depths; k < perDepth_[0]; ++k) {
+        while (m > 0 && perDepth_[size_t(m - 1)] <= k) --m;  // depths with N_d > k
+        rowStart_[size_t(k) + 1] = rowStart_[size_t(k)] + m;
+    }
     lightSampler_ = LightSampler(scene.lights, "power", loc_);
     ctx_.init(scene, lightSampler_, MISHeuristic::Balance);
     ctx_.rrDepth = -1;  // the depth of a state is fixed: subpaths have exactly s and t vertices
@@ -131,19 +148,29 @@ Spectrum MLTIntegrator::contribution(PrimarySampler &u, int depth, Arena &arena,
 
 // ---------------------------------------------------------------- bootstrap and chain starts
 void MLTIntegrator::bootstrap(PassContext &ctx) {
-    const int64_t depths = set_.maxDepth + 1, n = int64_t(set_.bootstrapSamples) * depths;
+    const int64_t depths = set_.maxDepth + 1;
+    const int64_t n = rowStart_.back();
+    // State (d, k) draws its numbers from key (seed, k x depths + d), its
+    // index when every depth has the same N_d.
+    auto stateKey = [depths](int64_t d, int64_t k) { return uint64_t(k * depths + d); };
+    auto rowOf = [this](int64_t i) {
+        return int64_t(std::upper_bound(rowStart_.begin(), rowStart_.end(), i) - rowStart_.begin()) - 1;
+    };
     const uint64_t key = ctx.seed() ^ kBootstrapTag;
     std::vector<double> weight(size_t(n), 0.0);
     std::atomic<uint64_t> bad{0};
     ctx.parallelFor(n, 1024, [&](int64_t i0, int64_t i1, Worker &wk) {
         PrimarySampler u(set_.sigma, set_.largeStepProbability);
         uint64_t nonFinite = 0;
+        int64_t k = rowOf(i0);
         for (int64_t i = i0; i < i1; ++i) {
-            RNG rng(Hash(key, uint64_t(i)));
+            while (i >= rowStart_[size_t(k) + 1]) ++k;
+            const int64_t d = i - rowStart_[size_t(k)];
+            RNG rng(Hash(key, stateKey(d, k)));
             u.restart(&rng);
             Point2 p;
             bool nf = false;
-            weight[size_t(i)] = Target(contribution(u, int(i % depths), wk.arena, &p), &nf);
+            weight[size_t(i)] = Target(contribution(u, int(d), wk.arena, &p), &nf);
             nonFinite += nf;
             wk.arena.reset();
         }
@@ -154,16 +181,20 @@ void MLTIntegrator::bootstrap(PassContext &ctx) {
     cdf_.resize(size_t(n));
     double sum = 0;
     nBootstrapNonZero_ = 0;
-    for (int64_t i = 0; i < n; ++i) {
-        sum += weight[size_t(i)];
-        cdf_[size_t(i)] = sum;
-        nBootstrapNonZero_ += weight[size_t(i)] > 0;
-    }
+    std::vector<double> invN(static_cast<size_t>(depths));
+    for (int64_t d = 0; d < depths; ++d) invN[size_t(d)] = 1.0 / double(perDepth_[size_t(d)]);
+    for (int64_t k = 0; k + 1 < int64_t(rowStart_.size()); ++k)
+        for (int64_t i = rowStart_[size_t(k)]; i < rowStart_[size_t(k) + 1]; ++i) {
+            sum += weight[size_t(i)] * invN[size_t(i - rowStart_[size_t(k)])];
+            cdf_[size_t(i)] = sum;
+            nBootstrapNonZero_ += weight[size_t(i)] > 0;
+        }
     // b: the integral of I over all depths and primary sample space, estimated
-    // by bootstrapsamples uniform states per depth (pbrt-v3 Sec. 16.4.5: the
-    // image is b / (mutations per pixel) times the summed splats of L / I;
-    // Metropolis estimates of integrals, Sec. 13.4.5).
-    b_ = sum / double(set_.bootstrapSamples);
+    // by N_d uniform states per depth, b = sum_d (1 / N_d) sum_k I_dk (pbrt-v3
+    // Sec. 16.4.5 with N_d = bootstrapsamples: the image is b / (mutations per
+    // pixel) times the summed splats of L / I; Metropolis estimates of
+    // integrals, Sec. 13.4.5).
+    b_ = sum;
     if (!(b_ > 0)) {
         b_ = 0;
         warning_ = "mlt: none of the " + std::to_string(n) +
@@ -173,8 +204,8 @@ void MLTIntegrator::bootstrap(PassContext &ctx) {
         cdf_.clear();
         return;
     }
-    // Chain starts: bootstrap state k with probability I_k / sum_j I_j. With b
-    // from the same samples, E[b g(X_0)] = (1 / bootstrapsamples) sum_k E[I_k g(x_k)]
+    // Chain starts: bootstrap state (d, k) with probability (I_dk / N_d) / b.
+    // With b from the same samples, E[b g(X_0)] = sum_d (1 / N_d) sum_k E[I_dk g(x_dk)]
     // = the integral of I g for any g, and every later state keeps that (the
     // kernel leaves I invariant): no start-up bias (pbrt-v3 Secs. 13.4.3, 16.4.5).
     const int nChains = set_.chains;
@@ -190,9 +221,10 @@ void MLTIntegrator::bootstrap(PassContext &ctx) {
             int64_t k = std::upper_bound(cdf_.begin(), cdf_.end(), x) - cdf_.begin();
             k = std::min(k, n - 1);
             Chain &ch = chains_[size_t(c)];
-            RNG rng(Hash(key, uint64_t(k)));
+            const int64_t row = rowOf(k), d = k - rowStart_[size_t(row)];
+            RNG rng(Hash(key, stateKey(d, row)));
             ch.u.restart(&rng);
-            ch.depth = int(k % depths);
+            ch.depth = int(d);
             bool nf = false;
             ch.L = contribution(ch.u, ch.depth, wk.arena, &ch.pRaster);
             ch.I = Target(ch.L, &nf);
@@ -357,6 +389,12 @@ void MLTIntegrator::finish(const Film &, const RenderStats &, Image *out) {
     if (!warning_.empty()) m["mlt_warning"] = warning_;
 }
 
+std::vector<int64_t> MLTIntegrator::chainsPerDepth() const {
+    std::vector<int64_t> n(size_t(set_.maxDepth) + 1, 0);
+    for (const Chain &c : chains_) ++n[size_t(c.depth)];
+    return n;
+}
+
 std::string MLTIntegrator::statistics() const {
     auto rate = [](int64_t acc, int64_t n) {
         std::ostringstream o;
@@ -369,9 +407,23 @@ std::string MLTIntegrator::statistics() const {
     const int64_t depths = set_.maxDepth + 1;
     std::ostringstream o;
     o << "MLT:\n";
-    o << "  bootstrap: " << int64_t(set_.bootstrapSamples) * depths << " states (" << set_.bootstrapSamples
-      << " per depth, " << nBootstrapNonZero_ << " carry light), b = " << b_ << "\n";
+    int64_t firstCut = -1;
+    for (size_t d = 0; d < perDepth_.size() && firstCut < 0; ++d)
+        if (perDepth_[d] < set_.bootstrapSamples) firstCut = int64_t(d);
+    o << "  bootstrap: " << (rowStart_.empty() ? 0 : rowStart_.back()) << " states (" << set_.bootstrapSamples
+      << " per depth";
+    if (firstCut >= 0)
+        o << "; bootstrapvertices " << set_.bootstrapVertices << " gives " << perDepth_[size_t(firstCut)]
+          << " at depth " << firstCut << " down to " << perDepth_.back() << " at depth " << depths - 1;
+    o << "; " << nBootstrapNonZero_ << " carry light), b = " << b_ << "\n";
     o << "  chains: " << chains_.size() << "; mutations: " << nMutations_ << "\n";
+    if (!chains_.empty()) {
+        o << "  chains per depth:";
+        const std::vector<int64_t> n = chainsPerDepth();
+        for (size_t d = 0; d < n.size(); ++d)
+            if (n[d] > 0) o << " " << d << ":" << n[d];
+        o << "\n";
+    }
     o << "  acceptance: small steps " << rate(nSmallAccepted_, nSmall_) << " of " << nSmall_ << ", large steps "
       << rate(nLargeAccepted_, nLarge_) << " of " << nLarge_ << ", all "
       << rate(nSmallAccepted_ + nLargeAccepted_, nSmall_ + nLarge_) << "\n";

@@ -7,9 +7,10 @@
 // (s, t) of that depth; the state's contribution is that strategy's
 // MIS-weighted estimate divided by the selection probability, its target
 // function the luminance of that.
-//   1. Bootstrap (first pass): bootstrapsamples independent states per depth;
-//      b = their summed luminance / bootstrapsamples estimates the integral of
-//      the target over all depths.
+//   1. Bootstrap (first pass): N_d independent states at each depth d (N_d =
+//      bootstrapsamples unless bootstrapvertices caps the work, below);
+//      b = sum over d of (summed luminance at d) / N_d estimates the integral
+//      of the target over all depths.
 //   2. Chains: each starts from a bootstrap state picked in proportion to its
 //      luminance (b times an estimate at such a start is unbiased, so there is
 //      no start-up bias), then mutates (small/large steps) in the later passes
@@ -26,6 +27,15 @@
 // Parameters (pbrt-v3 names and defaults):
 //   integer maxdepth 5                  maximum path depth (edges - 1)
 //   integer bootstrapsamples 100000     bootstrap states per depth (b and the chain starts)
+//   integer bootstrapvertices 50000000  cap on the bootstrap's path vertices (0: no cap).
+//       A state of depth d has d + 2 vertices, so pbrt-v3's bootstrap costs
+//       bootstrapsamples x sum_d (d + 2), quadratic in maxdepth (100000 states
+//       per depth take ~10 s at maxdepth 65 and hours at 1000). With the cap,
+//       N_d = min(bootstrapsamples, max(1, cap / ((maxdepth + 1)(d + 2)))):
+//       an equal share of vertices per depth, cutting only the deepest depths
+//       (no change up to maxdepth 20 with the defaults). Any N_d >= 1 keeps b
+//       and the chain starts unbiased: each depth's mean is unbiased, and a
+//       start is drawn with probability (I / N_d) / sum (I / N_d).
 //   integer chains 1000                 Markov chains
 //   integer mutationsperpixel 100       mutations per pixel when --spp is not given
 //   float largestepprobability 0.3      probability of a large step (independent proposal)
@@ -51,6 +61,7 @@ namespace gradus {
 struct MLTSettings {
     int maxDepth;
     int bootstrapSamples;
+    int bootstrapVertices;
     int chains;
     int mutationsPerPixel;
     Float largeStepProbability;
@@ -87,6 +98,11 @@ class MLTIntegrator : public Integrator {
                 nStartMismatch_};
     }
 
+    // Chains per depth (their depth is fixed at the start) and the bootstrap's
+    // states per depth N_d.
+    std::vector<int64_t> chainsPerDepth() const;
+    const std::vector<int64_t> &bootstrapStatesPerDepth() const { return perDepth_; }
+
     // Contribution of state `u` at `depth` (the chosen strategy's weighted
     // estimate over its selection probability) and its raster position.
     Spectrum contribution(mlt::PrimarySampler &u, int depth, Arena &arena, Point2 *pRaster) const;
@@ -109,7 +125,11 @@ class MLTIntegrator : public Integrator {
     BidirContext ctx_;
     Bounds2i pixels_;         // the film's pixel bounds: where camera strategies start
     Float splatScale_ = 1;    // light-tracing (t = 1) contributions: film pixels / pixel bounds
-    std::vector<double> cdf_;  // running sums of the bootstrap luminances
+    // States per depth (N_d, non-increasing in d) and the bootstrap arrays'
+    // layout, index-major as pbrt-v3's interleaved index: row k holds state k
+    // of every depth with N_d > k, so state (d, k) is at rowStart_[k] + d.
+    std::vector<int64_t> perDepth_, rowStart_;
+    std::vector<double> cdf_;  // running sums of the bootstrap weights I / N_d
     double b_ = 0;
     std::string warning_;
     std::vector<Chain> chains_;

@@ -252,15 +252,30 @@ def seed_of(base, name):
     return base + zlib.crc32(name.encode()) % 100000
 
 
+def parse_spec(spec):
+    """'mlt[largestepmis=true;chains=10]' -> ('mlt', ['largestepmis=true', 'chains=10'])."""
+    m = re.fullmatch(r"([A-Za-z0-9_]+)(?:\[(.*)\])?", spec)
+    if not m:
+        sys.exit("stress: bad integrator %r (NAME or NAME[P=V;...])" % spec)
+    params = [p for p in (m.group(2) or "").split(";") if p]
+    for p in params:
+        if "=" not in p:
+            sys.exit("stress: bad parameter %r in %r (P=V)" % (p, spec))
+    return m.group(1), params
+
+
 def render_cell(args, gradus, scene, integ, outdir, twin=False):
     name = scene.name + (TWIN if twin else "")
-    base = os.path.join(outdir, "%s__%s" % (name, integ))
+    base = os.path.join(outdir, "%s__%s" % (name, re.sub(r"[^A-Za-z0-9_.=-]", "_", integ)))
     pbrt, exr = base + ".pbrt", base + ".exr"
     spp = args.spp
+    integ_name, params = parse_spec(integ)
     with open(pbrt, "w") as f:
-        f.write(scene.text(integ, args.size, spp))
+        f.write(scene.text(integ_name, args.size, spp))
     cmd = [gradus, pbrt, "--outfile", exr, "--spp", str(spp), "--seed", str(seed_of(args.seed, name)),
            "--nthreads", str(args.nthreads), "--quiet"]
+    for p in params:
+        cmd += ["--param", p]
     t0 = time.monotonic()
     cell = dict(scene=name, integrator=integ, pbrt=pbrt, exr=exr, spp=spp)
     try:
@@ -421,7 +436,8 @@ def main(argv=None):
     p.add_argument("--bin", default=os.environ.get("GRADUS_BIN", os.path.join(ROOT, "build", "bin")),
                    help="folder with gradus and imgtool (default $GRADUS_BIN, else build/bin)")
     p.add_argument("--out", help="results folder (default: a new temp dir)")
-    p.add_argument("--integrators", help="comma list (default: every registered integrator)")
+    p.add_argument("--integrators", help="comma list of NAME or NAME[P=V;...] (integrator parameters; "
+                   "default: every registered integrator)")
     p.add_argument("--scenes", help="comma list of names or fnmatch patterns (default: all)")
     p.add_argument("--size", type=int, default=32, help="film width in pixels (default 32)")
     p.add_argument("--spp", type=int, default=16, help="samples per pixel (default 16)")
@@ -459,7 +475,7 @@ def main(argv=None):
             sys.exit("stress: %s not found (build first, or pass --bin)" % exe)
     registered = list_integrators(gradus)
     integrators = args.integrators.split(",") if args.integrators else registered
-    unknown = [i for i in integrators if i not in registered]
+    unknown = [i for i in integrators if parse_spec(i)[0] not in registered]
     if unknown:
         sys.exit("stress: unknown integrator(s) %s (registered: %s)" % (",".join(unknown), ",".join(registered)))
 

@@ -183,5 +183,53 @@ TEST(MLTRender, CappedBootstrapKeepsEachDepthsShareOfChains) {
     EXPECT_GT(power, 1) << "power check: starts weighted without 1 / N_d are not detected";
 }
 
+// largestepmis (mlt.h; Kelemen et al. 2002, Sec. 4). Two emitters fill the
+// view side by side, radiance 1e-3 (left) and 1e6 (right), maxdepth 0: every
+// pixel of the left half is exactly 1e-3 (box footprint, unfiltered splats).
+// The chains live on the bright half; pbrt-v3's estimator gives the dim half
+// its light only through states that visit it (probability ~1e-9), so its
+// mean there falls far short. With largestepmis the large steps carry it.
+// One-sample t of the dim half's mean over K = 20 seeds against 1e-3 at
+// alpha 1e-4 (Student, 19 dof); the same statistic rejects the default
+// estimator (the power check: its loss is the bias this option exists for).
+TEST(MLTRender, LargeStepMISRecoversADimEmitterBesideABrightOne) {
+    auto scene = [](const char *mis) {
+        return MLTLine(std::string("\"integer maxdepth\" [0] \"integer chains\" [64] "
+                                   "\"integer bootstrapsamples\" [4000] \"bool largestepmis\" [") +
+                       mis + "]") +
+               "\nSampler \"random\"\nPixelFilter \"box\"\nFilm \"image\" \"integer xresolution\" [16] "
+               "\"integer yresolution\" [8] \"string filename\" [\"unused.exr\"]\n"
+               "LookAt 0 0 -1  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [90]\n"
+               "WorldBegin\nMaterial \"matte\" \"rgb Kd\" [0 0 0]\n"
+               "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1e-3 1e-3 1e-3]\n"
+               "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [0 -2 0  0 2 0  3 2 0  3 -2 0]\n"
+               "AttributeEnd\nAttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1e6 1e6 1e6]\n"
+               "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-3 -2 0  -3 2 0  0 2 0  0 -2 0]\n"
+               "AttributeEnd\nWorldEnd\n";
+    };
+    const int K = 20;
+    auto tStatistic = [&](const char *mis, double *mean) {
+        std::vector<double> v;
+        for (int k = 0; k < K; ++k) {
+            Rendered r = Render(scene(mis), 16, uint64_t(700 + k));
+            EXPECT_TRUE(AllFinite(r.image));
+            // The dim half is the darker one; the two columns at the seam are left out.
+            v.push_back(std::min(MeanLum(r.image, 0, 0, 7, 8), MeanLum(r.image, 9, 0, 16, 8)));
+        }
+        double m = 0, s2 = 0;
+        for (double x : v) m += x / K;
+        for (double x : v) s2 += (x - m) * (x - m) / (K - 1);
+        *mean = m;
+        return (m - 1e-3) / std::sqrt(s2 / K + 1e-300);
+    };
+    const double crit = conformance::StudentCritical(1e-4, K - 1);
+    double meanMIS = 0, meanDefault = 0;
+    const double tMIS = tStatistic("true", &meanMIS), tDefault = tStatistic("false", &meanDefault);
+    std::cout << "[ mlt ] dim half: largestepmis " << meanMIS << " (t " << tMIS << "), default " << meanDefault
+              << " (t " << tDefault << "), exact 1e-3, critical " << crit << "\n";
+    EXPECT_LT(std::abs(tMIS), crit) << "largestepmis: the dim emitter's mean " << meanMIS << " is not 1e-3";
+    EXPECT_GT(std::abs(tDefault), crit) << "power check: the default estimator's loss is not detected";
+}
+
 }  // namespace
 }  // namespace gradus::mlt_test

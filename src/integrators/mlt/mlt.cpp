@@ -37,6 +37,8 @@ ParamTable<MLTSettings> Table() {
            "probability of a large step (independent proposal)", Range{0, 1});
     t.real("sigma", &S::sigma, 0.01, "standard deviation of a small step in primary sample space",
            Range{1e-7, 1, "a positive deviation within the unit interval"});
+    t.boolean("largestepmis", &S::largeStepMIS, false,
+              "count large steps also as independent samples (Kelemen et al. 2002, balance heuristic; mlt.h)");
     return t;
 }
 
@@ -183,9 +185,12 @@ void MLTIntegrator::bootstrap(PassContext &ctx) {
     nBootstrapNonZero_ = 0;
     std::vector<double> invN(static_cast<size_t>(depths));
     for (int64_t d = 0; d < depths; ++d) invN[size_t(d)] = 1.0 / double(perDepth_[size_t(d)]);
+    bDepth_.assign(size_t(depths), 0.0);
     for (int64_t k = 0; k + 1 < int64_t(rowStart_.size()); ++k)
         for (int64_t i = rowStart_[size_t(k)]; i < rowStart_[size_t(k) + 1]; ++i) {
-            sum += weight[size_t(i)] * invN[size_t(i - rowStart_[size_t(k)])];
+            const size_t d = size_t(i - rowStart_[size_t(k)]);
+            sum += weight[size_t(i)] * invN[d];
+            bDepth_[d] += weight[size_t(i)] * invN[d];
             cdf_[size_t(i)] = sum;
             nBootstrapNonZero_ += weight[size_t(i)] > 0;
         }
@@ -238,7 +243,7 @@ void MLTIntegrator::bootstrap(PassContext &ctx) {
 }
 
 namespace {
-constexpr uint32_t kMLTStateMagic = 0x544c4d31;  // "1MLT"
+constexpr uint32_t kMLTStateMagic = 0x544c4d32;  // "2MLT"
 template <typename T>
 void Put(std::string *s, const T &v) { s->append(reinterpret_cast<const char *>(&v), sizeof v); }
 template <typename T>
@@ -259,6 +264,8 @@ std::string MLTIntegrator::saveState() const {
                           &nNonFinite_, &nStartMismatch_})
         Put(&s, int64_t(c->load()));
     Put(&s, nBootstrapNonZero_);
+    Put(&s, uint64_t(bDepth_.size()));
+    for (double v : bDepth_) Put(&s, v);
     Put(&s, uint64_t(warning_.size()));
     s += warning_;
     Put(&s, uint64_t(chains_.size()));
@@ -285,7 +292,11 @@ void MLTIntegrator::loadState(const std::string &s) {
         c->store(v);
     }
     uint64_t n;
-    if (!Get(s, &at, &nBootstrapNonZero_) || !Get(s, &at, &n) || n > s.size() - at) bad();
+    if (!Get(s, &at, &nBootstrapNonZero_) || !Get(s, &at, &n) || n > uint64_t(set_.maxDepth) + 1) bad();
+    bDepth_.assign(size_t(n), 0.0);
+    for (double &v : bDepth_)
+        if (!Get(s, &at, &v)) bad();
+    if (!Get(s, &at, &n) || n > s.size() - at) bad();
     warning_ = s.substr(at, n);
     at += n;
     if (!Get(s, &at, &n)) bad();
@@ -318,6 +329,18 @@ void MLTIntegrator::runPass(PassContext &ctx) {
     // Mutation j of the render goes to chain j mod chains: chain i's share of [0, x).
     auto share = [nChains](int64_t x, int64_t i) { return x > i ? (x - i - 1) / nChains + 1 : 0; };
     const double b = b_;
+    // largestepmis (mlt.h): the large steps' density per mutation at each depth,
+    // q_d = largestepprobability x b_d / b, b_d / b being the probability that a
+    // chain starts at depth d. The large steps' own estimate is normalised by
+    // their realised count, M x largestepprobability x (chains at d) / chains.
+    std::vector<double> qLarge(size_t(set_.maxDepth) + 1, 0.0), largeNorm(qLarge.size(), 0.0);
+    if (set_.largeStepMIS) {
+        const std::vector<int64_t> perDepth = chainsPerDepth();
+        for (size_t d = 0; d < qLarge.size() && d < bDepth_.size(); ++d) {
+            qLarge[d] = double(set_.largeStepProbability) * bDepth_[d] / b;
+            if (perDepth[d] > 0) largeNorm[d] = double(nChains) / (double(set_.largeStepProbability) * double(perDepth[d]));
+        }
+    }
     ctx.forEachItem(nChains, kMutationTag, [&](int64_t i, RNG &rng, SampleRecorder &rec, Worker &wk) {
         const int64_t count = share(first + M, i) - share(first, i);
         Chain &c = chains_[size_t(i)];
@@ -342,8 +365,22 @@ void MLTIntegrator::runPass(PassContext &ctx) {
             // Expected values (Veach and Guibas 1997, "use of expected values";
             // pbrt-v3 Sec. 13.4.1): the proposal y with weight a and the current
             // state x with 1 - a, each as b L / I (pbrt-v3 Sec. 16.4.5).
-            if (a > 0) rec.splat(pY, LY * (b * a / IY));
-            if (a < 1) rec.splat(c.pRaster, c.L * (b * (1 - a) / c.I));
+            if (set_.largeStepMIS) {
+                // Kelemen et al. 2002, Sec. 4: balance heuristic of the chain (density
+                // I / b) and the large steps (density q_d), weights w_c = (I/b) / (I/b + q_d)
+                // and w_l = q_d / (I/b + q_d). Chain states keep pbrt-v3's estimate
+                // b L / I times w_c (expected values as below); a large step adds
+                // L w_l / (its density per mutation at this depth, 1 / largeNorm).
+                const size_t d = size_t(c.depth);
+                const double q = qLarge[d];
+                double wY = IY > 0 ? a / (IY / b + q) : 0;
+                if (isLarge && IY > 0) wY += largeNorm[d] * q / (IY / b + q);
+                if (wY > 0) rec.splat(pY, LY * Float(wY));
+                if (a < 1) rec.splat(c.pRaster, c.L * Float((1 - a) / (c.I / b + q)));
+            } else {
+                if (a > 0) rec.splat(pY, LY * (b * a / IY));
+                if (a < 1) rec.splat(c.pRaster, c.L * (b * (1 - a) / c.I));
+            }
             (isLarge ? large : small) += 1;
             if (rng.uniform() < a) {
                 c.u.accept();

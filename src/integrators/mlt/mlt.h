@@ -40,6 +40,19 @@
 //   integer mutationsperpixel 100       mutations per pixel when --spp is not given
 //   float largestepprobability 0.3      probability of a large step (independent proposal)
 //   float sigma 0.01                    standard deviation of a small step in primary sample space
+//   bool largestepmis false             also count large steps as independent samples (below)
+// largestepmis: Kelemen et al. 2002 (Sec. 4) combine the chain with its large
+// steps, which are uniform samples of primary sample space, by the balance
+// heuristic: chain density I / b, large-step density q_d = largestepprobability
+// x b_d / b at depth d (b_d / b: a chain's chance to start there), weights
+// w_c = (I/b) / (I/b + q_d) and w_l = q_d / (I/b + q_d). The chain's states
+// keep pbrt-v3's estimate (b L / I with expected values) times w_c; each
+// large step y adds L(y) w_l(y) divided by the large steps' realised density
+// at that depth (largestepprobability x chains at d / chains). Regions the
+// chains almost never visit (a dim emitter beside one 1e18 times brighter)
+// get their light from the large steps. The weights use the bootstrap's b
+// and b_d, so the estimate is consistent (bias O(1 / bootstrap size)), not
+// unbiased for any bootstrap as pbrt-v3's; the image mean is no longer b.
 // Lights are chosen by power, as in pbrt-v3. Splats are unfiltered (the pixel
 // holding the raster point), as pbrt-v3's MLT; the chains sample the film's
 // pixel bounds (pbrt-v3: the filter's sample bounds, the margin of which an
@@ -66,6 +79,7 @@ struct MLTSettings {
     int mutationsPerPixel;
     Float largeStepProbability;
     Float sigma;
+    bool largeStepMIS;
 };
 
 class MLTIntegrator : public Integrator {
@@ -131,6 +145,7 @@ class MLTIntegrator : public Integrator {
     std::vector<int64_t> perDepth_, rowStart_;
     std::vector<double> cdf_;  // running sums of the bootstrap weights I / N_d
     double b_ = 0;
+    std::vector<double> bDepth_;  // b's share of each depth, b_d = (1 / N_d) sum_k I_dk
     std::string warning_;
     std::vector<Chain> chains_;
     int64_t mutationsIssued_ = 0;  // running mutation index (round-robin over the chains)

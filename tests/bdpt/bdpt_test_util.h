@@ -23,7 +23,8 @@ inline std::string Quad(const std::string &mat, const char *P, const char *N = n
 // `floorNormals` tilts the floor's shading normals (tests the adjoint correction).
 inline std::string BoxScene(const std::string &integrator, const std::string &lights, const std::string &objects,
                             int res = 16, const std::string &camera = "Camera \"perspective\" \"float fov\" [40]",
-                            bool floorNormals = false, const std::string &floorMat = "Material \"matte\" \"rgb Kd\" [0.7 0.7 0.7]") {
+                            bool floorNormals = false, const std::string &floorMat = "Material \"matte\" \"rgb Kd\" [0.7 0.7 0.7]",
+                            const char *floorNormalValues = "0.35 1 0.2  0.35 1 0.2  -0.2 1 -0.3  -0.2 1 -0.3") {
     std::string s = "Integrator \"" + integrator + "\" \"integer maxdepth\" [4]\n";
     s += "Sampler \"random\" \"integer pixelsamples\" [4]\nPixelFilter \"box\"\n";
     s += "Film \"image\" \"integer xresolution\" [" + std::to_string(res) + "] \"integer yresolution\" [" +
@@ -31,7 +32,7 @@ inline std::string BoxScene(const std::string &integrator, const std::string &li
     s += "LookAt 0 1 3.5  0 1 0  0 1 0\n" + camera + "\nWorldBegin\n";
     s += lights;
     s += Quad(floorMat, "-1 0 -1  -1 0 1  1 0 1  1 0 -1",
-              floorNormals ? "0.35 1 0.2  0.35 1 0.2  -0.2 1 -0.3  -0.2 1 -0.3" : nullptr);
+              floorNormals ? floorNormalValues : nullptr);
     s += Quad("Material \"matte\" \"rgb Kd\" [0.7 0.7 0.7]", "-1 2 -1  1 2 -1  1 2 1  -1 2 1");
     s += Quad("Material \"matte\" \"rgb Kd\" [0.7 0.7 0.7]", "-1 0 -1  1 0 -1  1 2 -1  -1 2 -1");
     s += Quad("Material \"matte\" \"rgb Kd\" [0.63 0.065 0.05]", "-1 0 -1  -1 2 -1  -1 2 1  -1 0 1");

@@ -368,6 +368,24 @@ TEST(BDPTMIS, CompactVertex) {
     EXPECT_LE(sizeof(PathVertex), 120u);
 }
 
+// Throughputs keep double's range at float's precision: 1e39 (beyond float)
+// and 1e-41 (below float's normal range) round-trip to 2^-24 relative; values
+// in [1e-30, 1e30] are stored unscaled; zero and sign survive.
+TEST(BDPTMIS, ThroughputKeepsDoubleRange) {
+    for (double m : {1e300, 4e39, 1e31, 1.0, 0.3, 1e-31, 1e-41, 1e-300}) {
+        PathVertex v;
+        const Spectrum s(m, 0.25 * m, -0.5 * m);
+        v.setThroughput(s);
+        const Spectrum t = v.throughput();
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(t[c] / m, s[c] / m, 1.2e-7) << m << " channel " << c;
+        EXPECT_EQ(v.betaExp == 0, m <= 1e30 && m >= 1e-30) << m;
+    }
+    PathVertex z;
+    z.setThroughput(Spectrum(0));
+    EXPECT_TRUE(z.throughput().isBlack());
+    EXPECT_EQ(z.betaExp, 0);
+}
+
 }  // namespace
 }  // namespace gradus::bdpt_test
 

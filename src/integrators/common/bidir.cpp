@@ -103,11 +103,13 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
         v.ns = bsdf ? bsdf.ns() : isect.shading.n;
         if (bsdf) v.setRoughnessClass(bsdf.roughnessClass(0.001));
         ++n;
-        if (DebugTracing())
+        if (DebugTracing()) {
+            const Spectrum tb = v.throughput();
             DebugTrace("%s vertex %d: p (%.6g, %.6g, %.6g) ng (%.3f, %.3f, %.3f) beta (%.4g, %.4g, %.4g) pdfFwd %.4g%s",
                        mode == TransportMode::Radiance ? "camera" : "light", n - 1, v.p.x, v.p.y, v.p.z,
-                       double(v.ng.x), double(v.ng.y), double(v.ng.z), double(v.beta[0]), double(v.beta[1]),
-                       double(v.beta[2]), v.pdfFwd, bsdf ? "" : " (no BSDF)");
+                       double(v.ng.x), double(v.ng.y), double(v.ng.z), tb.r, tb.g, tb.b, v.pdfFwd,
+                       bsdf ? "" : " (no BSDF)");
+        }
         if (n >= maxVertices || !bsdf) break;
 
         Vec3 wo = isect.wo;

@@ -13,6 +13,8 @@
 // Normals and directions are unit vectors stored in float (enough for cosines
 // and BSDF frames); the position stays double (ray offsets, short edges).
 #pragma once
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 #include "core/geometry.h"
@@ -41,12 +43,32 @@ enum VertexFlags : uint8_t {
     // Bits 3-4: RoughnessClass of the BSDF (shift mappings).
 };
 
+// Throughputs are stored as float with a power-of-two exponent: the
+// components keep float's 24-bit precision, the range is double's. A plain
+// float overflowed for light subpaths above 3.4e38 (an environment of radiance
+// 1e28 over a scene of radius 1e5: every such sample was discarded as
+// non-finite). Values within [1e-30, 1e30] take exponent 0 (no scaling).
+inline int PackThroughput(const Spectrum &s, float out[3]) {
+    const double m = std::max({std::abs(s.r), std::abs(s.g), std::abs(s.b)});
+    int e = 0;
+    if (std::isfinite(m) && m > 0 && (m > 1e30 || m < 1e-30)) std::frexp(m, &e);
+    const double scale = e ? std::ldexp(1.0, -e) : 1.0;
+    out[0] = float(s.r * scale);
+    out[1] = float(s.g * scale);
+    out[2] = float(s.b * scale);
+    return e;
+}
+inline Spectrum UnpackThroughput(const float b[3], int e) {
+    const Spectrum s(b[0], b[1], b[2]);
+    return e ? s * std::ldexp(1.0, e) : s;
+}
+
 struct PathVertex {
     Point3 p;                 // position (for infinite-light vertices: a point along the direction)
     PackedVec3 ng;            // geometric normal (zero for point lights; infinite: towards the scene)
     PackedVec3 ns;            // shading normal (after bump mapping)
     PackedVec3 wo;            // unit direction towards the previous vertex of its own subpath
-    float beta[3] = {0, 0, 0};// subpath throughput up to and including this vertex
+    float beta[3] = {0, 0, 0};// subpath throughput up to and including this vertex, times 2^-betaExp
     Float pdfFwd = 0;         // area density of generating this vertex from its own subpath
     Float pdfRev = 0;         // area density of generating it from the opposite direction
     union {
@@ -61,16 +83,13 @@ struct PathVertex {
     // throughput after this vertex (1: no roulette here). Shifts that re-derive
     // an offset's throughput from BSDF ratios multiply it back in (the offset
     // reuses the base's roulette decisions; camera_shift.cpp). Fits the padding.
+    int16_t betaExp = 0;      // power-of-two exponent of beta (PackThroughput); in the padding
     float rrScale = 1;
 
     PathVertex() : material(nullptr) {}
 
-    Spectrum throughput() const { return Spectrum(beta[0], beta[1], beta[2]); }
-    void setThroughput(const Spectrum &s) {
-        beta[0] = float(s.r);
-        beta[1] = float(s.g);
-        beta[2] = float(s.b);
-    }
+    Spectrum throughput() const { return UnpackThroughput(beta, betaExp); }
+    void setThroughput(const Spectrum &s) { betaExp = PackThroughput(s, beta); }
     bool delta() const { return flags & VERTEX_DELTA; }
     bool isInfiniteLight() const { return type == VertexType::Light && (flags & VERTEX_INFINITE); }
     bool isDeltaLight() const { return type == VertexType::Light && (flags & VERTEX_DELTA_LIGHT); }

@@ -66,6 +66,7 @@ PathVertex AsPathVertex(const LightVertex &lv) {
     v.ns = lv.ns;
     v.wo = lv.wo;
     v.beta[0] = lv.beta[0], v.beta[1] = lv.beta[1], v.beta[2] = lv.beta[2];
+    v.betaExp = lv.betaExp;
     v.pdfFwd = lv.pdfFwd;
     v.geomId = lv.geomId;
     v.primId = lv.primId;
@@ -95,6 +96,7 @@ int VCMLightVertices(const BidirContext &ctx, const PathVertex *v, const BSDF *b
             lv.ns = v[i].ns;
             lv.wo = v[i].wo;
             for (int c = 0; c < 3; ++c) lv.beta[c] = v[i].beta[c];
+            lv.betaExp = v[i].betaExp;
             lv.geomId = v[i].geomId;
             lv.primId = v[i].primId;
             lv.b1 = v[i].b1;

@@ -97,8 +97,9 @@ struct LightVertex {
     double B;               // B_i = c_{i-2} + S_L(i-2) (vcm.h), with the heuristic's exponent
     uint16_t depth;         // i (edges from the light)
     uint8_t flags;          // kPrev* below
+    int16_t betaExp;        // beta's power-of-two exponent (PackThroughput, path_vertex.h)
     static constexpr uint8_t kPrevDelta = 1, kPrevMergeable = 2, kPrevEdgeOK = 4;
-    Spectrum throughput() const { return Spectrum(beta[0], beta[1], beta[2]); }
+    Spectrum throughput() const { return UnpackThroughput(beta, betaExp); }
 };
 
 // The recursive MIS quantities of the derivation above (exposed for tests/vcm).

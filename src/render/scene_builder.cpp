@@ -552,8 +552,12 @@ RenderResult RenderJobImage(RenderJob &job, const RenderOptions &opts) {
     job.integrator->preprocess(*job.scene, *job.film);
     const auto t1 = Clock::now();
     RenderOptions loopOpts = opts;
-    if (opts.timeLimit > 0)  // at least one pass runs whatever is left
-        loopOpts.timeLimit = std::max(1e-9, opts.timeLimit - seconds(t0, t1) - job.integrator->finishEstimate());
+    if (opts.timeLimit > 0) {  // at least one pass runs whatever is left
+        // The estimate may time a probe of its own: it is taken first, so that its
+        // time counts as spent.
+        const double finish = job.integrator->finishEstimate();
+        loopOpts.timeLimit = std::max(1e-9, opts.timeLimit - seconds(t0, Clock::now()) - finish);
+    }
     // Checkpoints: resume, --passes, periodic and final writes (render/checkpoint.h).
     const std::string identity = RenderIdentity(job, opts);
     Checkpoint prior;

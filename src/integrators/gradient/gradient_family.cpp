@@ -1,8 +1,32 @@
 #include "integrators/gradient/gradient_family.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cstring>
+#include <memory>
 
 namespace gradus {
+
+namespace {
+// Seconds per byte of memory the process touches for the first time (page
+// faults): 0.1-0.4 s per GB on most machines, 4.2 s per GB on some virtual
+// machines. Timed once on 32 MB.
+double FreshMemorySecondsPerByte() {
+    static const double perByte = [] {
+        constexpr size_t n = size_t(32) << 20;
+        const auto t0 = std::chrono::steady_clock::now();
+        std::unique_ptr<char[]> p(new char[n]);
+        volatile char *q = p.get();
+        for (size_t i = 0; i < n; i += 4096) q[i] = 1;  // one write per page: the faults
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / double(n);
+    }();
+    return perByte;
+}
+// Fresh bytes finishGradients allocates per pixel: the film's layer images,
+// the gradient arrays, the solvers' buffers and the output image (a 512x512
+// gpt finish spent 0.6 of its 0.7 s there at 4.2 s per GB: ~550 bytes/pixel).
+constexpr double kFinishFreshBytesPerPixel = 600;
+}  // namespace
 
 void GradientFamily::initGradients(Film &film, bool useFilmFilter, bool lightTracing) {
     gfilm_.init(film, useFilmFilter, lightTracing);
@@ -11,30 +35,39 @@ void GradientFamily::initGradients(Film &film, bool useFilmFilter, bool lightTra
 
 double GradientFamily::reconstructionEstimate(ReconstructionNorm norm, Float alpha) const {
     if (reconEstimate_ >= 0) return reconEstimate_;
-    constexpr int n = 64;
-    GradientImages g;
-    g.width = g.height = n;
-    g.channels = 3;
-    const size_t values = size_t(n) * n * 3;
-    g.primal.resize(values);
-    g.dx.resize(values);
-    g.dy.resize(values);
-    g.primalVar.assign(values, 0.01f);
-    g.dxVar.assign(values, 0.01f);
-    g.dyVar.assign(values, 0.01f);
-    uint32_t h = 12345;  // deterministic noise: a realistic IRLS workload
-    for (size_t i = 0; i < values; ++i) {
-        h = h * 1664525u + 1013904223u;
-        g.primal[i] = float(h >> 8) / float(1 << 24);
-        g.dx[i] = 0.1f * (float(h & 0xffff) / 65536.f - 0.5f);
-        g.dy[i] = -g.dx[i];
-    }
-    Image scratch;
-    std::string report;
-    const auto t0 = std::chrono::steady_clock::now();
-    WriteGradientOutput(g, norm, alpha, &scratch, &report);
-    const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    reconEstimate_ = 1.5 * sec * double(filmBounds_.area()) / double(n * n);
+    // Timed on n x n problems of 64 and 128 pixels: a fixed cost (thread
+    // dispatch, FFT plans) and a cost per pixel, so that neither is scaled by
+    // the other.
+    auto timeAt = [&](int n) {
+        GradientImages g;
+        g.width = g.height = n;
+        g.channels = 3;
+        const size_t values = size_t(n) * n * 3;
+        g.primal.resize(values);
+        g.dx.resize(values);
+        g.dy.resize(values);
+        g.primalVar.assign(values, 0.01f);
+        g.dxVar.assign(values, 0.01f);
+        g.dyVar.assign(values, 0.01f);
+        uint32_t h = 12345;  // deterministic noise: a realistic IRLS workload
+        for (size_t i = 0; i < values; ++i) {
+            h = h * 1664525u + 1013904223u;
+            g.primal[i] = float(h >> 8) / float(1 << 24);
+            g.dx[i] = 0.1f * (float(h & 0xffff) / 65536.f - 0.5f);
+            g.dy[i] = -g.dx[i];
+        }
+        Image scratch;
+        std::string report;
+        const auto t0 = std::chrono::steady_clock::now();
+        WriteGradientOutput(g, norm, alpha, &scratch, &report);
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    };
+    timeAt(64);  // warm-up (first FFT plans, thread pool)
+    const double t64 = timeAt(64), t128 = timeAt(128);
+    const double perPixel = std::max(0.0, (t128 - t64) / (128.0 * 128 - 64.0 * 64));
+    const double fixed = std::max(0.0, t64 - perPixel * 64 * 64);
+    const double pixels = double(filmBounds_.area());
+    reconEstimate_ = 1.5 * (fixed + perPixel * pixels) + kFinishFreshBytesPerPixel * pixels * FreshMemorySecondsPerByte();
     return reconEstimate_;
 }
 

@@ -30,10 +30,11 @@ class GradientFamily {
     void finishGradients(const Film &film, const RenderStats &stats, ReconstructionNorm norm, Float alpha,
                          Image *out);
 
-    // Seconds the reconstructions of finishGradients will take at this film's
-    // size: a reconstruction of a 64x64 problem, timed on first use (only a
-    // render with a --time budget asks), scaled by the pixel count with a 1.5
-    // safety factor. The render loop reserves it from the budget.
+    // Seconds finishGradients will take at this film's size: reconstructions
+    // of 64x64 and 128x128 problems, timed on first use (only a render with a
+    // --time budget asks), give a fixed cost and a cost per pixel (x 1.5 for
+    // safety); plus the page faults of the memory it allocates (timed once).
+    // The render loop reserves it from the budget.
     double reconstructionEstimate(ReconstructionNorm norm, Float alpha) const;
     // The statistics tail: the integrator's lines followed by the reconstruction's.
     std::string withReconstructionReport(const std::string &lines) const { return lines + reconReport_; }

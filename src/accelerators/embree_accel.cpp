@@ -2,6 +2,7 @@
 
 #include "core/stats.h"
 
+#include <algorithm>
 #include <embree3/rtcore.h>
 
 #include <cmath>
@@ -83,31 +84,37 @@ void AlphaFilter(const RTCFilterFunctionNArguments *args, bool shadow) {
 void AlphaIntersectFilter(const RTCFilterFunctionNArguments *args) { AlphaFilter(args, false); }
 void AlphaOccludedFilter(const RTCFilterFunctionNArguments *args) { AlphaFilter(args, true); }
 
-void ToRTCRay(const Ray &r, RTCRay *ray) {
+// Returns the factor s by which the direction was scaled: Embree refuses
+// directions above ~1.8e18 (and float loses ones below ~1e-38), so a direction
+// outside [1e-8, 1e8] is normalised, with tfar / s; a hit's t is t_embree * s.
+double ToRTCRay(const Ray &r, RTCRay *ray) {
+    const double m = std::max({std::abs(r.d.x), std::abs(r.d.y), std::abs(r.d.z)});
+    const double s = (m > 1e8 || (m > 0 && m < 1e-8)) && std::isfinite(m) ? 1 / m : 1;
     ray->org_x = float(r.o.x);
     ray->org_y = float(r.o.y);
     ray->org_z = float(r.o.z);
-    ray->dir_x = float(r.d.x);
-    ray->dir_y = float(r.d.y);
-    ray->dir_z = float(r.d.z);
+    ray->dir_x = float(r.d.x * s);
+    ray->dir_y = float(r.d.y * s);
+    ray->dir_z = float(r.d.z * s);
     ray->tnear = 0;
-    ray->tfar = std::isinf(r.tMax) ? INFINITY : float(r.tMax);
+    ray->tfar = std::isinf(r.tMax) ? INFINITY : float(r.tMax / s);
     ray->time = 0;
     ray->mask = 0xFFFFFFFFu;
     ray->id = 0;
     ray->flags = 0;
+    return s;
 }
 
 // Embree asserts (and aborts) on rays it cannot trace: non-finite origins or
 // directions, origins beyond ~1.8e18, a NaN or negative tfar. Such rays come
 // only from degenerate input (near-singular transforms, overflowing geometry):
 // they are dropped - a miss for closest hits, blocked for shadow rays - and counted.
+// (Directions are scaled into range by ToRTCRay; the bound is Embree's.)
 bool Traceable(const RTCRay &r) {
-    constexpr float kMaxOrigin = 1e18f;
+    constexpr float kMax = 1e18f;
     auto ok = [](float v, float lim) { return std::abs(v) < lim; };  // false for NaN and Inf
-    return ok(r.org_x, kMaxOrigin) && ok(r.org_y, kMaxOrigin) && ok(r.org_z, kMaxOrigin) &&
-           ok(r.dir_x, INFINITY) && ok(r.dir_y, INFINITY) && ok(r.dir_z, INFINITY) &&
-           (r.dir_x != 0 || r.dir_y != 0 || r.dir_z != 0) && r.tfar >= r.tnear;
+    return ok(r.org_x, kMax) && ok(r.org_y, kMax) && ok(r.org_z, kMax) && ok(r.dir_x, kMax) && ok(r.dir_y, kMax) &&
+           ok(r.dir_z, kMax) && (r.dir_x != 0 || r.dir_y != 0 || r.dir_z != 0) && r.tfar >= r.tnear;
 }
 
 }  // namespace
@@ -171,7 +178,7 @@ bool EmbreeAccel::intersect(const Ray &r, RayHit *hit) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRayHit rh;
-    ToRTCRay(r, &rh.ray);
+    const double scale = ToRTCRay(r, &rh.ray);
     if (!Traceable(rh.ray)) {
         GRADUS_STAT_COUNTER("Embree/Untraceable rays dropped", nBad);
         ++nBad;
@@ -184,7 +191,7 @@ bool EmbreeAccel::intersect(const Ray &r, RayHit *hit) const {
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
     hit->geomId = int(rh.hit.geomID);
     hit->primId = int(rh.hit.primID);
-    hit->t = rh.ray.tfar;
+    hit->t = rh.ray.tfar * scale;
     hit->b1 = rh.hit.u;
     hit->b2 = rh.hit.v;
     return true;

@@ -227,6 +227,9 @@ class InfiniteLight : public Light {
     // Bilinear lookup at (u, v) in [0,1]^2 (u wraps).
     Spectrum lookup(Point2 st) const {
         Float x = st.x * w_ - 0.5, y = st.y * h_ - 0.5;
+        // A non-finite direction (a degenerate ray) has no texel: no radiance
+        // (fuzz_scene: NaN reached the int conversion below).
+        if (!std::isfinite(x) || !std::isfinite(y)) return Spectrum(0);
         int x0 = int(std::floor(x)), y0 = int(std::floor(y));
         Float dx = x - x0, dy = y - y0;
         auto tex = [&](int xi, int yi) { return lookupTexel(((xi % w_) + w_) % w_, yi); };
@@ -262,7 +265,7 @@ class InfiniteLight : public Light {
         Vec3 wl = Normalize(objectFromWorld_.applyVector(wWorld));
         Float theta = SphericalTheta(wl), phi = SphericalPhi(wl);
         Float sinTheta = std::sin(theta);
-        if (sinTheta == 0) return 0;
+        if (!(sinTheta > 0)) return 0;  // the poles, and non-finite directions
         return dist_.pdf(Point2(phi * Inv2Pi, theta * InvPi)) / (2 * Pi * Pi * sinTheta);
     }
     bool sampleLi(const Interaction &ref, Point2 u, LightLiSample *s) const override {

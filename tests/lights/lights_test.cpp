@@ -320,6 +320,25 @@ TEST(InfiniteLight, PowerMatchesQuadrature) {
     EXPECT_NEAR(c->power().y(), Pi * 3 * 4 * Pi * 0.5, 1e-9);
 }
 
+// A non-finite direction (a degenerate ray in a fuzzed gbdpt scene) reached
+// the texel lookup's int conversion (UBSan): it now has no radiance and no
+// density, for a map and for a constant environment.
+TEST(InfiniteLight, NonFiniteDirectionHasNoRadiance) {
+    Image map = TestMap();
+    Bounds3 b;
+    b.expand(Point3(-1, -1, -1));
+    b.expand(Point3(1, 1, 1));
+    for (const Image *m : std::vector<const Image *>{&map, nullptr}) {
+        auto l = CreateInfiniteLight(Transform(), Spectrum(1), m);
+        l->preprocess(b);
+        for (const Vec3 &d : {Vec3(NAN, 0, 1), Vec3(0, NAN, 0), Vec3(INFINITY, 0, 0)}) {
+            EXPECT_TRUE(l->Le(Ray(Point3(0, 0, 0), d)).isBlack());
+            EXPECT_EQ(l->pdfLi(Interaction(), d), 0);
+        }
+        EXPECT_FALSE(l->Le(Ray(Point3(0, 0, 0), Vec3(0, 0, 1))).isBlack());
+    }
+}
+
 // The spatial light choice at points far outside its grid (1e73 and NaN in a
 // fuzzed scene: the voxel index conversion was undefined behaviour) uses the
 // nearest boundary voxel, or voxel 0 for NaN, and returns a valid choice.

@@ -291,7 +291,7 @@ void MLTIntegrator::loadState(const std::string &s) {
         if (!Get(s, &at, &v)) bad();
         c->store(v);
     }
-    uint64_t n;
+    uint64_t n = 0;
     if (!Get(s, &at, &nBootstrapNonZero_) || !Get(s, &at, &n) || n > uint64_t(set_.maxDepth) + 1) bad();
     bDepth_.assign(size_t(n), 0.0);
     for (double &v : bDepth_)

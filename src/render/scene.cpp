@@ -41,6 +41,15 @@ bool Scene::intersect(const Ray &r, SurfaceInteraction *si) const {
     return true;
 }
 
+Scene::SurfaceHit Scene::intersectSurface(Ray *ray, SurfaceInteraction *si) const {
+    bool hit = intersect(*ray, si);
+    for (int k = 0; hit && !si->material && k < kMaxInterfaceCrossings; ++k) {
+        *ray = si->spawnRay(ray->d);
+        hit = intersect(*ray, si);
+    }
+    return !hit ? SurfaceHit::Miss : si->material ? SurfaceHit::Hit : SurfaceHit::Stuck;
+}
+
 bool Scene::occluded(const Ray &r) const {
     GRADUS_STAT_COUNTER("Rays/Shadow rays", nShadow);
     ++nShadow;

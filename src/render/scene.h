@@ -45,6 +45,11 @@ class Scene {
     ~Scene();
     // Closest hit; fills the full surface interaction (double precision).
     bool intersect(const Ray &r, SurfaceInteraction *si) const;
+    // Closest hit on a surface with a material: interfaces (no material) are
+    // crossed straight through by re-spawning *ray, at most
+    // kMaxInterfaceCrossings times in a row. Stuck: the limit was reached.
+    enum class SurfaceHit { Miss, Hit, Stuck };
+    SurfaceHit intersectSurface(Ray *ray, SurfaceInteraction *si) const;
     // Any hit before r.tMax.
     bool occluded(const Ray &r) const;
     // Shadow-ray test between two interactions (offset at both ends).

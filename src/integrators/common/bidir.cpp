@@ -56,12 +56,9 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
     const Float beta0 = beta.maxComponent();
     while (n < maxVertices) {
         SurfaceInteraction isect;
-        bool hit = scene.intersect(ray, &isect);
-        for (int k = 0; hit && !isect.material && k < kMaxInterfaceCrossings; ++k) {  // interfaces: continue straight through
-            ray = isect.spawnRay(ray.d);
-            hit = scene.intersect(ray, &isect);
-        }
-        if (hit && !isect.material) break;
+        const Scene::SurfaceHit h = scene.intersectSurface(&ray, &isect);  // through interfaces
+        if (h == Scene::SurfaceHit::Stuck) break;
+        const bool hit = h == Scene::SurfaceHit::Hit;
         PathVertex &prev = path[n - 1];
         if (!hit) {
             // An escaped camera path ends on the infinite lights.

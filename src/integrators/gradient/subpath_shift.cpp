@@ -114,12 +114,7 @@ Spectrum SafeDiv(const Spectrum &a, const Spectrum &b) {
 }
 
 bool TraceSurface(const Scene &scene, Ray ray, SurfaceInteraction *si) {
-    bool hit = scene.intersect(ray, si);
-    for (int k = 0; hit && !si->material && k < kMaxInterfaceCrossings; ++k) {
-        ray = si->spawnRay(ray.d);
-        hit = scene.intersect(ray, si);
-    }
-    return hit && si->material;
+    return scene.intersectSurface(&ray, si) == Scene::SurfaceHit::Hit;
 }
 
 // sample() with the lobe-selection number at its extremes picks the reflection

@@ -200,33 +200,17 @@ void WriteGradientOutput(const GradientImages &g, ReconstructionNorm norm, doubl
         im.data() = v;
         return im;
     };
-    Image img = Image::RGB(g.width, g.height);
-    img.metadata = out->metadata;
-    std::vector<std::string> names;  // every layer's channels in one reallocation
-    for (const char *l : {"primal", "dx", "dy", "primal_var", "dx_var", "dy_var", "reconstructed_l1",
-                          "reconstructed_l2", "reconstructed_hybrid"})
-        for (const std::string &c : Image::LayerRGBNames(l)) names.push_back(c);
-    img.addChannels(names);
-    img.setLayerRGB("primal", toImage(g.primal));
-    img.setLayerRGB("dx", toImage(g.dx));
-    img.setLayerRGB("dy", toImage(g.dy));
-    img.setLayerRGB("primal_var", toImage(g.primalVar));
-    img.setLayerRGB("dx_var", toImage(g.dxVar));
-    img.setLayerRGB("dy_var", toImage(g.dyVar));
     // The last column of dx and the last row of dy are unused by the solver.
     ReconstructionOptions o1 = ReconstructionOptions::L1Default();
     o1.alpha = alpha;
     ReconstructionResult r1 = Reconstruct(g, o1);
     ReconstructionResult r2 = Reconstruct(g, ReconstructionOptions::L2Exact(alpha));
     Image i1 = ResultToImage(r1), i2 = ResultToImage(r2);
-    img.setLayerRGB("reconstructed_l1", i1);
-    img.setLayerRGB("reconstructed_l2", i2);
     // Hybrid: the L1 solution above with the primal's coarse scales (reconstruction.h).
     ReconstructionResult rh = r1;
     rh.image = CombineScales(r1.image, g.primal, r1.width, r1.height, r1.channels,
                              ReconstructionOptions::Hybrid().lowpassSigma);
     Image ih = ResultToImage(rh);
-    img.setLayerRGB("reconstructed_hybrid", ih);
     const Image *chosen = &i1;
     Image iw;
     ReconstructionStats sw;
@@ -236,9 +220,21 @@ void WriteGradientOutput(const GradientImages &g, ReconstructionNorm norm, doubl
         ReconstructionResult rw = Reconstruct(g, ReconstructionOptions::Weighted());
         sw = rw.stats;
         iw = ResultToImage(rw);
-        img.setLayerRGB("reconstructed_weighted", iw);
         chosen = &iw;
     }
+    const Image primal = toImage(g.primal), dx = toImage(g.dx), dy = toImage(g.dy), primalVar = toImage(g.primalVar),
+                dxVar = toImage(g.dxVar), dyVar = toImage(g.dyVar);
+    std::vector<std::pair<const char *, const Image *>> layers = {
+        {"primal", &primal}, {"dx", &dx}, {"dy", &dy}, {"primal_var", &primalVar}, {"dx_var", &dxVar},
+        {"dy_var", &dyVar}, {"reconstructed_l1", &i1}, {"reconstructed_l2", &i2}, {"reconstructed_hybrid", &ih}};
+    if (norm == ReconstructionNorm::Weighted) layers.push_back({"reconstructed_weighted", &iw});
+    Image img = Image::RGB(g.width, g.height);
+    img.metadata = out->metadata;
+    std::vector<std::string> names;  // every layer's channels in one reallocation
+    for (const auto &l : layers)
+        for (const std::string &c : Image::LayerRGBNames(l.first)) names.push_back(c);
+    img.addChannels(names);
+    for (const auto &l : layers) img.setLayerRGB(l.first, *l.second);
     img.setLayerRGB("", *chosen);
     img.metadata["reconstruction"] = ReconstructionNormName(norm);
     img.metadata["reconstruction_alpha"] = std::to_string(alpha);

@@ -373,9 +373,11 @@ void MLTIntegrator::runPass(PassContext &ctx) {
                 // L w_l / (its density per mutation at this depth, 1 / largeNorm).
                 const size_t d = size_t(c.depth);
                 const double q = qLarge[d];
-                double wY = IY > 0 ? a / (IY / b + q) : 0;
-                if (isLarge && IY > 0) wY += largeNorm[d] * q / (IY / b + q);
-                if (wY > 0) rec.splat(pY, LY * Float(wY));
+                if (IY > 0) {
+                    const double denY = IY / b + q;
+                    const double wY = (a + (isLarge ? largeNorm[d] * q : 0)) / denY;
+                    rec.splat(pY, LY * Float(wY));
+                }
                 if (a < 1) rec.splat(c.pRaster, c.L * Float((1 - a) / (c.I / b + q)));
             } else {
                 if (a > 0) rec.splat(pY, LY * (b * a / IY));

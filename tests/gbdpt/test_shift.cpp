@@ -6,6 +6,8 @@
 #include <cmath>
 #include <random>
 
+#include <Eigen/Dense>
+
 #include "gbdpt_test_util.h"
 #include "integrators/gbdpt/gbdpt.h"
 #include "integrators/gradient/camera_shift.h"
@@ -23,8 +25,8 @@ struct Fixture {
     RenderJob job;
     GBDPTIntegrator *g = nullptr;
     explicit Fixture(const std::string &line = "Integrator \"gbdpt\"", int w = 24, int h = 18, bool env = false,
-                     bool roughGlass = false)
-        : job(MakeJob(env ? EnvScene(line, w, h) : BoxScene(line, w, h, false, roughGlass), 1, 0)) {
+                     bool roughGlass = false, bool glossyMirror = false)
+        : job(MakeJob(env ? EnvScene(line, w, h) : BoxScene(line, w, h, glossyMirror, roughGlass), 1, 0)) {
         job.integrator->preprocess(*job.scene, *job.film);
         g = dynamic_cast<GBDPTIntegrator *>(job.integrator.get());
     }
@@ -136,6 +138,114 @@ TEST(GBDPTShift, ChainSolidAngleMatchesFiniteDifferences) {
     EXPECT_GE(tested, 10);
 }
 
+// Phi of a second chain with near-specular glossy vertices (ChainDirectionsPerArea:
+// the sampled directions at b and at every glossy vertex per unit area at c and
+// per unit of the glossy half-vectors) against finite differences of the inverse
+// map: perturb the directions, trace, and measure c's tangent coordinates and
+// the projected half-vectors in the base's frames. Chains b -> glossy metal
+// sphere -> c and b -> rough glass -> rough glass -> c of the glossy box's
+// camera subpaths; det(d(A_c, O_g)/d(omega_b, omega_g)) * Phi = 1.
+TEST(GBDPTShift, GlossyChainDirectionsPerAreaMatchFiniteDifferences) {
+    Fixture f("Integrator \"gbdpt\"", 24, 18, false, true, true);
+    const SubpathShiftContext &sc = f.g->shiftContext();
+    const BidirContext &bc = f.g->bidirContext();
+    const Scene &scene = *bc.scene;
+    std::unique_ptr<Sampler> sampler = f.job.sampler->clone();
+    Arena arena;
+    int tested[3] = {0, 0, 0};  // by glossy vertex count 1, 2, 3+
+    for (int trial = 0; trial < 20000 && tested[0] + tested[1] < 40; ++trial) {
+        Ray ray;
+        TrialSample(*sampler, *bc.camera, trial, &ray);
+        ShiftSubpath x = ArenaSubpath(arena, 7);
+        x.n = GenerateCameraSubpath(bc, ray, *sampler, arena, 6, x.v, x.b);
+        PrepareSubpath(sc, &x);
+        // b: the first diffuse vertex; c: the next; only glossy (no ideal specular) between.
+        int b = -1, c = -1;
+        for (int i = 1; i < x.n; ++i)
+            if (IsDiffuseVertex(sc, x.v[i], &x.b[i])) {
+                if (b < 0) b = i;
+                else { c = i; break; }
+            }
+        const int k = c - b - 1;
+        if (b < 0 || c < 0 || k < 1 || x.v[c].type != VertexType::Surface || x.v[b].type != VertexType::Surface) continue;
+        bool onlyGlossy = true;
+        for (int j = b + 1; j < c; ++j) onlyGlossy &= !x.deltaSample[j];
+        if (!onlyGlossy) continue;
+        ChainInterior in;
+        bool ok = true;
+        for (int j = 0; ok && j < k; ++j) {
+            const PathVertex &xv = x.v[b + 1 + j];
+            ok = VertexInteraction(scene, xv, x.v[b + j].p, &in.si[j]);
+            in.bsdf[j] = &x.b[b + 1 + j];
+            in.wo[j] = xv.wo;
+            in.wi[j] = Normalize(x.v[b + 2 + j].p - xv.p);
+            in.transmit[j] = Transmits(in.wo[j], in.wi[j], Vec3(x.b[b + 1 + j].ns()));
+            in.specular[j] = false;
+            in.geomId[j] = xv.geomId;
+        }
+        const PathVertex &xb = x.v[b], &xc = x.v[c];
+        ManifoldChain chain;
+        if (!ok || !BuildChain(sc, EndpointSP(xb.p, xb.ng, xb.geomId), in, k, EndpointSP(xc.p, xc.ng, xc.geomId), &chain))
+            continue;
+        const Float phi = ChainDirectionsPerArea(chain);
+        if (!(phi > 0)) continue;
+        // Inverse map: directions (omega_b, omega_g...) -> (c's tangent coordinates, O_g...).
+        const int n = 2 * (k + 1);
+        std::vector<Vec3> dirs(k + 1), t1(k + 1), t2(k + 1);
+        for (int j = 0; j <= k; ++j) {
+            dirs[j] = Normalize(chain.v[j + 1].sp.p - chain.v[j].sp.p);
+            CoordinateSystem(dirs[j], &t1[j], &t2[j]);
+        }
+        const ManifoldVertex &cv = chain.back();
+        auto forward = [&](const std::vector<Vec3> &d, Eigen::VectorXd *out) {
+            ManifoldChain y = chain;
+            Point3 o = chain.front().sp.p;
+            for (int j = 0; j <= k; ++j) {
+                SurfaceInteraction si;
+                Float len = Distance(chain.v[j + 1].sp.p, chain.v[j].sp.p);
+                if (!scene.intersect(Ray(o + d[j] * (1e-5 * len), d[j]), &si) || si.geomId != chain.v[j + 1].sp.primitiveId)
+                    return false;
+                ManifoldSurfacePoint sp = j < k ? sc.mscene->fromInteraction(si) : EndpointSP(si.p, si.n, si.geomId);
+                sp.etaInterior = chain.v[j + 1].sp.etaInterior;
+                sp.etaExterior = chain.v[j + 1].sp.etaExterior;
+                SetupManifoldVertex(&y.v[j + 1], sp, &chain.v[j + 1].frameRef);
+                o = si.p;
+            }
+            out->resize(n);
+            (*out)(0) = Dot(y.back().sp.p - cv.sp.p, cv.s);
+            (*out)(1) = Dot(y.back().sp.p - cv.sp.p, cv.t);
+            for (int j = 1; j <= k; ++j) {
+                bool good = false;
+                Vec2 h = ProjectedHalfVector(y, j, &good);
+                if (!good) return false;
+                (*out)(2 * j) = h.x;
+                (*out)(2 * j + 1) = h.y;
+            }
+            return true;
+        };
+        const Float eps = 2e-4;  // single-precision hits: smaller steps measure their noise
+        Eigen::MatrixXd D(n, n);
+        for (int col = 0; col < n && ok; ++col) {
+            std::vector<Vec3> dp = dirs, dm = dirs;
+            const int j = col / 2;
+            const Vec3 &t = col % 2 ? t2[j] : t1[j];
+            dp[j] = Perturb(dirs[j], t, eps);
+            dm[j] = Perturb(dirs[j], t, -eps);
+            Eigen::VectorXd vp, vm;
+            ok = forward(dp, &vp) && forward(dm, &vm);
+            if (ok) D.col(col) = (vp - vm) / (2 * eps);
+        }
+        if (!ok) continue;
+        const double det = std::abs(D.determinant());
+        EXPECT_NEAR(det * phi, 1.0, 1e-2) << k << " glossy vertices, trial " << trial;
+        ++tested[std::min(k, 3) - 1];
+    }
+    std::printf("glossy second chains checked: %d with 1 glossy vertex, %d with 2, %d with more\n", tested[0],
+                tested[1], tested[2]);
+    EXPECT_GE(tested[0], 10) << "chains through the near-specular metal sphere";
+    EXPECT_GE(tested[1], 5) << "chains through the rough glass sphere";
+}
+
 // Empty second chain: the same quantity reduces to |cos_end| / d^2 (the
 // reconnection Jacobian's ingredients).
 TEST(GBDPTShift, DirectSolidAngleIsCosOverDistanceSquared) {
@@ -234,17 +344,34 @@ ShiftSubpath ReversedTail(const BidirContext &bc, const ShiftSubpath &x, int s, 
 // Env scene: the camera paths end on the environment (escaped) or, appended,
 // at the point light after a diffuse vertex; both need every strategy shifted
 // the same way (environment shift, reconnection to the point).
-void CheckCombinedWeightsSumToOne(const std::string &line, bool lightTracing, bool env = false) {
-    Fixture f(line, 24, 18, env);
+// Glossy box: the mirror sphere is near-specular metal and the glass sphere
+// near-specular rough glass, so second chains hold glossy vertices (walked
+// with their half-vectors kept).
+bool HasGlossySecondChain(const SubpathShiftContext &sc, const ShiftSubpath &x) {
+    int diffuse = 0;
+    for (int i = 1; i < x.n; ++i) {
+        if (IsDiffuseVertex(sc, x.v[i], &x.b[i])) {
+            if (++diffuse == 2) return false;
+        } else if (diffuse == 1 && !x.deltaSample[i]) {
+            for (int j = i + 1; j < x.n; ++j)
+                if (IsDiffuseVertex(sc, x.v[j], &x.b[j])) return true;
+            return false;
+        }
+    }
+    return false;
+}
+
+void CheckCombinedWeightsSumToOne(const std::string &line, bool lightTracing, bool env = false, bool glossy = false) {
+    Fixture f(line, 24, 18, env, glossy, glossy);
     const SubpathShiftContext &sc = f.g->shiftContext();
     const BidirContext &bc = f.g->bidirContext();
     std::unique_ptr<Sampler> sampler = f.job.sampler->clone();
     Arena arena;
-    int paths = 0, withLT = 0, withChain = 0, toEnv = 0, toPoint = 0, oneSided = 0;
+    int paths = 0, withLT = 0, withChain = 0, withGlossy = 0, toEnv = 0, toPoint = 0, oneSided = 0;
     const Light *point = nullptr;
     for (const auto &l : f.job.scene->lights)
         if (l->flags & LIGHT_DELTA_POSITION) point = l.get();
-    for (int trial = 0; trial < (env ? 200000 : 20000) && paths < 200; ++trial) {
+    for (int trial = 0; trial < (env || glossy ? 200000 : 20000) && paths < 200; ++trial) {
         Ray ray;
         const CameraSample cs = TrialSample(*sampler, *bc.camera, trial, &ray);
         const int maxV = 6;
@@ -286,6 +413,8 @@ void CheckCombinedWeightsSumToOne(const std::string &line, bool lightTracing, bo
         for (int k = 1; k + 1 < n; ++k) corner |= Distance(x.v[k].p, x.v[k + 1].p) < 1e-2;
         if (corner) continue;
         PrepareSubpath(sc, &x);
+        const bool glossyChain = HasGlossySecondChain(sc, x);
+        if (glossy && !glossyChain && paths >= 2 * withGlossy) continue;  // at least a third through glossy chains
         CameraShift sh;
         SubpathShiftStats st;
         ShiftCameraSubpath(sc, x, cs, {1, 0}, arena, &sh, &st);
@@ -338,10 +467,12 @@ void CheckCombinedWeightsSumToOne(const std::string &line, bool lightTracing, bo
         bool chain = false;
         for (int k = 1; k < n; ++k) chain |= x.deltaSample[k] != 0;
         withChain += chain;
+        withGlossy += glossyChain;
         toEnv += e.isInfiniteLight();
         toPoint += pointEnd;
         EXPECT_NEAR(sumx, 1.0, 1e-4) << "BDPT weights of the enumerated strategies";
-        EXPECT_NEAR(sum, 1.0, 2e-3) << "path of " << n << " vertices, chain " << chain
+        EXPECT_NEAR(sum, 1.0, 2e-3) << "path of " << n << " vertices, chain " << chain << ", glossy chain " << glossyChain
+                                    << ", trial " << trial
                                     << (e.isInfiniteLight() ? ", to the environment" : pointEnd ? ", to a point" : "");
         ++paths;
     }
@@ -351,9 +482,13 @@ void CheckCombinedWeightsSumToOne(const std::string &line, bool lightTracing, bo
         EXPECT_EQ(toEnv, 100);
         EXPECT_EQ(toPoint, 100);
     }
-    std::printf("%s: %d paths (%d light-tracing strategies, %d with specular chains; %d to the environment, %d to "
-                "the point light; %d with only the light-tracing shift failed)\n",
-                line.c_str(), paths, withLT, withChain, toEnv, toPoint, oneSided);
+    if (glossy) {
+        EXPECT_GE(withGlossy, 60) << "paths whose second chain holds glossy vertices";
+    }
+    std::printf("%s%s: %d paths (%d light-tracing strategies, %d with specular chains, %d with glossy second chains; "
+                "%d to the environment, %d to the point light; %d with only the light-tracing shift failed)\n",
+                line.c_str(), glossy ? " (glossy box)" : "", paths, withLT, withChain, withGlossy, toEnv, toPoint,
+                oneSided);
 }
 
 TEST(GBDPTShift, CombinedWeightsOfAllStrategiesSumToOne) {
@@ -361,6 +496,9 @@ TEST(GBDPTShift, CombinedWeightsOfAllStrategiesSumToOne) {
 }
 TEST(GBDPTShift, CombinedWeightsSumToOneWithEnvironmentAndPointLight) {
     CheckCombinedWeightsSumToOne("Integrator \"gbdpt\"", true, true);
+}
+TEST(GBDPTShift, CombinedWeightsSumToOneThroughGlossySecondChains) {
+    CheckCombinedWeightsSumToOne("Integrator \"gbdpt\"", true, false, true);
 }
 TEST(GBDPTShift, CombinedWeightsSumToOneWithoutLightTracing) {
     CheckCombinedWeightsSumToOne("Integrator \"gbdpt\" \"bool lighttracing\" \"false\"", false);
@@ -371,16 +509,17 @@ TEST(GBDPTShift, CombinedWeightsSumToOneWithoutLightTracing) {
 // (so w_ij,st(x) + w_ji,st(y) = (p_st(x) + |T'| p_st(y)) / sum_k [...], which
 // sums to one over the strategies of a path).
 TEST(GBDPTShift, CameraShiftIsInvertibleAndWeightsPair) {
-    // Third run: near-specular rough glass (half-vector refraction in the first chain).
-    for (int config = 0; config < 3; ++config) {
+    // Third run: near-specular rough glass (half-vector refraction in the first
+    // chain); fourth: also a near-specular metal sphere (glossy second chains).
+    for (int config = 0; config < 4; ++config) {
         const char *line = config == 1 ? "Integrator \"gbdpt\" \"string shift\" \"halfvector\"" : "Integrator \"gbdpt\"";
-        const bool roughGlass = config == 2;
-        Fixture f(line, 24, 18, false, roughGlass);
+        const bool roughGlass = config >= 2, glossyMirror = config == 3;
+        Fixture f(line, 24, 18, false, roughGlass, glossyMirror);
         const SubpathShiftContext &sc = f.g->shiftContext();
         const BidirContext &bc = f.g->bidirContext();
         std::unique_ptr<Sampler> sampler = f.job.sampler->clone();
         Arena arena;
-        int pairs = 0, chains = 0, weights = 0, asymmetric = 0, glossyRefractions = 0;
+        int pairs = 0, chains = 0, weights = 0, asymmetric = 0, glossyRefractions = 0, glossyChains = 0;
         for (int trial = 0; trial < 3000; ++trial) {
             Ray ray;
             const CameraSample cs = TrialSample(*sampler, *bc.camera, trial, &ray);
@@ -421,6 +560,7 @@ TEST(GBDPTShift, CameraShiftIsInvertibleAndWeightsPair) {
             bool chain = false;
             for (int k = 1; k < fwd.r; ++k) chain |= x.deltaSample[k] != 0;
             chains += chain;
+            glossyChains += HasGlossySecondChain(sc, x);
             ++pairs;
             // Eq. 8 pairing for the emitter-hit strategy (s = 0) and the BDPT weights of both paths.
             int t = x.n;
@@ -447,9 +587,13 @@ TEST(GBDPTShift, CameraShiftIsInvertibleAndWeightsPair) {
         if (roughGlass) {
             EXPECT_GT(glossyRefractions, 5) << "pairs through the rough glass's half-vector refraction";
         }
-        std::printf("%s%s: %d shifted pairs (%d with specular chains, %d glossy refractions), %d weight pairs, %d "
-                    "one-sided\n",
-                    line, roughGlass ? " (rough glass)" : "", pairs, chains, glossyRefractions, weights, asymmetric);
+        if (glossyMirror) {
+            EXPECT_GT(glossyChains, 20) << "pairs through glossy second chains";
+        }
+        std::printf("%s%s: %d shifted pairs (%d with specular chains, %d glossy refractions, %d glossy second chains), "
+                    "%d weight pairs, %d one-sided\n",
+                    line, glossyMirror ? " (glossy box)" : roughGlass ? " (rough glass)" : "", pairs, chains,
+                    glossyRefractions, glossyChains, weights, asymmetric);
     }
 }
 

@@ -29,9 +29,10 @@ Reference BDPTReference(const std::string &scene, int runs, int spp) {
     return test::AverageRuns(runs, [&](int k) { return Render(scene, spp, 5000 + k, "bdpt").layerRGB(""); });
 }
 
-enum class TestScene { Box, Env, RoughGlassBox };
+enum class TestScene { Box, Env, RoughGlassBox, GlossyBox };
 std::string SceneText(TestScene sc, const std::string &line) {
-    return sc == TestScene::Env ? EnvScene(line, 24, 18, true) : BoxScene(line, 24, 18, false, sc == TestScene::RoughGlassBox);
+    if (sc == TestScene::Env) return EnvScene(line, 24, 18, true);
+    return BoxScene(line, 24, 18, sc == TestScene::GlossyBox, sc != TestScene::Box);
 }
 
 void Check(const std::string &line, const Reference &ref, int spp, TestScene sc = TestScene::Box) {
@@ -97,4 +98,15 @@ TEST(GBDPTUnbiased, RoughGlassGradientsMatchBDPT) {
         return Render(SceneText(TestScene::RoughGlassBox, "Integrator \"bdpt\""), 256, 8000 + k, "bdpt").layerRGB("");
     });
     Check("Integrator \"gbdpt\"", ref, 512, TestScene::RoughGlassBox);
+}
+
+// Near-specular metal sphere and rough glass (roughness 0.0005 < shiftthreshold):
+// second chains b -> glossy vertices -> c are walked with their half-vectors
+// kept (Phi of subpath_shift.h; they fell back before), in the camera-subpath
+// and the light-tracing shifts (the metal sphere's caustic on the floor).
+TEST(GBDPTUnbiased, GlossySecondChainGradientsMatchBDPT) {
+    Reference ref = test::AverageRuns(16, [&](int k) {
+        return Render(SceneText(TestScene::GlossyBox, "Integrator \"bdpt\""), 256, 9000 + k, "bdpt").layerRGB("");
+    });
+    Check("Integrator \"gbdpt\"", ref, 512, TestScene::GlossyBox);
 }

@@ -10,7 +10,11 @@
 // light-tracing paths (t = 1, case (iii)) are shifted one by one (lines 9-11).
 // Gradients use the combined MIS of Eq. 8 (or Eq. 9); failed shifts and
 // blocked/black offsets fall back to the base's BDPT weight with a zero offset
-// (Sec. 4); blocked base paths are not shifted. Every strategy of a path must
+// (Sec. 4); blocked base paths are not shifted. Near-specular glossy vertices
+// (roughness below shiftthreshold) are specular in both chains (Sec. 3.1): the
+// first chain copies their half-vectors, the manifold walk of the second keeps
+// them, its Jacobian taking their directions as variables (subpath_shift.h).
+// Every strategy of a path must
 // shift or fall back alike (else its Eq. 8 weights do not sum to one): a path
 // ending at infinity (escaped camera subpath, next-event estimation of an
 // infinite or distant light, light subpath started there) keeps the

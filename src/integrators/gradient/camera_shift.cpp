@@ -202,18 +202,15 @@ void TraceFirstChain(const SubpathShiftContext &ctx, const ShiftSubpath &x, cons
 
 // The offset's direction from its vertex i towards the base's x_rec: a direct
 // reconnection (empty second chain) or a manifold walk through the chain's
-// ideal specular vertices i+1..rec-1. J = |d omega_y,i / d omega_x,i|.
+// specular and near-specular vertices i+1..rec-1. J = Phi(y)/Phi(x) of the
+// chain's sampled directions (ChainDirectionsPerArea; for an empty or ideal
+// specular chain |d omega_y,i / d omega_x,i|).
 bool ShiftToReconnection(const SubpathShiftContext &ctx, const ShiftSubpath &x, const PathVertex &yi, int i, int rec,
                          Arena &arena, SubpathShiftStats *st, Vec3 *wiY, Float *J, WalkedInterior *walked) {
     const Scene &scene = *ctx.bidir->scene;
     const PathVertex &xi = x.v[i], &xr = x.v[rec];
     const int k = rec - i - 1;  // interior vertices of the second chain
-    bool ok = true;
-    for (int j = i + 1; j < rec; ++j)
-        if (!x.deltaSample[j]) ok = false;
-    if (!ok) ++st->unsupportedChains;
-    if (xr.isInfiniteLight() && k > 0) ok = false;  // no manifold walk towards infinity
-    if (!ok) return false;
+    if (xr.isInfiniteLight() && k > 0) return false;  // no manifold walk towards infinity
     if (xr.isInfiniteLight()) {
         // Environment shift: the offset keeps the base's direction towards the
         // point at infinity, |d omega_y / d omega_x| = 1 (shift.h), if it escapes.
@@ -236,7 +233,8 @@ bool ShiftToReconnection(const SubpathShiftContext &ctx, const ShiftSubpath &x, 
     }
     // Manifold walk from offset b to base c with the base's half vectors.
     ChainInterior in;
-    ok = ctx.trySpecular && k + 2 <= kMaxManifoldVertices;
+    if (k + 2 > kMaxManifoldVertices) ++st->longChains;
+    bool ok = ctx.trySpecular && k + 2 <= kMaxManifoldVertices, glossy = false;
     for (int j = 0; ok && j < k; ++j) {
         const PathVertex &xv = x.v[i + 1 + j];
         ok = VertexInteraction(scene, xv, x.v[i + j].p, &in.si[j]);
@@ -244,8 +242,11 @@ bool ShiftToReconnection(const SubpathShiftContext &ctx, const ShiftSubpath &x, 
         in.wo[j] = xv.wo;
         in.wi[j] = Normalize(x.v[i + 2 + j].p - xv.p);
         in.transmit[j] = Transmits(in.wo[j], in.wi[j], Vec3(x.b[i + 1 + j].ns()));
+        in.specular[j] = x.deltaSample[i + 1 + j] != 0;
         in.geomId[j] = xv.geomId;
+        glossy |= !in.specular[j];
     }
+    st->glossyChains += glossy;
     ManifoldChain base, offChain;
     if (ok)
         ok = BuildChain(ctx, EndpointSP(xi.p, xi.ng, xi.geomId), in, k, EndpointSP(xr.p, xr.ng, xr.geomId), &base);
@@ -259,25 +260,37 @@ bool ShiftToReconnection(const SubpathShiftContext &ctx, const ShiftSubpath &x, 
     return true;
 }
 
-// Offset vertices i+1..rec-1 of a walked second chain (ideal specular: the
-// Dirac coefficient of the offset over the base's lobe probability).
+// Offset vertices i+1..rec-1 of a walked second chain. Ideal specular: the
+// Dirac coefficient of the offset over the base's lobe probability; glossy
+// (near-specular, its half-vector kept): f_y |cos_y| / p_x in the throughput
+// (Eq. 5, its direction is a variable of J_b) and p_y / p_x in rho (Eq. 8).
 bool AppendWalkedInterior(const ShiftSubpath &x, int i, int rec, const WalkedInterior &walked, CameraShift *out,
                           OffsetState *o) {
     ShiftSubpath &y = out->y;
     for (int j = 0; j < rec - i - 1; ++j) {
-        const PathVertex &xv = x.v[i + 1 + j];
-        BSDFSample sx;
-        bool trj = Transmits(xv.wo, Normalize(x.v[i + 2 + j].p - xv.p), Vec3(x.b[i + 1 + j].ns()));
-        if (!DeltaLobe(x.b[i + 1 + j], xv.wo, trj, TransportMode::Radiance, &sx)) return false;
-        const SurfaceInteraction &si = walked.si[j];
-        SetSurfaceVertex(si, walked.bsdf[j], xv, o->beta, &y.v[i + 1 + j]);
-        y.b[i + 1 + j] = walked.bsdf[j];
-        y.deltaSample[i + 1 + j] = 1;
-        out->rho[i + 1 + j] = o->R;
-        BSDFSample sy;
-        DeltaLobe(walked.bsdf[j], si.wo, trj, TransportMode::Radiance, &sy);
-        o->beta *= sy.f * (AbsDot(sy.wi, Vec3(walked.bsdf[j].ns())) / sx.pdf) * xv.rrScale;
-        o->R *= sy.pdf / sx.pdf;
+        const int m = i + 1 + j;
+        const PathVertex &xv = x.v[m];
+        const Vec3 wiX = Normalize(x.v[m + 1].p - xv.p);
+        Float px;
+        if (x.deltaSample[m]) {
+            BSDFSample sx;
+            if (!DeltaLobe(x.b[m], xv.wo, Transmits(xv.wo, wiX, Vec3(x.b[m].ns())), TransportMode::Radiance, &sx))
+                return false;
+            px = sx.pdf;
+        } else {
+            // From the vertex positions, as the MIS densities (PdfArea) and the
+            // offset's (EvaluateWalked): a stored single-precision direction
+            // differs by ~1e-7, which a roughness-5e-4 lobe at grazing
+            // reflection turns into ~1% of its density.
+            px = x.b[m].pdf(Normalize(x.v[m - 1].p - xv.p), wiX);
+            if (!(px > 0)) return false;
+        }
+        SetSurfaceVertex(walked.si[j], walked.bsdf[j], xv, o->beta, &y.v[m]);
+        y.b[m] = walked.bsdf[j];
+        y.deltaSample[m] = x.deltaSample[m];
+        out->rho[m] = o->R;
+        o->beta *= walked.fcos[j] * (xv.rrScale / px);
+        o->R *= walked.pdf[j] / px;
     }
     return true;
 }

@@ -6,25 +6,28 @@ namespace gradus {
 
 namespace {
 
-// c: the first diffuse vertex after b = x_1 going towards the light (-1: none,
-// or a glossy vertex in between, counted as an unsupported chain).
-int FindChainEnd(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s, SubpathShiftStats *st) {
+// c: the first diffuse vertex after b = x_1 going towards the light (-1: none).
+int FindChainEnd(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s) {
     for (int j = s - 2; j >= 0; --j) {
         const PathVertex &v = light.v[j];
         if (v.type == VertexType::Light || IsDiffuseVertex(ctx, v, &light.b[j])) return j;
-        if (!light.deltaSample[j]) {
-            ++st->unsupportedChains;
-            return -1;
-        }
     }
     return -1;
 }
 
+// |cos at b2| / d^2 of the edge a -> b2 (no cosine off surfaces).
+Float EdgeGeometry(const Point3 &a, const Point3 &b2, const Vec3 &nb, bool surf) {
+    Vec3 d = b2 - a;
+    Float d2 = d.lengthSquared();
+    return (surf ? AbsDot(nb, d / std::sqrt(d2)) : Float(1)) / d2;
+}
+
 // The second chain b .. c of base and offset.
 struct LightChain {
-    Float J = 0;                  // |d omega_y,b / d omega_x,b|
-    Float discX = 1, discY = 1;   // discrete lobe probabilities of the interiors
-    Spectrum chainX{1}, chainY{1};  // Dirac coefficients f |cos| of the interiors
+    Float J = 0;                  // Phi(y)/Phi(x) (ChainDirectionsPerArea; |d omega_y,b / d omega_x,b| without glossy vertices)
+    Float discX = 1, discY = 1;   // discrete lobe probabilities of the ideal specular interiors
+    Spectrum chainX{1}, chainY{1};  // f |cos| of the interiors (Dirac coefficients at ideal specular ones)
+    Float glossyRho = 1;          // the glossy interiors' factors of rho (ShiftLightTracingPath)
     Vec3 wiY1;                    // offset direction at b towards c
     Vec3 towardCamX, towardCamY;  // at c, towards the camera side
     ManifoldChain offChain;
@@ -65,8 +68,12 @@ bool ShiftChain(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s
         return true;
     }
     ChainInterior in;
-    if (k + 2 > kMaxManifoldVertices) return false;
+    if (k + 2 > kMaxManifoldVertices) {
+        ++st->longChains;
+        return false;
+    }
     // Chain from b = x1 (camera side) to c; interior j is light vertex s-2-j.
+    bool glossy = false;
     for (int j = 0; j < k; ++j) {
         const PathVertex &v = light.v[s - 2 - j];
         if (!VertexInteraction(scene, v, light.v[s - 1 - j].p, &in.si[j])) {
@@ -78,7 +85,19 @@ bool ShiftChain(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s
         in.wo[j] = Normalize(light.v[s - 1 - j].p - v.p);  // towards the camera side
         in.wi[j] = Normalize(light.v[s - 3 - j].p - v.p);
         in.transmit[j] = Transmits(in.wo[j], in.wi[j], Vec3(b.ns()));
+        in.specular[j] = light.deltaSample[s - 2 - j] != 0;
         in.geomId[j] = v.geomId;
+        if (!in.specular[j]) {
+            // Near-specular glossy vertex: its direction towards c is a variable (J_b).
+            glossy = true;
+            Spectrum fc = b.f(in.wo[j], in.wi[j], TransportMode::Radiance) * AbsDot(in.wi[j], Vec3(b.ns()));
+            if (fc.isBlack()) {
+                st->shift.fail(ShiftFailure::Geometry);
+                return false;
+            }
+            ch->chainX *= fc;
+            continue;
+        }
         BSDFSample sx;
         if (!DeltaLobe(b, in.wo[j], in.transmit[j], TransportMode::Radiance, &sx) ||
             Dot(sx.wi, in.wi[j]) < 1 - kShiftDirTol) {
@@ -88,6 +107,7 @@ bool ShiftChain(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s
         ch->chainX *= sx.f * AbsDot(sx.wi, Vec3(b.ns()));
         ch->discX *= sx.pdf;
     }
+    st->glossyChains += glossy;
     ManifoldChain base;
     // The walk ends on c's shape (an area light's emitting shape for a light vertex).
     int gidc = xc.type == VertexType::Surface ? xc.geomId : ctx.mscene->geomOfLight(xc.light);
@@ -99,9 +119,44 @@ bool ShiftChain(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s
     if (!WalkSecondChain(ctx, base, EndpointSP(yHit.p, yHit.n, yHit.geomId), in, arena, st, &ch->offChain,
                          &ch->walked, &ch->J))
         return false;
-    ch->chainY = ch->walked.factor;
     ch->discY = ch->walked.prob;
+    for (int j = 0; j < k; ++j) ch->chainY *= ch->walked.fcos[j];
     ch->wiY1 = Normalize(ch->offChain.v[1].sp.p - yHit.p);
+    if (glossy) {
+        // Each glossy interior g of the light path (vertex s-2-j) enters rho
+        // (ShiftLightTracingPath) with its MIS densities of common/ in both
+        // directions: p_omega,g towards b times the edge geometry there (the
+        // light-tracing strategy's density of the next vertex), and the edge
+        // geometry of g's edge towards c, which the camera side's density
+        // p_omega,g |cos|/d^2 carries beyond the ratio p_y,g / p_x,g of its rho:
+        //   glossyRho = prod_g (p_y,g Gb_y Gc_x) / (p_x,g Gb_x Gc_y).
+        auto chainPos = [&](bool off, int i) -> Point3 {  // chain vertex i: b, interiors, c
+            if (!off) return i == 0 ? x1.p : i == k + 1 ? xc.p : light.v[s - 1 - i].p;
+            return i == 0 ? yHit.p : i == k + 1 ? xc.p : ch->offChain.v[i].sp.p;
+        };
+        auto chainNormal = [&](bool off, int i) -> Vec3 {
+            if (!off) return i == 0 ? Vec3(x1.ng) : i == k + 1 ? Vec3(xc.ng) : Vec3(light.v[s - 1 - i].ng);
+            return i == 0 ? Vec3(yHit.n) : i == k + 1 ? Vec3(xc.ng) : Vec3(ch->walked.si[i - 1].n);
+        };
+        const bool cSurf = xc.onSurface();
+        for (int j = 0; j < k; ++j) {
+            if (in.specular[j]) continue;
+            Float f[2];
+            for (int off = 0; off < 2; ++off) {
+                const BSDF &bg = off ? ch->walked.bsdf[j] : light.b[s - 2 - j];
+                Point3 pg = chainPos(off, j + 1), pb = chainPos(off, j), pc = chainPos(off, j + 2);
+                Float pdf = bg.pdf(Normalize(pc - pg), Normalize(pb - pg), TransportMode::Importance);
+                Float gb = EdgeGeometry(pg, pb, chainNormal(off, j), true);
+                Float gc = EdgeGeometry(pg, pc, chainNormal(off, j + 2), j + 2 < k + 1 || cSurf);
+                f[off] = pdf * gb / gc;
+            }
+            if (!(f[0] > 0) || !(f[1] > 0)) {
+                st->shift.fail(ShiftFailure::Geometry);
+                return false;
+            }
+            ch->glossyRho *= f[1] / f[0];
+        }
+    }
     ch->towardCamX = Normalize(light.v[c + 1].p - xc.p);
     ch->towardCamY = Normalize(ch->offChain.v[k].sp.p - xc.p);
     return true;
@@ -136,12 +191,6 @@ void EvalAtChainEnd(const ShiftSubpath &light, int c, const Vec3 &towardCam, Spe
     }
 }
 
-// |cos at b2| / d^2 of the edge a -> b2 (no cosine off surfaces).
-Float EdgeGeometry(const Point3 &a, const Point3 &b2, const Vec3 &nb, bool surf) {
-    Vec3 d = b2 - a;
-    Float d2 = d.lengthSquared();
-    return (surf ? AbsDot(nb, d / std::sqrt(d2)) : Float(1)) / d2;
-}
 
 // BDPT weight of the offset light-tracing path: only light vertices c-1 .. s-1
 // differ from the base, so they are swapped in place and restored (copying
@@ -193,6 +242,13 @@ Float OffsetWeight(const BidirContext &bc, const ShiftSubpath &light, int s, int
     if (k > 0) yv[c].pdfRev = 0;
     if (c >= 1 && xc.type == VertexType::Surface)
         yv[c - 1].pdfRev = PdfArea(bc, xc, &yb[c], &yv[c + 1], yv[c - 1], TransportMode::Radiance);
+    // A glossy interior is sampled from, unlike an ideal specular one: its
+    // neighbours' densities are real (as in the base's light subpath).
+    for (int m = c + 1; m <= s - 2; ++m)
+        if (!light.deltaSample[m]) {
+            yv[m + 1].pdfFwd = PdfArea(bc, yv[m], &yb[m], &yv[m - 1], yv[m + 1], TransportMode::Importance);
+            yv[m - 1].pdfRev = PdfArea(bc, yv[m], &yb[m], &yv[m + 1], yv[m - 1], TransportMode::Radiance);
+        }
     PathVertex lensY = lens;
     Float wy = MISWeight(bc, SubpathView{yv, yb, s}, SubpathView{&lensY, nullptr, 1}, s, 1, &lensY);
     for (int j = 0; j < m; ++j) {
@@ -210,7 +266,7 @@ bool ShiftLightTracingPath(const SubpathShiftContext &ctx, const ShiftSubpath &l
     const BidirContext &bc = *ctx.bidir;
     if (s < 2) return false;
     const PathVertex &x1 = light.v[s - 1];
-    const int c = FindChainEnd(ctx, light, s, st);
+    const int c = FindChainEnd(ctx, light, s);
     if (c < 0) return false;
     const int k = s - 2 - c;  // interior (ideal specular) vertices
     if (k > 0 && (!ctx.manifold || !ctx.trySpecular)) return false;
@@ -289,7 +345,7 @@ bool ShiftLightTracingPath(const SubpathShiftContext &ctx, const ShiftSubpath &l
         Gcy = AbsDot(wiX1, yaN);
     }
     Float denR = Fx * ch.discX * G1y * pcX * Gcx;
-    *rho = denR > 0 ? Fy * ch.J * ch.discY * G1x * pcY * Gcy / denR : 0;
+    *rho = denR > 0 ? Fy * ch.J * ch.discY * G1x * pcY * Gcy * ch.glossyRho / denR : 0;
 
     bool ok;
     *wy = OffsetWeight(bc, light, s, c, isect, ch, lens, arena, &ok);

@@ -22,8 +22,12 @@
 // the ratio of generalised geometry terms (JM12) per solid angle at b
 // (ChainSolidAnglePerArea). This equals |dy/dx| of Eq. 5 (the
 // reparameterisation Jacobians of LKL13 in the reduced measure); it is checked
-// against finite differences in tests/gbdpt. The prefix product up to b is
-// Eq. 7, up to c Eq. 6.
+// against finite differences in tests/gbdpt. A second chain with near-specular
+// glossy vertices g (treated as specular, Sec. 3.1: the walk keeps their
+// half-vectors) has the directions at b and at every g as variables; its
+// J_b = Phi(y)/Phi(x) (ChainDirectionsPerArea, which adds |dx_g/dO_g|, G-MLT
+// Eq. 14) multiplies f_y,g |cos_y,g| / p_x,g of each g. The prefix product up
+// to b is Eq. 7, up to c Eq. 6.
 //
 // Gradient MIS ratio rho = |T'| p_st(y) / p_st(x) (Eq. 8): the product over
 // the shifted sampled directions of J_i p_y,i / p_x,i (discrete lobe
@@ -60,7 +64,8 @@ struct SubpathShiftStats {
     LocalShiftStats shift;
     uint64_t walks = 0, walkFailures = 0;
     uint64_t walkStatus[size_t(ManifoldStatus::Count)] = {};
-    uint64_t unsupportedChains = 0;  // glossy vertex in a second chain: fallback
+    uint64_t glossyChains = 0;  // second chains walked with near-specular (glossy) vertices
+    uint64_t longChains = 0;    // second chains longer than the walk takes (kMaxManifoldVertices): fallback
     void recordWalk(const ManifoldWalkResult &r);
     void add(const SubpathShiftStats &o);
     // The manifold-walk lines of the end-of-render report.
@@ -82,9 +87,18 @@ void PrepareSubpath(const SubpathShiftContext &ctx, ShiftSubpath *p);
 // Rough (diffuse) for shift purposes.
 bool IsDiffuseVertex(const SubpathShiftContext &ctx, const PathVertex &v, const BSDF *b);
 
-// Solid angle at a chain's start per unit area at its end, G / |cos_0| (JM12);
-// the ratio offset/base is the Jacobian J_b of the second chain.
+// Solid angle at a chain's start per unit area at its end, G / |cos_0| (JM12).
 Float ChainSolidAnglePerArea(const ManifoldChain &c);
+// Phi = |d(omega_0, omega_g..) / d(A_end, O_g..)|: the sampled directions of a
+// chain (at its start and at every near-specular interior vertex g) per unit
+// area at its end and per unit of the glossy half-vectors O_g. The map is block
+// triangular (omega at a segment's start depends on the segment's end only), so
+//   Phi = prod over the segments between glossy vertices of ChainSolidAnglePerArea
+//         * |dx_g / dO_g| (HalfVectorJacobian, both chain ends fixed; G-MLT Eq. 14).
+// Without glossy vertices Phi = ChainSolidAnglePerArea. Base and offset share
+// A_end and O_g, so the ratio offset/base is the Jacobian J_b of the second
+// chain in the camera-side direction measure (Eq. 5).
+Float ChainDirectionsPerArea(const ManifoldChain &c);
 // dA_b/ds of a pinhole camera at `lens` with axis n0 (cos^4 / G of
 // ShiftJacobianFactor for an empty eye chain, up to the focal constant).
 Float EyeAreaFactor(const Point3 &lens, const Vec3 &n0, const Point3 &pb, const Vec3 &ngb);
@@ -113,18 +127,21 @@ bool DeltaLobe(const BSDF &bsdf, const Vec3 &wo, bool transmit, TransportMode mo
 bool VertexInteraction(const Scene &scene, const PathVertex &v, const Point3 &from, SurfaceInteraction *si);
 // Endpoint of a chain: geometric normal (area measure), no curvature.
 ManifoldSurfacePoint EndpointSP(const Point3 &p, const Vec3 &ng, int geomId);
-// The interior (ideal specular) vertices of a base chain, from its start
-// towards its end: interactions, BSDFs, the directions towards the start (wo)
-// and the end (wi), the event (refraction or reflection) and the geometry.
+// The interior vertices of a base chain (ideal specular, or near-specular
+// glossy ones that the walk treats as specular: their half-vectors are kept,
+// Sec. 3.1), from its start towards its end: interactions, BSDFs, the
+// directions towards the start (wo) and the end (wi), the event (refraction or
+// reflection), whether the vertex is ideal specular, and the geometry.
 struct ChainInterior {
     SurfaceInteraction si[kMaxManifoldVertices];
     const BSDF *bsdf[kMaxManifoldVertices];
     Vec3 wo[kMaxManifoldVertices], wi[kMaxManifoldVertices];
     bool transmit[kMaxManifoldVertices];
+    bool specular[kMaxManifoldVertices];
     int geomId[kMaxManifoldVertices];
 };
 // Builds the base chain start, interior[0..k-1], end; records the index of
-// refraction of refracting interiors.
+// refraction of refracting interiors (the Dirac lobe's, or BSDF::eta for glossy ones).
 bool BuildChain(const SubpathShiftContext &ctx, const ManifoldSurfacePoint &start, const ChainInterior &interior, int k,
                 const ManifoldSurfacePoint &end, ManifoldChain *chain);
 // Empty second chain: the offset vertex yFrom (base: xFrom) reconnects to the
@@ -132,21 +149,24 @@ bool BuildChain(const SubpathShiftContext &ctx, const ManifoldSurfacePoint &star
 // attempt and a failure in `st` (the success is the caller's).
 bool ReconnectToVertex(const Scene &scene, const Point3 &xFrom, const Interaction &yFrom, const PathVertex &target,
                        LocalShiftStats *st, ReconnectionShift *rc);
-// Interactions, BSDFs and the specular factors of a walked offset interior
-// (re-traced from the chain's start, each vertex with the base's event).
+// Interactions, BSDFs and the vertex factors of a walked offset interior
+// (re-traced from the chain's start, each vertex with the base's event), in
+// the chain's direction (wo towards its start, wi towards its end).
 struct WalkedInterior {
     SurfaceInteraction si[kMaxManifoldVertices];
     BSDF bsdf[kMaxManifoldVertices];
-    Spectrum factor{1};  // prod f_y |cos| (Dirac coefficients)
-    Float prob = 1;      // prod of discrete lobe probabilities
+    Spectrum fcos[kMaxManifoldVertices];  // f |cos wi|: the Dirac coefficient at an ideal specular vertex
+    Float pdf[kMaxManifoldVertices];      // its discrete lobe probability, or the glossy solid-angle density
+    Spectrum factor{1};  // prod of the ideal specular vertices' fcos
+    Float prob = 1;      // prod of their discrete lobe probabilities
 };
 // Second chain of an offset: the manifold walk from `start` to the base
 // chain's end, kept only if it is reversible (JM12 Sec. 5: the walk may
 // converge to another solution of the chain; only reversible walks keep the
 // shift a bijection), then the re-traced interior (`walked`) and
-// J = ChainSolidAnglePerArea(offset) / ChainSolidAnglePerArea(base), the
-// Jacobian |d omega_y,b / d omega_x,b| with the chain's end fixed. Records the
-// walk and a failure in `st`.
+// J = ChainDirectionsPerArea(offset) / ChainDirectionsPerArea(base), the
+// Jacobian of the chain's sampled directions with its end and its glossy
+// half-vectors fixed. Records the walk and a failure in `st`.
 bool WalkSecondChain(const SubpathShiftContext &ctx, const ManifoldChain &base, const ManifoldSurfacePoint &start,
                      const ChainInterior &interior, Arena &arena, SubpathShiftStats *st, ManifoldChain *offset,
                      WalkedInterior *walked, Float *J);

@@ -29,7 +29,8 @@ void ExpectIdentical(const Image &a, const Image &b) {
 // 40x40 pixels = 9 tiles of subpaths: generation, sort and connection all run in parallel.
 TEST(MBDPTRender, IndependentOfThreadCount) {
     for (std::string p : {"\"integer connections\" 2 \"bool visualizestrategies\" [true]",
-                          "\"string reorder\" \"morton\" \"string matrixsampler\" \"lhs\""}) {
+                          "\"string reorder\" \"morton\" \"string matrixsampler\" \"lhs\"",
+                          "\"string matrixsampler\" \"pixel\" \"integer connections\" 2"}) {
         std::string scene = BoxScene(MBDPT(p), 40);
         Rendered one = Render(scene, 2, 7, 1);
         Rendered two = Render(scene, 2, 7, 2);
@@ -113,7 +114,8 @@ TEST(MBDPTRender, StatisticsReportMemoryPerPixel) {
 TEST(MBDPTRender, ParameterErrors) {
     for (std::string p : {"\"string reorder\" \"hilbert\"", "\"integer connections\" 0",
                           "\"string matrixsampler\" \"sobol2\"", "\"string visualizematrix\" \"1,3\"",
-                          "\"string visualizematrix\" \"2,x\"", "\"string matrixrows\" \"some\""}) {
+                          "\"string visualizematrix\" \"2,x\"", "\"string matrixrows\" \"some\"",
+                          "\"string visualizematrix\" \"2,2\" \"string matrixsampler\" \"pixel\""}) {
         std::string name = p.substr(p.find(' ') + 2);
         name = name.substr(0, name.find('"'));
         try {

@@ -10,5 +10,13 @@ TEST(MBDPTUnbiased, DistanceReorder) {
     ExpectAgreement("\"string reorder\" \"distance\" \"integer connections\" 4", 300);
 }
 
+// "pixel": camera subpaths generated at connection time, column coordinates and
+// row participation from the pixel sample's own dimensions, kept light BSDFs.
+TEST(MBDPTUnbiased, PixelSampler) {
+    ExpectAgreement("\"string matrixsampler\" \"pixel\" \"integer connections\" 1", 1700);
+    ExpectAgreement("\"string matrixsampler\" \"pixel\" \"integer connections\" 3", 1800);
+    ExpectAgreement("\"string matrixsampler\" \"pixel\" \"string matrixrows\" \"all\"", 1900);
+}
+
 }  // namespace
 }  // namespace gradus::mbdpt_test

@@ -28,6 +28,7 @@ TEST(MBDPTUnbiased, SamplersRowsAndCombinatorial) {
 TEST(MBDPTUnbiased, StrategyImages) {
     ExpectAgreement("\"string reorder\" \"distance\"", 1500, true);
     ExpectAgreement("\"string reorder\" \"morton\" \"integer connections\" 2 \"string matrixrows\" \"all\"", 1600, true);
+    ExpectAgreement("\"string matrixsampler\" \"pixel\" \"integer connections\" 2", 2000, true);
 }
 
 }  // namespace

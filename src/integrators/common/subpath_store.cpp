@@ -16,50 +16,63 @@ size_t ImageSubpaths::bytes() const {
     return camera.bytes() + light.bytes() + pFilm.capacity() * sizeof(Point2) + camWeight.capacity() * sizeof(float);
 }
 
-void ImageSubpaths::generate(PassContext &ctx, const BidirContext &bidir, int maxDepth) {
+void ImageSubpaths::generate(PassContext &ctx, const BidirContext &bidir, int maxDepth, bool withCamera,
+                             int lightDimension, bool keepLightBSDFs) {
     const Scene &scene = ctx.scene();
     const int ntiles = tiles_.count();
     const size_t N = size();
     const int maxCam = maxDepth + 2, maxLight = maxDepth + 1;
     const int sampleIndex = ctx.firstSample();
+    if (keepLightBSDFs && tileArenas_.size() != size_t(ntiles)) {
+        tileArenas_.clear();
+        for (int t = 0; t < ntiles; ++t) tileArenas_.push_back(std::make_unique<Arena>());
+    }
     struct TileOut {
+        std::vector<BSDF> lb;
         std::vector<PathVertex> cv, lv;
         std::vector<uint8_t> cc, lc;
         std::vector<uint32_t> nc, nl;
     };
     std::vector<TileOut> out(ntiles);
-    pFilm.resize(N);
-    camWeight.resize(N);
+    pFilm.resize(withCamera ? N : 0);
+    camWeight.resize(withCamera ? N : 0);
     ctx.parallelFor(ntiles, 1, [&](int64_t begin, int64_t end, Worker &wk) {
         std::vector<PathVertex> camV(maxCam), lightV(maxLight);
         std::vector<BSDF> camB(maxCam), lightB(maxLight);
         for (int64_t ti = begin; ti < end; ++ti) {
             TileOut &o = out[ti];
             const Bounds2i tb = tiles_.tile(int(ti));
+            Arena *lightArena = keepLightBSDFs ? tileArenas_[ti].get() : &wk.arena;
+            if (keepLightBSDFs) lightArena->reset();
             uint32_t p = tileStart_[ti];
             for (int y = tb.pMin.y; y < tb.pMax.y; ++y)
                 for (int x = tb.pMin.x; x < tb.pMax.x; ++x, ++p) {
                     Sampler &smp = *wk.sampler;
                     smp.startPixelSample({x, y}, sampleIndex);
-                    CameraSample cs;
-                    Point2 u = smp.get2D();
-                    cs.pFilm = Point2(x + u.x, y + u.y);
-                    cs.pLens = smp.get2D();
-                    Ray ray;
-                    Float w = scene.camera->generateRay(cs, &ray);
                     int nC = 0, nL = 0;
                     for (auto &b : camB) b = BSDF();
                     for (auto &b : lightB) b = BSDF();
-                    if (w > 0) nC = GenerateCameraSubpath(bidir, ray, smp, wk.arena, maxCam, camV.data(), camB.data());
+                    if (withCamera) {
+                        CameraSample cs;
+                        Point2 u = smp.get2D();
+                        cs.pFilm = Point2(x + u.x, y + u.y);
+                        cs.pLens = smp.get2D();
+                        Ray ray;
+                        Float w = scene.camera->generateRay(cs, &ray);
+                        if (w > 0)
+                            nC = GenerateCameraSubpath(bidir, ray, smp, wk.arena, maxCam, camV.data(), camB.data());
+                        pFilm[p] = cs.pFilm;
+                        camWeight[p] = float(w);
+                    }
+                    if (lightDimension >= 0) smp.startPixelSample({x, y}, sampleIndex, lightDimension);
                     if (!scene.lights.empty())
-                        nL = GenerateLightSubpath(bidir, smp, wk.arena, maxLight, lightV.data(), lightB.data());
-                    pFilm[p] = cs.pFilm;
-                    camWeight[p] = float(w);
+                        nL = GenerateLightSubpath(bidir, smp, *lightArena, maxLight, lightV.data(), lightB.data());
                     for (int i = 0; i < nC; ++i) {
                         o.cv.push_back(camV[i]);
                         o.cc.push_back(camV[i].type == VertexType::Surface && IsConnectible(camV[i], &camB[i]));
                     }
                     for (int i = 0; i < nL; ++i) {
+                        if (keepLightBSDFs) o.lb.push_back(lightB[i]);
                         o.lv.push_back(lightV[i]);
                         o.lc.push_back(lightV[i].type == VertexType::Surface && IsConnectible(lightV[i], &lightB[i]));
                     }
@@ -74,6 +87,7 @@ void ImageSubpaths::generate(PassContext &ctx, const BidirContext &bidir, int ma
         std::vector<size_t> vstart(ntiles + 1, 0);
         for (int ti = 0; ti < ntiles; ++ti) vstart[ti + 1] = vstart[ti] + (cam ? out[ti].cv.size() : out[ti].lv.size());
         store.v.resize(vstart[ntiles]);
+        store.b.resize(!cam && keepLightBSDFs ? vstart[ntiles] : 0);
         store.connectible.resize(vstart[ntiles]);
         store.offset.resize(N + 1);
         store.offset[N] = uint32_t(vstart[ntiles]);
@@ -84,6 +98,7 @@ void ImageSubpaths::generate(PassContext &ctx, const BidirContext &bidir, int ma
                 const auto &cs = cam ? o.cc : o.lc;
                 const auto &ns = cam ? o.nc : o.nl;
                 std::copy(vs.begin(), vs.end(), store.v.begin() + vstart[ti]);
+                if (!store.b.empty()) std::copy(o.lb.begin(), o.lb.end(), store.b.begin() + vstart[ti]);
                 std::copy(cs.begin(), cs.end(), store.connectible.begin() + vstart[ti]);
                 uint32_t off = uint32_t(vstart[ti]);
                 for (size_t j = 0; j < ns.size(); ++j) {

@@ -10,6 +10,7 @@
 // depend on the thread count.
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "integrators/common/bidir.h"
@@ -20,13 +21,16 @@ namespace gradus {
 // Subpaths of one pass, indexed in generation order.
 struct SubpathStore {
     std::vector<PathVertex> v;
+    std::vector<BSDF> b;               // per vertex, when kept (ImageSubpaths::generate keepLightBSDFs)
     std::vector<uint8_t> connectible;  // per vertex: a connection may end here (surface, non-specular)
     std::vector<uint32_t> offset;      // subpath i: v[offset[i], offset[i+1])
     int count(size_t i) const { return int(offset[i + 1] - offset[i]); }
     const PathVertex *path(size_t i) const { return v.data() + offset[i]; }
+    const BSDF *bsdfs(size_t i) const { return b.empty() ? nullptr : b.data() + offset[i]; }
     bool eligible(size_t i, int len) const { return count(i) >= len && connectible[offset[i] + len - 1]; }
     size_t bytes() const {
-        return v.capacity() * sizeof(PathVertex) + connectible.capacity() + offset.capacity() * sizeof(uint32_t);
+        return v.capacity() * sizeof(PathVertex) + b.capacity() * sizeof(BSDF) + connectible.capacity() +
+               offset.capacity() * sizeof(uint32_t);
     }
 };
 
@@ -35,8 +39,15 @@ class ImageSubpaths {
     // Numbers the subpaths over the tiles (call once, after the film is known).
     void init(const TileGrid &tiles);
     // Generates the pass's subpaths (camera subpaths up to maxDepth + 2
-    // vertices, light subpaths up to maxDepth + 1).
-    void generate(PassContext &ctx, const BidirContext &bidir, int maxDepth);
+    // vertices, light subpaths up to maxDepth + 1). withCamera = false: light
+    // subpaths only (the camera store stays empty, pFilm and camWeight are not
+    // set). lightDimension >= 0: the light subpath draws from that sampler
+    // dimension of the pixel sample on (else it follows the camera subpath's).
+    // keepLightBSDFs: the light vertices' BSDFs from generation are kept in
+    // light.b (their lobes in per-tile arenas that live until the next call),
+    // so no connection rebuilds them.
+    void generate(PassContext &ctx, const BidirContext &bidir, int maxDepth, bool withCamera = true,
+                  int lightDimension = -1, bool keepLightBSDFs = false);
 
     size_t size() const { return tileStart_.empty() ? 0 : tileStart_.back(); }
     uint32_t tileBegin(int tile) const { return tileStart_[tile]; }
@@ -49,6 +60,7 @@ class ImageSubpaths {
 
   private:
     TileGrid tiles_;
+    std::vector<std::unique_ptr<Arena>> tileArenas_;  // kept light BSDFs' lobes, one arena per tile
     std::vector<uint32_t> tileStart_;  // first subpath of each tile
 };
 

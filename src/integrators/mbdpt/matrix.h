@@ -17,9 +17,12 @@
 namespace gradus::mbdpt {
 
 enum class Reorder { Distance, Morton, None };
-// How the columns of a row are chosen: rank-1 lattice (2D low-discrepancy,
-// default), Latin hypercube, independent uniform, or the diagonal (plain BDPT pairing).
-enum class MatrixSampling { Lattice, LHS, Random, Diagonal };
+// How the columns of a row are chosen: rank-1 lattice (2D low-discrepancy),
+// Latin hypercube, independent uniform, the diagonal (plain BDPT pairing), or
+// Pixel: each pixel's column coordinates (and row participation) are
+// dimensions of its own sample, so over the iterations a pixel's connections
+// are stratified along the sorted light subpaths (no row order needed).
+enum class MatrixSampling { Lattice, LHS, Random, Diagonal, Pixel };
 
 // Sec. 4.2: d(y) = sum_{k=0}^{n-2} |y_k - y_{k+1}|^2 over the first n vertices.
 inline double DistanceMetric(const PathVertex *v, int n) {

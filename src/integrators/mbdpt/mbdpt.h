@@ -4,8 +4,9 @@
 //
 // One iteration (Algorithm 1) = one sample per pixel:
 //   1. generation: one camera subpath per sampled pixel and as many light
-//      subpaths (N = L), stored compactly (vertices only; BSDFs are rebuilt
-//      at connection time with RebuildBSDF);
+//      subpaths (N = L), stored compactly (camera vertices only, their BSDFs
+//      rebuilt once per row with RebuildBSDF; light vertices with the BSDFs
+//      of their generation, kept in per-tile arenas for the iteration);
 //   2. reordering: for every camera prefix length t and light prefix length
 //      s the eligible subpaths (enough vertices, connectible end vertex) are
 //      sorted by the Sec. 4.2 metric (a parallel sort with a total order);
@@ -14,7 +15,16 @@
 //      light subpaths chosen by a stratified 2D point set over the reordered
 //      matrix M_{s,t} (Sec. 4.3). s = 0 (emitter hits), s = 1 (next-event
 //      estimation with a fresh light sample, as in pbrt-v3) and t = 1 (light
-//      tracing) use the diagonal (Sec. 5.1, Fig. 5): plain BDPT.
+//      tracing) use the diagonal (Sec. 5.1, Fig. 5): plain BDPT. A row's
+//      connections are chosen first and their light subpaths prefetched (a
+//      random place in the image-wide store), then the diagonal strategies
+//      run while the loads complete.
+// matrixsampler "pixel" replaces the row order by the pixel sampler: a row's
+// participation and column coordinates are dimensions of the pixel's own
+// sample (fixed dimensions, so over the iterations a pixel's connections are
+// stratified along the sorted light subpaths), the camera subpath is
+// generated tile by tile in stage 3 and never stored, and next-event samples
+// come from the sampler as in bdpt.
 // Random numbers are addressed by (pixel, iteration) and the seed; the
 // result does not depend on the thread count.
 //
@@ -32,7 +42,8 @@
 //   string matrixrows "matched"     matched: a camera subpath takes part in M_{s,t} with probability
 //                                   L_s / L (same expected connections as BDPT) | all: always
 //   bool combinatorial false        connect every camera subpath to all columns (Eq. 6; quadratic cost)
-//   string matrixsampler "lattice"  lattice (rank-1 lattice, 2D low discrepancy) | lhs | random | diagonal
+//   string matrixsampler "lattice"  lattice (rank-1 lattice, 2D low discrepancy) | lhs | random | diagonal |
+//                                   pixel (per-pixel sampler dimensions; no stored camera subpaths)
 //   string visualizematrix ""       "s,t": image of the matrix M_{s,t} of the first iteration (Fig. 4)
 //   integer matrixresolution 256    its maximum width/height (rows and columns subsampled evenly)
 //   string matrixfile ""            where to write it (default: <film name>_matrix_s<S>_t<T>.exr);

@@ -7,6 +7,7 @@ import csv
 import os
 
 from . import analysis
+from .runs import integrator_params
 from .tools import HarnessError
 
 COLUMNS = ["scene", "gradient", "primal", "spp", "runs", "gradient_seconds",
@@ -43,8 +44,9 @@ def run_overhead(tools, scenes, pairs, spp, seeds, args):
                 for role, integ in (order if k % 2 == 0 else order[::-1]):
                     path = os.path.join(args.out, "renders", scene.name,
                                         "overhead-%s-%s-spp%d-s%d.exr" % (role, integ, spp, seed))
-                    meta, wall = tools.render(scene.scene, path, integrator=integ, spp=spp,
-                                              seed=seed, nthreads=args.nthreads)
+                    name, params = integrator_params(integ)
+                    meta, wall = tools.render(scene.scene, path, integrator=name, spp=spp,
+                                              seed=seed, nthreads=args.nthreads, params=params)
                     got = int(float(meta.get("spp", spp)))
                     if got != spp:
                         raise HarnessError("%s rendered %d spp instead of %d on %s (sampler "

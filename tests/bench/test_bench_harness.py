@@ -153,6 +153,22 @@ class Overhead(unittest.TestCase):
         self.assertTrue(all(x["spp"] == 4 for x in runs))
         self.assertTrue(os.path.isfile(os.path.join(out, "report.html")))
 
+    def test_pair_member_with_parameters(self):
+        # 'NAME[P=V]' reaches gradus as --param P=V (a misspelt one would fail the render).
+        out = os.path.join(self.tmp, "out")
+        p = bu.harness(BIN, "--overhead", "path[maxdepth=2]:path", "--spp", 4, "--seeds", 1,
+                       "--scenes", bu.TINY, "--refdir", self.tmp, "--out", out,
+                       "--nthreads", 2, "--quiet", tmp=self.tmp)
+        self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
+        with open(os.path.join(out, "overhead.csv"), newline="") as f:
+            rows = list(csv.DictReader(f))
+        self.assertEqual(rows[0]["gradient"], "path[maxdepth=2]")
+        p = bu.harness(BIN, "--overhead", "path[maxdepht=2]:path", "--spp", 4, "--seeds", 1,
+                       "--scenes", bu.TINY, "--refdir", self.tmp, "--out", out + "2",
+                       "--nthreads", 2, "--quiet", tmp=self.tmp)
+        self.assertNotEqual(p.returncode, 0)
+        self.assertIn("maxdepht", p.stdout + p.stderr)
+
     def test_unknown_name_in_pair(self):
         out = os.path.join(self.tmp, "out")
         p = bu.harness(BIN, "--overhead", "no-such-gpt:path", "--scenes", bu.TINY,

@@ -133,11 +133,14 @@ class Overhead(unittest.TestCase):
     def tearDown(self):
         shutil.rmtree(self.tmp, ignore_errors=True)
 
+    def overhead(self, pair, out, seeds):
+        return bu.harness(BIN, "--overhead", pair, "--spp", 4, "--seeds", seeds,
+                          "--scenes", bu.TINY, "--refdir", self.tmp, "--out", out,
+                          "--nthreads", 2, "--quiet", tmp=self.tmp)
+
     def test_equal_spp_timing(self):
         out = os.path.join(self.tmp, "out")
-        p = bu.harness(BIN, "--overhead", "path:path", "--spp", 4, "--seeds", 2,
-                       "--scenes", bu.TINY, "--refdir", self.tmp, "--out", out,
-                       "--nthreads", 2, "--quiet", tmp=self.tmp)
+        p = self.overhead("path:path", out, 2)
         self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
         with open(os.path.join(out, "overhead.csv"), newline="") as f:
             rows = list(csv.DictReader(f))
@@ -156,16 +159,12 @@ class Overhead(unittest.TestCase):
     def test_pair_member_with_parameters(self):
         # 'NAME[P=V]' reaches gradus as --param P=V (a misspelt one would fail the render).
         out = os.path.join(self.tmp, "out")
-        p = bu.harness(BIN, "--overhead", "path[maxdepth=2]:path", "--spp", 4, "--seeds", 1,
-                       "--scenes", bu.TINY, "--refdir", self.tmp, "--out", out,
-                       "--nthreads", 2, "--quiet", tmp=self.tmp)
+        p = self.overhead("path[maxdepth=2]:path", out, 1)
         self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
         with open(os.path.join(out, "overhead.csv"), newline="") as f:
             rows = list(csv.DictReader(f))
         self.assertEqual(rows[0]["gradient"], "path[maxdepth=2]")
-        p = bu.harness(BIN, "--overhead", "path[maxdepht=2]:path", "--spp", 4, "--seeds", 1,
-                       "--scenes", bu.TINY, "--refdir", self.tmp, "--out", out + "2",
-                       "--nthreads", 2, "--quiet", tmp=self.tmp)
+        p = self.overhead("path[maxdepht=2]:path", out + "2", 1)
         self.assertNotEqual(p.returncode, 0)
         self.assertIn("maxdepht", p.stdout + p.stderr)
 

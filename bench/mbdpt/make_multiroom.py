@@ -63,32 +63,28 @@ w('Film "image" "integer xresolution" [160] "integer yresolution" [120] "string 
 w("LookAt 0.4 4.0 5.0  4 3.4 5.9  0 1 0")
 w('Camera "perspective" "float fov" [60]')
 w("WorldBegin")
-for f in range(NF):
+def walls(axis, f):
+    """The walls of floor f in the planes axis = const, a door opening cut out where DOORS says."""
     y0, y1 = f * H, (f + 1) * H
-    for i in range(NX + 1):            # walls x = const
-        x = i * W
-        for iz in range(NZ):
-            z0, z1 = iz * D, (iz + 1) * D
-            d = door_at("x", x, iz, f)
+    size, other, n_planes, n_cells = (W, D, NX, NZ) if axis == "x" else (D, W, NZ, NX)
+    draw = wall_x if axis == "x" else wall_z
+    for i in range(n_planes + 1):
+        c = i * size
+        for cell in range(n_cells):
+            a0, a1 = cell * other, (cell + 1) * other
+            d = door_at(axis, c, cell, f)
             if not d:
-                wall_x(x, z0, z1, y0, y1)
+                draw(c, a0, a1, y0, y1)
                 continue
             lo, hi = d[4], d[5]
-            wall_x(x, z0, lo, y0, y1)
-            wall_x(x, hi, z1, y0, y1)
-            wall_x(x, lo, hi, y0 + 2.0, y1)
-    for k in range(NZ + 1):            # walls z = const
-        z = k * D
-        for ix in range(NX):
-            x0, x1 = ix * W, (ix + 1) * W
-            d = door_at("z", z, ix, f)
-            if not d:
-                wall_z(z, x0, x1, y0, y1)
-                continue
-            lo, hi = d[4], d[5]
-            wall_z(z, x0, lo, y0, y1)
-            wall_z(z, hi, x1, y0, y1)
-            wall_z(z, lo, hi, y0 + 2.0, y1)
+            draw(c, a0, lo, y0, y1)
+            draw(c, hi, a1, y0, y1)
+            draw(c, lo, hi, y0 + 2.0, y1)
+
+
+for f in range(NF):
+    walls("x", f)
+    walls("z", f)
 for lv in range(NF + 1):               # slabs: floor of the storey above, ceiling of the one below
     y = lv * H
     for ix in range(NX):

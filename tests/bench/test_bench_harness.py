@@ -138,12 +138,15 @@ class Overhead(unittest.TestCase):
                           "--scenes", bu.TINY, "--refdir", self.tmp, "--out", out,
                           "--nthreads", 2, "--quiet", tmp=self.tmp)
 
-    def test_equal_spp_timing(self):
-        out = os.path.join(self.tmp, "out")
-        p = self.overhead("path:path", out, 2)
+    def overhead_rows(self, pair, out, seeds):
+        p = self.overhead(pair, out, seeds)
         self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
         with open(os.path.join(out, "overhead.csv"), newline="") as f:
-            rows = list(csv.DictReader(f))
+            return list(csv.DictReader(f))
+
+    def test_equal_spp_timing(self):
+        out = os.path.join(self.tmp, "out")
+        rows = self.overhead_rows("path:path", out, 2)
         self.assertEqual(len(rows), 1)
         r = rows[0]
         self.assertEqual((r["gradient"], r["primal"], r["spp"], r["runs"]),
@@ -159,10 +162,7 @@ class Overhead(unittest.TestCase):
     def test_pair_member_with_parameters(self):
         # 'NAME[P=V]' reaches gradus as --param P=V (a misspelt one would fail the render).
         out = os.path.join(self.tmp, "out")
-        p = self.overhead("path[maxdepth=2]:path", out, 1)
-        self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
-        with open(os.path.join(out, "overhead.csv"), newline="") as f:
-            rows = list(csv.DictReader(f))
+        rows = self.overhead_rows("path[maxdepth=2]:path", out, 1)
         self.assertEqual(rows[0]["gradient"], "path[maxdepth=2]")
         p = self.overhead("path[maxdepht=2]:path", out + "2", 1)
         self.assertNotEqual(p.returncode, 0)

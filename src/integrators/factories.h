@@ -23,6 +23,8 @@ std::unique_ptr<Integrator> CreateGVCMIntegrator(const EntityDesc &desc);
 std::vector<ParamInfo> GVCMParameters();
 std::unique_ptr<Integrator> CreateMLTIntegrator(const EntityDesc &desc);
 std::vector<ParamInfo> MLTParameters();
+std::unique_ptr<Integrator> CreatePMLTIntegrator(const EntityDesc &desc);
+std::vector<ParamInfo> PMLTParameters();
 std::unique_ptr<Integrator> CreateGMLTIntegrator(const EntityDesc &desc);
 std::vector<ParamInfo> GMLTParameters();
 

@@ -35,6 +35,10 @@ const std::vector<IntegratorInfo> &IntegratorRegistry() {
         {"mlt", "multiplexed primary-sample-space Metropolis light transport (pbrt-v3)", CreateMLTIntegrator,
          MLTParameters},
 #endif
+#ifdef GRADUS_HAS_PMLT
+        {"pmlt", "path-space Metropolis light transport (Veach and Guibas 1997)", CreatePMLTIntegrator,
+         PMLTParameters},
+#endif
 #ifdef GRADUS_HAS_GMLT
         {"gmlt", "gradient-domain Metropolis light transport", CreateGMLTIntegrator, GMLTParameters},
 #endif

@@ -83,22 +83,11 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
         }
         ++nVerts;
         PathVertex &v = path[n];
-        v = PathVertex();
-        v.type = VertexType::Surface;
-        v.material = isect.material;
-        v.p = isect.p;
-        v.ng = isect.n;
-        v.wo = isect.wo;
-        v.geomId = isect.geomId;
-        v.primId = isect.primId;
-        const GeometryRecord &g = scene.geometry[isect.geomId];
-        if (g.mesh) Barycentrics(*g.mesh, isect.primId, isect.p, &v.b1, &v.b2);
+        BSDF bsdf = isect.material->getBSDF(isect, arena, mode);
+        MakeSurfaceVertex(ctx, isect, bsdf, &v);
         v.setThroughput(beta);
         v.pdfFwd = ConvertDensity(pdfFwd, prev, v);
-        BSDF bsdf = isect.material->getBSDF(isect, arena, mode);
         bsdfs[n] = bsdf;
-        v.ns = bsdf ? bsdf.ns() : isect.shading.n;
-        if (bsdf) v.setRoughnessClass(bsdf.roughnessClass(0.001));
         ++n;
         if (DebugTracing()) {
             const Spectrum tb = v.throughput();
@@ -143,6 +132,22 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
 }
 
 }  // namespace
+
+void MakeSurfaceVertex(const BidirContext &ctx, const SurfaceInteraction &isect, const BSDF &bsdf, PathVertex *pv) {
+    PathVertex &v = *pv;
+    v = PathVertex();
+    v.type = VertexType::Surface;
+    v.material = isect.material;
+    v.p = isect.p;
+    v.ng = isect.n;
+    v.wo = isect.wo;
+    v.geomId = isect.geomId;
+    v.primId = isect.primId;
+    const GeometryRecord &g = ctx.scene->geometry[isect.geomId];
+    if (g.mesh) Barycentrics(*g.mesh, isect.primId, isect.p, &v.b1, &v.b2);
+    v.ns = bsdf ? bsdf.ns() : isect.shading.n;
+    if (bsdf) v.setRoughnessClass(bsdf.roughnessClass(0.001));
+}
 
 Interaction AsInteraction(const PathVertex &v) {
     // Light and camera vertices off a surface get no ray offset (zero normal).

@@ -122,6 +122,9 @@ bool IsConnectible(const PathVertex &v, const BSDF *bsdf);
 // A vertex at which a camera and a light subpath can be merged (VCM): a surface
 // with a non-specular BSDF component (bsdf must be given).
 bool IsMergeable(const PathVertex &v, const BSDF *bsdf);
+// A surface vertex of an intersection and its BSDF (what the random walks
+// store; throughput and pdfs left zero).
+void MakeSurfaceVertex(const BidirContext &ctx, const SurfaceInteraction &isect, const BSDF &bsdf, PathVertex *v);
 // The vertex as an interaction (no ray offset off surfaces).
 Interaction AsInteraction(const PathVertex &v);
 // Solid-angle density at `from` towards `to` -> area density at `to` (Veach 1997,

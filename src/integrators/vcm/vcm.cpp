@@ -9,6 +9,7 @@
 #include "core/error.h"
 #include "core/stats.h"
 #include "integrators/factories.h"
+#include "samplers/rng_sampler.h"
 
 namespace gradus {
 
@@ -36,23 +37,6 @@ ParamTable<VCMSettings> Table() {
               "pbrt-v3 sppm: accepted; intermediate images are not written");
     return t;
 }
-
-// Draws from a per-item RNG through the Sampler interface (light subpaths).
-class RNGSampler final : public Sampler {
-  public:
-    explicit RNGSampler(RNG &rng) : Sampler(1, 0), rng_(rng) {}
-    void startPixelSample(Point2i, int64_t, int) override {}
-    Float get1D() override { return std::min<Float>(rng_.uniform(), OneMinusEpsilon); }
-    Point2 get2D() override {
-        Float a = get1D();
-        return Point2(a, get1D());
-    }
-    std::unique_ptr<Sampler> clone() const override { GRADUS_CHECK(false); return nullptr; }
-    std::string name() const override { return "rng"; }
-
-  private:
-    RNG &rng_;
-};
 
 Float Remap(Float f) { return f != 0 ? f : Float(1); }
 

@@ -1,0 +1,457 @@
+#include "integrators/pmlt/mutations.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "lights/light.h"
+
+namespace gradus::pmlt {
+
+namespace {
+
+Vec3 Dir(const PathVertex &from, const PathVertex &to) { return Normalize(to.p - from.p); }
+
+// Traces from `from` along dir and makes the vertex hit (an infinite-light
+// vertex for an escaped ray when allowed and the scene has infinite lights).
+bool Trace(const BidirContext &ctx, const PathVertex &from, const Vec3 &dir, Arena &arena, bool allowInfinite,
+           PathVertex *v, BSDF *b) {
+    Ray ray = AsInteraction(from).spawnRay(dir);
+    SurfaceInteraction isect;
+    const Scene::SurfaceHit h = ctx.scene->intersectSurface(&ray, &isect);
+    if (h == Scene::SurfaceHit::Stuck) return false;
+    if (h == Scene::SurfaceHit::Miss) {
+        if (!allowInfinite || ctx.scene->infiniteLights.empty()) return false;
+        *v = PathVertex();
+        v->type = VertexType::Light;
+        v->flags = VERTEX_INFINITE;
+        v->light = nullptr;
+        v->p = from.p + dir;
+        v->ng = -dir;
+        v->wo = -dir;
+        *b = BSDF();
+        return true;
+    }
+    const BSDF bsdf = isect.material->getBSDF(isect, arena, TransportMode::Radiance);
+    MakeSurfaceVertex(ctx, isect, bsdf, v);
+    *b = bsdf;
+    return true;
+}
+
+// Samples a scattering direction at v (arrived at from wo); marks v specular
+// when a specular lobe was chosen.
+bool Scatter(PathVertex *v, const BSDF &b, const Vec3 &wo, TransportMode mode, Sampler &u, Vec3 *wi) {
+    if (!b) return false;
+    const Float uc = u.get1D();
+    const Point2 u2 = u.get2D();
+    BSDFSample bs;
+    if (!b.sample(wo, uc, u2, mode, &bs) || !bs.valid()) return false;
+    v->flags = uint8_t(bs.isSpecular() ? (v->flags | VERTEX_DELTA) : (v->flags & ~VERTEX_DELTA));
+    *wi = bs.wi;
+    return true;
+}
+
+// Follows the specular lobe (reflection or transmission) that x took at its
+// vertex j, at the new vertex v arrived at from wo.
+bool FollowSpecular(const Path &x, int j, PathVertex *v, const BSDF &b, const Vec3 &wo, TransportMode mode,
+                    Vec3 *wi) {
+    const PathVertex &xj = x.v[size_t(j)];
+    const Vec3 ng = xj.ng;
+    const bool transmit = Dot(Dir(xj, x.v[size_t(j - 1)]), ng) * Dot(Dir(xj, x.v[size_t(j + 1)]), ng) < 0;
+    BSDFSample bs;
+    if (!b || !SampleSpecularLobe(b, wo, transmit, mode, &bs)) return false;
+    v->flags |= VERTEX_DELTA;
+    *wi = bs.wi;
+    return true;
+}
+
+// A film offset (density ~ 1/r on [r1, r2], uniform angle; symmetric).
+Point2 PerturbFilm(Point2 p, Float r1, Float r2, Sampler &u) {
+    const Float r = r2 * std::exp(-std::log(r2 / r1) * u.get1D());
+    const Float phi = 2 * Pi * u.get1D();
+    return Point2(p.x + r * std::cos(phi), p.y + r * std::sin(phi));
+}
+
+// A direction at angle theta (density ~ 1/theta on [t1, t2]) from w, uniform
+// azimuth: a density per solid angle that depends on the angle only (symmetric).
+Vec3 PerturbDirection(const Vec3 &w, Float t1, Float t2, Sampler &u) {
+    const Float theta = t2 * std::exp(-std::log(t2 / t1) * u.get1D());
+    const Float phi = 2 * Pi * u.get1D();
+    Vec3 s, t;
+    CoordinateSystem(w, &s, &t);
+    const Float st = std::sin(theta);
+    return Normalize(s * (st * std::cos(phi)) + t * (st * std::sin(phi)) + w * std::cos(theta));
+}
+
+bool Visible(const BidirContext &ctx, const PathVertex &a, const PathVertex &b) {
+    return EdgeConnectible(ctx, a, b) && ctx.scene->unoccluded(AsInteraction(a), AsInteraction(b));
+}
+
+// Index into [0, n) from a uniform number.
+int Pick(Float u, int n) { return std::min(int(u * Float(n)), n - 1); }
+
+Float DeleteWeight(int nd) { return nd == 0 ? 0.25 : nd == 1 ? 0.5 : std::ldexp(1.0, -(nd + 1)); }
+
+Float AddWeight(int delta) {
+    const int d = std::abs(delta);
+    return d == 0 ? 0.5 : d == 1 ? 0.15 : d == 2 ? 0.05 : 0.02 * std::ldexp(1.0, -(d - 3));
+}
+
+}  // namespace
+
+const char *MutationName(MutationType t) {
+    switch (t) {
+    case MutationType::Bidirectional: return "bidirectional";
+    case MutationType::Lens: return "lens";
+    case MutationType::Caustic: return "caustic";
+    case MutationType::MultiChain: return "multichain";
+    }
+    return "?";
+}
+
+void BuildBSDFs(const BidirContext &ctx, const Path &x, Arena &arena, std::vector<BSDF> *bsdf) {
+    bsdf->resize(x.v.size());
+    for (size_t i = 0; i < x.v.size(); ++i) (*bsdf)[i] = RebuildBSDF(ctx, x.v[i], TransportMode::Radiance, arena);
+}
+
+Mutator::Mutator(const BidirContext &ctx, const FilmDomain &film, const MutationSettings &s)
+    : ctx_(ctx), film_(film), set_(s) {
+    if (set_.lensR2 <= 0) set_.lensR2 = Float(0.1) * Float(std::max(film.pixels.width(), film.pixels.height()));
+    set_.lensR2 = std::max(set_.lensR2, set_.lensR1 * Float(1.0001));
+}
+
+ProposalResult Mutator::propose(MutationType type, const State &x, Sampler &u, Arena &arena, State *y,
+                                Float *accept) const {
+    *accept = 0;
+    switch (type) {
+    case MutationType::Bidirectional: return bidirectional(x, u, arena, y, accept);
+    case MutationType::Lens: return lens(x, false, u, arena, y, accept);
+    case MutationType::MultiChain: return lens(x, true, u, arena, y, accept);
+    case MutationType::Caustic: return caustic(x, u, arena, y, accept);
+    }
+    return ProposalResult::NotApplicable;
+}
+
+// ---------------------------------------------------------------- bidirectional mutation
+// Deleting [a, a + nd) keeps a prefix of a vertices and a suffix of n - a - nd.
+// A kept part is never the lone lens or the lone emitter (a new direction from
+// a fixed lens point or emitter point would need densities the camera and light
+// interfaces do not offer); inserting (nd = 0) or joining the kept parts
+// (na = 0) needs both parts to end on surfaces. The rules depend on (n, nd, a,
+// na) only and hold for the reverse move with (n', na, a, nd).
+bool Mutator::allowedPosition(int n, int nd, int a) const {
+    const int suffix = n - a - nd;
+    if (a < 0 || suffix < 0 || a == 1 || suffix == 1) return false;
+    if (nd == 0) return a >= 2 && suffix >= 2;
+    return true;
+}
+
+int Mutator::positionCount(int n, int nd) const {
+    int c = 0;
+    for (int a = 0; a + nd <= n; ++a) c += allowedPosition(n, nd, a);
+    return c;
+}
+
+Float Mutator::deletionProbability(int n, int nd) const {
+    if (positionCount(n, nd) == 0) return 0;
+    Float sum = 0;
+    for (int k = 0; k <= n; ++k)
+        if (positionCount(n, k) > 0) sum += DeleteWeight(k);
+    return DeleteWeight(nd) / sum;
+}
+
+bool Mutator::allowedAddition(int n, int nd, int a, int na) const {
+    const int np = n - nd + na, suffix = n - a - nd;
+    if (na < 0 || np < 2 || np > set_.maxDepth + 2) return false;
+    if (nd == 0 && na == 0) return false;
+    if (na == 0) return a >= 2 && suffix >= 2;
+    return true;
+}
+
+Float Mutator::additionProbability(int n, int nd, int a, int na) const {
+    if (!allowedAddition(n, nd, a, na)) return 0;
+    Float sum = 0;
+    for (int k = 0; k <= set_.maxDepth + 2; ++k)
+        if (allowedAddition(n, nd, a, k)) sum += AddWeight(k - nd);
+    return AddWeight(na - nd) / sum;
+}
+
+// T of the move that deleted the vertices the state's path holds at [a, a + na)
+// (its `na` new vertices) from a path of n vertices with nd there: Veach 1997,
+// Eq. 11.10, P_d P_pos P_a times the split-averaged density of those vertices.
+Float Mutator::bidirDensity(const State &s, int a, int nd, int na, int n) const {
+    const Float pd = deletionProbability(n, nd);
+    const int positions = positionCount(n, nd);
+    const Float pa = additionProbability(n, nd, a, na);
+    if (pd == 0 || positions == 0 || pa == 0 || !allowedPosition(n, nd, a)) return 0;
+    const int tmin = a == 0 ? 1 : 0;  // without a kept prefix the camera side samples the lens
+    double sum = 0;
+    for (int tp = tmin; tp <= na; ++tp) sum += s.e.splitDensity(s.x, ctx_, a + tp, a, a + na);
+    return Float(double(pd) / positions * pa * sum / double(na + 1 - tmin));
+}
+
+ProposalResult Mutator::bidirectional(const State &xs, Sampler &u, Arena &arena, State *ys, Float *accept) const {
+    const Path &x = xs.x;
+    const int n = x.size();
+    // Deleted count, position, added count, split (Veach 1997, Sec. 11.4.2).
+    int nd = 0;
+    {
+        Float r = u.get1D();
+        for (nd = 0; nd < n; ++nd) {
+            r -= deletionProbability(n, nd);
+            if (r < 0) break;
+        }
+        while (nd > 0 && positionCount(n, nd) == 0) --nd;
+    }
+    const int positions = positionCount(n, nd);
+    if (positions == 0) return ProposalResult::NotApplicable;
+    int a = -1;
+    for (int k = Pick(u.get1D(), positions), c = 0; a < n; ) {
+        ++a;
+        if (allowedPosition(n, nd, a) && c++ == k) break;
+    }
+    int na = -1;
+    {
+        Float r = u.get1D();
+        int last = -1;
+        for (int k = 0; k <= set_.maxDepth + 2; ++k) {
+            const Float p = additionProbability(n, nd, a, k);
+            if (p == 0) continue;
+            last = k;
+            r -= p;
+            if (r < 0) {
+                na = k;
+                break;
+            }
+        }
+        if (na < 0) na = last;
+    }
+    if (na < 0) return ProposalResult::NotApplicable;
+    const int tmin = a == 0 ? 1 : 0;
+    const int tp = tmin + Pick(u.get1D(), na + 1 - tmin), sp = na - tp;
+    const int suffixStart = a + nd, suffixLen = n - suffixStart;
+
+    Path &y = ys->x;
+    std::vector<BSDF> &yb = ys->bsdf;
+    y.v.assign(x.v.begin(), x.v.begin() + a);
+    yb.assign(xs.bsdf.begin(), xs.bsdf.begin() + a);
+    const bool endsHere = suffixLen == 0 && sp == 0;  // the camera side must end on an emitter
+    // Camera side: tp new vertices.
+    if (tp > 0) {
+        Vec3 dir;
+        if (a == 0) {
+            CameraSample cs;
+            const Point2 uf = u.get2D();
+            cs.pFilm = Point2(film_.pixels.pMin.x + uf.x * film_.pixels.width(),
+                              film_.pixels.pMin.y + uf.y * film_.pixels.height());
+            cs.pLens = u.get2D();
+            Ray ray;
+            if (ctx_.camera->generateRay(cs, &ray) == 0) return ProposalResult::Zero;
+            PathVertex c;
+            c.type = VertexType::Camera;
+            c.p = ray.o;
+            c.ng = c.ns = ctx_.camera->lensNormal();
+            y.v.push_back(c);
+            yb.push_back(BSDF());
+            dir = Normalize(ray.d);
+        } else {
+            PathVertex &end = y.v.back();
+            if (!Scatter(&end, yb.back(), Dir(end, y.v[y.v.size() - 2]), TransportMode::Radiance, u, &dir))
+                return ProposalResult::Zero;
+        }
+        while (int(y.v.size()) < a + tp) {
+            PathVertex v;
+            BSDF b;
+            const bool last = int(y.v.size()) + 1 == a + tp;
+            if (!Trace(ctx_, y.v.back(), dir, arena, last && endsHere, &v, &b)) return ProposalResult::Zero;
+            y.v.push_back(v);
+            yb.push_back(b);
+            if (!last && !Scatter(&y.v.back(), b, -dir, TransportMode::Radiance, u, &dir))
+                return ProposalResult::Zero;
+        }
+    }
+    // Light side: sp new vertices from the suffix (or from a light), in light order.
+    std::vector<PathVertex> lv;
+    std::vector<BSDF> lb;
+    std::vector<PathVertex> suffix(x.v.begin() + suffixStart, x.v.end());
+    if (sp > 0) {
+        Vec3 dir;
+        if (suffixLen == 0) {
+            Float pmf;
+            const Light *light = ctx_.lightSampler->sample(u.get1D(), &pmf);
+            const Point2 u1 = u.get2D(), u2 = u.get2D();
+            if (!light || pmf == 0) return ProposalResult::Zero;
+            LightLeSample les;
+            if (!light->sampleLe(u1, u2, &les) || les.pdfPos == 0 || les.pdfDir == 0 || les.L.isBlack())
+                return ProposalResult::Zero;
+            PathVertex e;
+            e.type = VertexType::Light;
+            e.light = light;
+            if (IsDeltaLight(light->flags)) e.flags |= VERTEX_DELTA_LIGHT;
+            // Infinite and distant lights: a vertex on the scene's bounding disk (bidir.cpp).
+            if (light->flags & (LIGHT_INFINITE | LIGHT_DELTA_DIRECTION)) e.flags |= VERTEX_INFINITE;
+            e.p = les.ray.o;
+            e.ng = e.ns = les.nLight;
+            lv.push_back(e);
+            lb.push_back(BSDF());
+            dir = Normalize(les.ray.d);
+        } else {
+            if (!Scatter(&suffix[0], xs.bsdf[size_t(suffixStart)], Dir(suffix[0], suffix[1]), TransportMode::Importance,
+                         u, &dir))
+                return ProposalResult::Zero;
+        }
+        while (int(lv.size()) < sp) {
+            const PathVertex &src = lv.empty() ? suffix[0] : lv.back();
+            PathVertex v;
+            BSDF b;
+            if (!Trace(ctx_, src, dir, arena, false, &v, &b)) return ProposalResult::Zero;
+            lv.push_back(v);
+            lb.push_back(b);
+            if (int(lv.size()) < sp && !Scatter(&lv.back(), b, -dir, TransportMode::Importance, u, &dir))
+                return ProposalResult::Zero;
+        }
+    }
+    for (int k = sp - 1; k >= 0; --k) {
+        y.v.push_back(lv[size_t(k)]);
+        yb.push_back(lb[size_t(k)]);
+    }
+    y.v.insert(y.v.end(), suffix.begin(), suffix.end());
+    yb.insert(yb.end(), xs.bsdf.begin() + suffixStart, xs.bsdf.end());
+    const int np = y.size(), t = a + tp;
+    if (np < 2 || np > set_.maxDepth + 2) return ProposalResult::Zero;
+    // The join: a shadow-tested edge between non-specular ends (or the camera
+    // side's hit on an emitter).
+    y.v.back().flags &= uint8_t(~VERTEX_DELTA);
+    if (t < np) {
+        y.v[size_t(t - 1)].flags &= uint8_t(~VERTEX_DELTA);
+        y.v[size_t(t)].flags &= uint8_t(~VERTEX_DELTA);
+        if (y.v[size_t(t - 1)].isInfiniteLight() || !Visible(ctx_, y.v[size_t(t - 1)], y.v[size_t(t)]))
+            return ProposalResult::Zero;
+    }
+    for (int i = 1; i < np; ++i) y.v[size_t(i)].wo = PackedVec3(Dir(y.v[size_t(i)], y.v[size_t(i - 1)]));
+    if (!Evaluate(ctx_, film_, y, yb.data(), &ys->e)) return ProposalResult::Zero;
+    // a = min(1, I(y) T(y -> x) / (I(x) T(x -> y))) (Veach 1997, Eqs. 11.5, 11.10).
+    const Float tFwd = bidirDensity(*ys, a, nd, na, n);
+    const Float tRev = bidirDensity(xs, a, na, nd, np);
+    if (!(tFwd > 0) || !(tRev > 0)) return ProposalResult::Zero;
+    const double ratio = double(ys->e.I) * tRev / (double(xs.e.I) * tFwd);
+    if (!std::isfinite(ratio) || !(ratio > 0)) return ProposalResult::Zero;
+    *accept = Float(std::min(1.0, ratio));
+    return ProposalResult::Proposed;
+}
+
+// ---------------------------------------------------------------- perturbations
+ProposalResult Mutator::lens(const State &xs, bool multiChain, Sampler &u, Arena &arena, State *ys,
+                             Float *accept) const {
+    const Path &x = xs.x;
+    const int n = x.size();
+    // c: the first non-specular vertex after the lens; m: the first
+    // non-specular vertex from c on whose successor is connectible (or the emitter).
+    int c = 1;
+    while (c < n - 1 && x.v[size_t(c)].delta()) ++c;
+    auto connectsAfter = [&](int k) { return k == n - 1 || !x.v[size_t(k + 1)].delta(); };
+    if (multiChain == connectsAfter(c)) return ProposalResult::NotApplicable;
+    int m = c;
+    while (!connectsAfter(m)) {
+        ++m;
+        while (m < n - 1 && x.v[size_t(m)].delta()) ++m;
+    }
+    const Point2 pFilm = PerturbFilm(xs.e.pRaster, set_.lensR1, set_.lensR2, u);
+    const Point2 uLens = u.get2D();
+    if (!film_.contains(pFilm)) return ProposalResult::Zero;
+    CameraSample cs;
+    cs.pFilm = pFilm;
+    cs.pLens = uLens;  // uniform lens points: a constant density, the same in both directions
+    Ray ray;
+    if (ctx_.camera->generateRay(cs, &ray) == 0) return ProposalResult::Zero;
+    Path &y = ys->x;
+    std::vector<BSDF> &yb = ys->bsdf;
+    y.v.clear();
+    yb.clear();
+    PathVertex cam;
+    cam.type = VertexType::Camera;
+    cam.p = ray.o;
+    cam.ng = cam.ns = ctx_.camera->lensNormal();
+    y.v.push_back(cam);
+    yb.push_back(BSDF());
+    Vec3 dir = Normalize(ray.d);
+    for (int j = 1; j <= m; ++j) {
+        PathVertex v;
+        BSDF b;
+        if (!Trace(ctx_, y.v.back(), dir, arena, j == n - 1, &v, &b)) return ProposalResult::Zero;
+        if (j < m) {
+            if (x.v[size_t(j)].delta()) {
+                if (!FollowSpecular(x, j, &v, b, -dir, TransportMode::Radiance, &dir)) return ProposalResult::Zero;
+            } else {
+                // Multi-chain: a new direction near the old path's outgoing one.
+                dir = PerturbDirection(Dir(x.v[size_t(j)], x.v[size_t(j + 1)]), set_.theta1, set_.theta2, u);
+            }
+        }
+        y.v.push_back(v);
+        yb.push_back(b);
+    }
+    if (m < n - 1 && !Visible(ctx_, y.v.back(), x.v[size_t(m + 1)])) return ProposalResult::Zero;
+    y.v.insert(y.v.end(), x.v.begin() + m + 1, x.v.end());
+    yb.insert(yb.end(), xs.bsdf.begin() + m + 1, xs.bsdf.end());
+    for (int i = 1; i < n; ++i) y.v[size_t(i)].wo = PackedVec3(Dir(y.v[size_t(i)], y.v[size_t(i - 1)]));
+    if (!Evaluate(ctx_, film_, y, yb.data(), &ys->e)) return ProposalResult::Zero;
+    // D: density of x_1 .. x_m given the perturbed film position and
+    // directions (mutations.h); the kernels are symmetric.
+    auto D = [&](const State &s) {
+        double d = s.e.pE[1];
+        for (int j = 2; j <= m; ++j)
+            d *= s.x.v[size_t(j - 1)].delta() ? s.e.pE[size_t(j)] / s.e.lobeE[size_t(j - 1)]
+                                              : ConvertDensity(1, s.x.v[size_t(j - 1)], s.x.v[size_t(j)]);
+        return d;
+    };
+    const double ratio = (double(ys->e.I) / D(*ys)) / (double(xs.e.I) / D(xs));
+    if (!std::isfinite(ratio) || !(ratio > 0)) return ProposalResult::Zero;
+    *accept = Float(std::min(1.0, ratio));
+    return ProposalResult::Proposed;
+}
+
+ProposalResult Mutator::caustic(const State &xs, Sampler &u, Arena &arena, State *ys, Float *accept) const {
+    const Path &x = xs.x;
+    const int n = x.size();
+    if (n < 4 || x.v[1].delta() || !x.v[2].delta()) return ProposalResult::NotApplicable;
+    int c = 2;
+    while (c < n - 1 && x.v[size_t(c)].delta()) ++c;
+    const PathVertex &xc = x.v[size_t(c)];
+    if (xc.isInfiniteLight()) return ProposalResult::NotApplicable;
+    Vec3 dir = PerturbDirection(Dir(xc, x.v[size_t(c - 1)]), set_.theta1, set_.theta2, u);
+    // Trace from x_c back through the chain (light order), then join x_1' to the lens.
+    std::vector<PathVertex> nv;
+    std::vector<BSDF> nb;
+    for (int j = c - 1; j >= 1; --j) {
+        PathVertex v;
+        BSDF b;
+        if (!Trace(ctx_, nv.empty() ? xc : nv.back(), dir, arena, false, &v, &b)) return ProposalResult::Zero;
+        if (j >= 2 && !FollowSpecular(x, j, &v, b, -dir, TransportMode::Importance, &dir))
+            return ProposalResult::Zero;
+        nv.push_back(v);
+        nb.push_back(b);
+    }
+    if (!Visible(ctx_, nv.back(), x.v[0])) return ProposalResult::Zero;
+    Path &y = ys->x;
+    std::vector<BSDF> &yb = ys->bsdf;
+    y.v.assign(1, x.v[0]);
+    yb.assign(1, BSDF());
+    for (int k = int(nv.size()) - 1; k >= 0; --k) {
+        y.v.push_back(nv[size_t(k)]);
+        yb.push_back(nb[size_t(k)]);
+    }
+    y.v.insert(y.v.end(), x.v.begin() + c, x.v.end());
+    yb.insert(yb.end(), xs.bsdf.begin() + c, xs.bsdf.end());
+    for (int i = 1; i < n; ++i) y.v[size_t(i)].wo = PackedVec3(Dir(y.v[size_t(i)], y.v[size_t(i - 1)]));
+    if (!Evaluate(ctx_, film_, y, yb.data(), &ys->e)) return ProposalResult::Zero;
+    auto D = [&](const State &s) {
+        double d = ConvertDensity(1, s.x.v[size_t(c)], s.x.v[size_t(c - 1)]);
+        for (int j = 1; j <= c - 2; ++j) d *= s.e.pL[size_t(j)] / s.e.lobeL[size_t(j + 1)];
+        return d;
+    };
+    const double ratio = (double(ys->e.I) / D(*ys)) / (double(xs.e.I) / D(xs));
+    if (!std::isfinite(ratio) || !(ratio > 0)) return ProposalResult::Zero;
+    *accept = Float(std::min(1.0, ratio));
+    return ProposalResult::Proposed;
+}
+
+}  // namespace gradus::pmlt

@@ -1,0 +1,88 @@
+// The mutations of path-space MLT (Veach and Guibas 1997; Veach 1997,
+// Sec. 11.4) on pmlt::Path, each with its acceptance probability
+// a(x -> y) = min(1, I(y) T(y -> x) / (I(x) T(x -> y))) (Veach 1997, Eq. 11.5).
+//
+// Bidirectional mutation (Sec. 11.4.2): deletes the vertices [a, a + n_d)
+// and inserts n_a new ones, t' sampled from the kept camera prefix and
+// s' = n_a - t' from the kept light suffix, joined by a shadow-tested edge.
+// T(x -> y) = P_d(n_d) P_pos(a) P_a(n_a) sum_{t'} P_split(t') p_{t'}(y), the sum
+// over every split that could have produced the new vertices (Eq. 11.10),
+// p_{t'} the product of their densities in that technique (path.h).
+//
+// Perturbations (Sec. 11.4.3-11.4.4) regenerate a run of vertices from a
+// perturbed film position or direction, tracing specular vertices with the
+// lobe (reflection or transmission) the old path took. The perturbation
+// kernels are symmetric (film offset of density ~ 1/r in [r1, r2]; direction
+// offset of density ~ 1/theta in [theta1, theta2], uniform azimuth), so
+// T(x -> y) / T(y -> x) = D(y) / D(x), D the density of the regenerated
+// vertices given the perturbed variables: the camera's density of x_1 per
+// film area, one solid angle -> area conversion per perturbed direction and
+// p_E / P_lobe (p_L / P_lobe) per vertex traced through a specular one.
+//   lens:       paths E S* D (D | L) ...: regenerate x_1 .. x_c, connect x_c - x_{c+1}
+//   multichain: lens, then at every D followed by S perturb the old outgoing
+//               direction and trace the next chain, up to a connectible pair
+//   caustic:    paths E D S+ (D | L) ...: perturb the direction at x_c towards
+//               x_{c-1}, trace the chain back to x_1, connect x_1 to the lens
+// A mutation applies to a path by its pattern of specular vertices alone,
+// which every perturbation keeps: the selection probabilities cancel.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "core/arena.h"
+#include "integrators/pmlt/path.h"
+#include "samplers/sampler.h"
+
+namespace gradus::pmlt {
+
+enum class MutationType { Bidirectional, Lens, Caustic, MultiChain };
+constexpr int kMutationTypes = 4;
+const char *MutationName(MutationType t);
+
+struct MutationSettings {
+    int maxDepth = 5;
+    Float lensR1 = 0.1, lensR2 = 0;      // film offsets in pixels (r2 0: 10% of the film's larger side)
+    Float theta1 = 1e-4, theta2 = 0.1;  // direction offsets in radians
+};
+
+// A state of a chain: the path, its evaluation and its BSDFs (which point
+// into an arena that outlives the state's use).
+struct State {
+    Path x;
+    PathEval e;
+    std::vector<BSDF> bsdf;
+};
+
+enum class ProposalResult { Proposed, NotApplicable, Zero };
+
+class Mutator {
+  public:
+    Mutator(const BidirContext &ctx, const FilmDomain &film, const MutationSettings &s);
+    // Proposes y from x; on Proposed, *accept = a(x -> y) > 0 and y holds the
+    // new path (its new BSDFs allocated in `arena`). Zero: the proposal
+    // carries nothing or its reverse move is impossible (a = 0).
+    ProposalResult propose(MutationType type, const State &x, Sampler &u, Arena &arena, State *y,
+                           Float *accept) const;
+
+    // Transition density pieces of the bidirectional mutation (tests).
+    Float deletionProbability(int n, int nd) const;
+    int positionCount(int n, int nd) const;
+    Float additionProbability(int n, int nd, int a, int na) const;
+
+  private:
+    ProposalResult bidirectional(const State &x, Sampler &u, Arena &arena, State *y, Float *accept) const;
+    ProposalResult lens(const State &x, bool multiChain, Sampler &u, Arena &arena, State *y, Float *accept) const;
+    ProposalResult caustic(const State &x, Sampler &u, Arena &arena, State *y, Float *accept) const;
+    bool allowedPosition(int n, int nd, int a) const;
+    bool allowedAddition(int n, int nd, int a, int na) const;
+    Float bidirDensity(const State &s, int a, int nd, int na, int n) const;
+
+    const BidirContext &ctx_;
+    FilmDomain film_;
+    MutationSettings set_;
+};
+
+// Builds the BSDFs of every vertex of x (Radiance mode) in arena.
+void BuildBSDFs(const BidirContext &ctx, const Path &x, Arena &arena, std::vector<BSDF> *bsdf);
+
+}  // namespace gradus::pmlt

@@ -1,0 +1,386 @@
+#include "integrators/pmlt/pmlt.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <sstream>
+
+#include "core/error.h"
+#include "integrators/factories.h"
+#include "samplers/rng_sampler.h"
+
+namespace gradus {
+
+using pmlt::MutationType;
+
+std::unique_ptr<Integrator> CreatePMLTIntegrator(const EntityDesc &d) { return std::make_unique<PMLTIntegrator>(d); }
+
+namespace {
+
+constexpr uint64_t kBootstrapTag = 0x706d6c7400000001ULL;
+constexpr uint64_t kChainTag = 0x706d6c7400000002ULL;
+constexpr uint64_t kMutationTag = 0x706d6c7400000003ULL;
+constexpr uint64_t kConnectTag = 0x706d6c7400000004ULL;
+
+ParamTable<PMLTSettings> Table() {
+    using S = PMLTSettings;
+    ParamTable<S> t("pmlt");
+    t.integer("maxdepth", &S::maxDepth, 5, "maximum path depth (edges - 1)", AtLeast(0));
+    t.integer("bootstrapsamples", &S::bootstrapSamples, 100000,
+              "bidirectional samples of the bootstrap (b and the chain starts)", AtLeast(1));
+    t.integer("chains", &S::chains, 1000, "Markov chains", AtLeast(1));
+    t.integer("mutationsperpixel", &S::mutationsPerPixel, 100, "mutations per pixel when --spp is not given",
+              AtLeast(1));
+    t.real("bidirectional", &S::bidirectional, 1, "selection weight of the bidirectional mutation",
+           Range{0, 1e9});
+    t.real("lens", &S::lens, 1, "selection weight of the lens perturbation", Range{0, 1e9});
+    t.real("caustic", &S::caustic, 1, "selection weight of the caustic perturbation", Range{0, 1e9});
+    t.real("multichain", &S::multiChain, 1, "selection weight of the multi-chain perturbation", Range{0, 1e9});
+    return t;
+}
+
+// Connection numbers of strategy (s, t) of bootstrap sample k (reproducible
+// when a chain starts there).
+ConnectSamples ConnectNumbers(uint64_t key, int64_t k, int s, int t) {
+    RNG rng(Hash(key, uint64_t(k), uint64_t(s), uint64_t(t)));
+    ConnectSamples cu;
+    cu.uLightSelect = Float(rng.uniform());
+    cu.uLight = Point2(Float(rng.uniform()), Float(rng.uniform()));
+    cu.uLens = Point2(Float(rng.uniform()), Float(rng.uniform()));
+    return cu;
+}
+
+}  // namespace
+
+std::vector<ParamInfo> PMLTParameters() { return Table().describe(); }
+
+PMLTIntegrator::PMLTIntegrator(const EntityDesc &desc) : set_(Table().parse(desc)), loc_(desc.loc) {
+    if (!(set_.bidirectional > 0))
+        throw Error(loc_, "pmlt: \"bidirectional\" must be positive (the perturbations alone are not ergodic)");
+}
+
+void PMLTIntegrator::preprocess(const Scene &scene, Film &film) {
+    lights_.clear();
+    for (const auto &l : scene.lights) lights_.push_back(l.get());
+    lightSampler_ = LightSampler(scene.lights, "power", loc_);
+    ctx_.init(scene, lightSampler_, MISHeuristic::Balance);
+    ctx_.rrDepth = -1;
+    film_.pixels = film.pixelBounds();
+    const Point2i full = film.fullResolution();
+    film_.scale = film_.pixels.area() > 0 ? Float(int64_t(full.x) * full.y) / Float(film_.pixels.area()) : 1;
+    mset_.maxDepth = set_.maxDepth;
+}
+
+struct PMLTIntegrator::Sample {
+    PathVertex *cv = nullptr, *lv = nullptr;
+    BSDF *cb = nullptr, *lb = nullptr;
+    int nC = 0, nL = 0;
+    Float w = 0;
+};
+
+bool PMLTIntegrator::makeSample(uint64_t key, int64_t k, Arena &arena, Sample *s) const {
+    RNG rng(Hash(key, uint64_t(k)));
+    RNGSampler u(rng);
+    const Point2 uf = u.get2D();
+    CameraSample cs;
+    cs.pFilm = Point2(film_.pixels.pMin.x + uf.x * film_.pixels.width(),
+                      film_.pixels.pMin.y + uf.y * film_.pixels.height());
+    cs.pLens = u.get2D();
+    Ray ray;
+    s->w = ctx_.camera->generateRay(cs, &ray);
+    if (s->w == 0) return false;
+    AllocSubpath(arena, set_.maxDepth + 2, &s->cv, &s->cb);
+    AllocSubpath(arena, set_.maxDepth + 1, &s->lv, &s->lb);
+    s->nC = GenerateCameraSubpath(ctx_, ray, u, arena, set_.maxDepth + 2, s->cv, s->cb);
+    s->nL = GenerateLightSubpath(ctx_, u, arena, set_.maxDepth + 1, s->lv, s->lb);
+    return true;
+}
+
+void PMLTIntegrator::bootstrap(PassContext &ctx) {
+    const int64_t N = set_.bootstrapSamples;
+    const uint64_t key = ctx.seed() ^ kBootstrapTag, ckey = ctx.seed() ^ kConnectTag;
+    constexpr int64_t kGrain = 256;
+    std::vector<std::vector<Candidate>> chunks(size_t((N + kGrain - 1) / kGrain));
+    std::atomic<uint64_t> bad{0};
+    ctx.parallelFor(N, kGrain, [&](int64_t i0, int64_t i1, Worker &wk) {
+        std::vector<Candidate> &out = chunks[size_t(i0 / kGrain)];
+        uint64_t nonFinite = 0;
+        for (int64_t k = i0; k < i1; ++k) {
+            Sample smp;
+            if (makeSample(key, k, wk.arena, &smp)) {
+                for (int t = 1; t <= smp.nC; ++t)
+                    for (int s = 0; s <= smp.nL; ++s) {
+                        const int depth = s + t - 2;
+                        if (depth < 0 || depth > set_.maxDepth || (s == 1 && t == 1)) continue;
+                        ConnectResult r;
+                        if (!ConnectBDPT(ctx_, SubpathView{smp.lv, smp.lb, s}, SubpathView{smp.cv, smp.cb, t}, s, t,
+                                         ConnectNumbers(ckey, k, s, t), &r))
+                            continue;
+                        if (r.splat && !film_.contains(r.pRaster)) continue;
+                        const Spectrum L = r.L * (r.splat ? film_.scale : smp.w);
+                        if (!L.isFinite()) {
+                            ++nonFinite;
+                            continue;
+                        }
+                        const double y = L.y();
+                        if (y > 0) out.push_back(Candidate{k, int8_t(s), int8_t(t), y});
+                    }
+            }
+            wk.arena.reset();
+        }
+        bad += nonFinite;
+    });
+    ctx.addNonFinite(bad);
+    candidates_.clear();
+    double sum = 0;
+    for (auto &c : chunks)
+        for (Candidate &cd : c) {
+            sum += cd.cdf;
+            cd.cdf = sum;
+            candidates_.push_back(cd);
+        }
+    nBootstrapSamples_ = N;
+    b_ = sum / double(N);
+    if (!(b_ > 0)) {
+        b_ = 0;
+        warning_ = "pmlt: none of the " + std::to_string(N) +
+                   " bootstrap samples carries light (b = 0); no chains run and the image is black "
+                   "(raise \"bootstrapsamples\" if the light is hard to reach)";
+        std::fprintf(stderr, "warning: %s\n", warning_.c_str());
+        candidates_.clear();
+        return;
+    }
+    // Chain starts in proportion to the candidates' luminance (pmlt.h).
+    chains_.assign(size_t(set_.chains), Chain());
+    const uint64_t chainKey = ctx.seed() ^ kChainTag;
+    std::atomic<int64_t> mismatch{0};
+    ctx.parallelFor(set_.chains, 8, [&](int64_t c0, int64_t c1, Worker &wk) {
+        for (int64_t c = c0; c < c1; ++c) {
+            RNG pick(Hash(chainKey, uint64_t(c)));
+            const double xr = pick.uniform() * sum;
+            size_t i = size_t(std::upper_bound(candidates_.begin(), candidates_.end(), xr,
+                                               [](double v, const Candidate &cd) { return v < cd.cdf; }) -
+                              candidates_.begin());
+            i = std::min(i, candidates_.size() - 1);
+            const Candidate &cd = candidates_[i];
+            Chain &ch = chains_[size_t(c)];
+            Sample smp;
+            bool ok = makeSample(key, cd.sample, wk.arena, &smp);
+            if (ok) {
+                const int s = cd.s, t = cd.t;
+                ok = pmlt::StrategyPath(ctx_, SubpathView{smp.lv, smp.lb, s}, SubpathView{smp.cv, smp.cb, t}, s, t,
+                                        ConnectNumbers(ckey, cd.sample, s, t), &ch.x);
+                if (ok) {
+                    pmlt::State st;
+                    st.x = ch.x;
+                    pmlt::BuildBSDFs(ctx_, st.x, wk.arena, &st.bsdf);
+                    ok = pmlt::Evaluate(ctx_, film_, st.x, st.bsdf.data(), &st.e);
+                    ch.F = st.e.F;
+                    ch.I = st.e.I;
+                    ch.pRaster = st.e.pRaster;
+                }
+            }
+            if (!ok) {
+                ch.I = 0;
+                ++mismatch;
+            }
+            wk.arena.reset();
+        }
+    });
+    nStartMismatch_ += mismatch.load();
+}
+
+void PMLTIntegrator::beginPass(PassContext &ctx) {
+    if (ctx.pass() == 0) bootstrap(ctx);
+}
+
+void PMLTIntegrator::runPass(PassContext &ctx) {
+    if (chains_.empty()) return;
+    const int64_t nChains = int64_t(chains_.size());
+    const int64_t M = int64_t(ctx.sampleCount()) * film_.pixels.area();
+    const int64_t first = mutationsIssued_;
+    mutationsIssued_ += M;
+    auto share = [nChains](int64_t x, int64_t i) { return x > i ? (x - i - 1) / nChains + 1 : 0; };
+    double wsum = 0, cdf[pmlt::kMutationTypes];
+    for (int k = 0; k < pmlt::kMutationTypes; ++k) cdf[k] = (wsum += set_.weight(MutationType(k)));
+    const double b = b_;
+    const pmlt::Mutator mut(ctx_, film_, mset_);
+    ctx.forEachItem(nChains, kMutationTag, [&](int64_t i, RNG &rng, SampleRecorder &rec, Worker &wk) {
+        const int64_t count = share(first + M, i) - share(first, i);
+        Chain &ch = chains_[size_t(i)];
+        if (count == 0 || !(ch.I > 0)) return;
+        thread_local Arena cur;
+        cur.reset();
+        pmlt::State xs, ys;
+        xs.x = ch.x;
+        pmlt::BuildBSDFs(ctx_, xs.x, cur, &xs.bsdf);
+        if (!pmlt::Evaluate(ctx_, film_, xs.x, xs.bsdf.data(), &xs.e)) return;
+        RNGSampler u(rng);
+        int64_t prop[pmlt::kMutationTypes] = {}, acc[pmlt::kMutationTypes] = {}, na[pmlt::kMutationTypes] = {},
+                zero[pmlt::kMutationTypes] = {}, accMicro[pmlt::kMutationTypes] = {};
+        for (int64_t k = 0; k < count; ++k) {
+            const double r = rng.uniform() * wsum;
+            int type = 0;
+            while (type + 1 < pmlt::kMutationTypes && r >= cdf[type]) ++type;
+            Float a = 0;
+            const pmlt::ProposalResult res = mut.propose(MutationType(type), xs, u, wk.arena, &ys, &a);
+            if (res == pmlt::ProposalResult::NotApplicable) ++na[type];
+            if (res == pmlt::ProposalResult::Zero) ++zero[type];
+            if (res == pmlt::ProposalResult::Proposed) {
+                ++prop[type];
+                accMicro[type] += int64_t(a * 1e6);
+            }
+            // Expected values (Veach 1997, Sec. 11.5): the proposal with weight a,
+            // the current state with 1 - a, each as b F / I.
+            if (a > 0) rec.splat(ys.e.pRaster, ys.e.F * Float(b * a / ys.e.I));
+            if (a < 1) rec.splat(xs.e.pRaster, xs.e.F * Float(b * (1 - a) / xs.e.I));
+            if (a > 0 && rng.uniform() < a) {
+                ++acc[type];
+                std::swap(xs, ys);
+                cur.reset();
+                pmlt::BuildBSDFs(ctx_, xs.x, cur, &xs.bsdf);
+            }
+            wk.arena.reset();
+        }
+        ch.x = xs.x;
+        ch.F = xs.e.F;
+        ch.I = xs.e.I;
+        ch.pRaster = xs.e.pRaster;
+        nMutations_ += count;
+        for (int k = 0; k < pmlt::kMutationTypes; ++k) {
+            AtomicCounts &c = typeCounts_[k];
+            c.proposed += prop[k];
+            c.accepted += acc[k];
+            c.notApplicable += na[k];
+            c.zero += zero[k];
+            c.acceptMicro += accMicro[k];
+        }
+    });
+}
+
+PMLTIntegrator::TypeCounts PMLTIntegrator::counts(MutationType t) const {
+    const AtomicCounts &c = typeCounts_[int(t)];
+    TypeCounts r;
+    r.proposed = c.proposed;
+    r.accepted = c.accepted;
+    r.notApplicable = c.notApplicable;
+    r.zero = c.zero;
+    r.acceptSum = double(c.acceptMicro.load()) * 1e-6;
+    return r;
+}
+
+void PMLTIntegrator::finish(const Film &, const RenderStats &, Image *out) {
+    const int64_t done = nMutations_.load();
+    rescale_ = 1;
+    if (done > 0 && done != mutationsIssued_) {
+        rescale_ = double(mutationsIssued_) / double(done);
+        const auto &names = out->channelNames();
+        for (int ch = 0; ch < out->numChannels(); ++ch) {
+            if (names[size_t(ch)] != "R" && names[size_t(ch)] != "G" && names[size_t(ch)] != "B") continue;
+            for (int y = 0; y < out->height(); ++y)
+                for (int x = 0; x < out->width(); ++x) out->at(x, y, ch) = float(out->at(x, y, ch) * rescale_);
+        }
+    }
+    Metadata &m = out->metadata;
+    m["pmlt_b"] = MetaValue::Double(b_);
+    m["pmlt_mutations"] = MetaValue::Int(done);
+    m["pmlt_chains"] = MetaValue::Int(int64_t(chains_.size()));
+    if (!warning_.empty()) m["pmlt_warning"] = warning_;
+}
+
+std::string PMLTIntegrator::statistics() const {
+    std::ostringstream o;
+    o << "Path-space MLT:\n";
+    o << "  bootstrap: " << nBootstrapSamples_ << " bidirectional samples, " << candidates_.size()
+      << " contributing strategies, b = " << b_ << "\n";
+    int64_t active = 0;
+    for (const Chain &c : chains_) active += c.I > 0;
+    o << "  chains: " << chains_.size() << " (" << active << " active); mutations: " << nMutations_ << "\n";
+    for (int k = 0; k < pmlt::kMutationTypes; ++k) {
+        const TypeCounts c = counts(MutationType(k));
+        const int64_t tried = c.proposed + c.zero + c.notApplicable;
+        o << "  " << pmlt::MutationName(MutationType(k)) << ": " << tried << " selected, " << c.notApplicable
+          << " not applicable, " << c.zero << " without contribution, " << c.proposed << " proposed, "
+          << c.accepted << " accepted";
+        if (c.proposed > 0) o << " (mean acceptance " << 100.0 * c.acceptSum / double(c.proposed) << "%)";
+        o << "\n";
+    }
+    if (nStartMismatch_ > 0) o << "  chain starts that could not be rebuilt: " << nStartMismatch_ << "\n";
+    if (rescale_ != 1) o << "  interrupted pass: image scaled by " << rescale_ << " (mutations issued / run)\n";
+    if (!warning_.empty()) o << "  " << warning_ << "\n";
+    return o.str();
+}
+
+// ---------------------------------------------------------------- checkpoints
+namespace {
+constexpr uint32_t kPMLTStateMagic = 0x544c4d50;  // "PMLT"
+template <typename T>
+void Put(std::string *s, const T &v) { s->append(reinterpret_cast<const char *>(&v), sizeof v); }
+template <typename T>
+bool Get(const std::string &s, size_t *at, T *v) {
+    if (s.size() - *at < sizeof(T)) return false;
+    std::memcpy(v, s.data() + *at, sizeof(T));
+    *at += sizeof(T);
+    return true;
+}
+}  // namespace
+
+std::string PMLTIntegrator::saveState() const {
+    std::string s;
+    Put(&s, kPMLTStateMagic);
+    Put(&s, b_);
+    Put(&s, mutationsIssued_);
+    Put(&s, int64_t(nMutations_.load()));
+    Put(&s, uint64_t(chains_.size()));
+    for (const Chain &c : chains_) {
+        Put(&s, c.F);
+        Put(&s, c.I);
+        Put(&s, c.pRaster);
+        Put(&s, uint32_t(c.x.v.size()));
+        for (PathVertex v : c.x.v) {
+            // Pointers are stored as the light's index (light vertices) and
+            // rebuilt from the geometry record (surface vertices).
+            int32_t light = -1;
+            if (v.type == VertexType::Light && v.light)
+                light = int32_t(std::find(lights_.begin(), lights_.end(), v.light) - lights_.begin());
+            v.material = nullptr;
+            Put(&s, v);
+            Put(&s, light);
+        }
+    }
+    return s;
+}
+
+void PMLTIntegrator::loadState(const std::string &s) {
+    size_t at = 0;
+    uint32_t magic = 0;
+    auto bad = [] { throw Error("checkpoint: pmlt state is inconsistent"); };
+    int64_t done = 0;
+    uint64_t n = 0;
+    if (!Get(s, &at, &magic) || magic != kPMLTStateMagic || !Get(s, &at, &b_) || !Get(s, &at, &mutationsIssued_) ||
+        !Get(s, &at, &done) || !Get(s, &at, &n) || n > uint64_t(set_.chains))
+        bad();
+    nMutations_ = done;
+    chains_.assign(size_t(n), Chain());
+    for (Chain &c : chains_) {
+        uint32_t nv = 0;
+        if (!Get(s, &at, &c.F) || !Get(s, &at, &c.I) || !Get(s, &at, &c.pRaster) || !Get(s, &at, &nv) ||
+            nv > uint32_t(set_.maxDepth) + 2)
+            bad();
+        c.x.v.resize(nv);
+        for (PathVertex &v : c.x.v) {
+            int32_t light = -1;
+            if (!Get(s, &at, &v) || !Get(s, &at, &light)) bad();
+            if (v.type == VertexType::Surface) {
+                if (v.geomId < 0 || size_t(v.geomId) >= ctx_.scene->geometry.size()) bad();
+                v.material = ctx_.scene->geometry[size_t(v.geomId)].material;
+            } else {
+                if (light >= int32_t(lights_.size())) bad();
+                v.light = light >= 0 ? lights_[size_t(light)] : nullptr;
+            }
+        }
+    }
+    if (at != s.size()) bad();
+}
+
+}  // namespace gradus

@@ -1,0 +1,118 @@
+// Path-space Metropolis light transport (Veach and Guibas 1997; Veach 1997,
+// Ch. 11): integrator "pmlt".
+//
+// A chain's state is a full path (pmlt/path.h) and its target function the
+// luminance of the path's measurement contribution, I(x) = Y(F(x)).
+//   1. Bootstrap (first pass): `bootstrapsamples` bidirectional samples (the
+//      bdpt estimator at uniform film positions over the pixel bounds, all
+//      strategies of depth <= maxdepth, balance heuristic). Each strategy's
+//      weighted contribution w_st C*_st is a candidate; b = (sum of their
+//      luminances) / samples estimates the integral of I (times the film's
+//      pixel-bounds factor, as in mlt.h).
+//   2. Chains start at candidates picked in proportion to their luminance:
+//      then E[b g(X_0)] is the integral of I g for any g (resampling the
+//      MIS-weighted samples), so there is no start-up bias.
+//   3. Mutations (pmlt/mutations.h) with selection weights `bidirectional`,
+//      `lens`, `caustic`, `multichain`; a mutation that does not apply to the
+//      path's pattern of specular vertices leaves the state (a rejected
+//      proposal). Each mutation splats the proposal with a and the current
+//      state with 1 - a (expected values), b F / I each; the film divides by
+//      the mutations per pixel (pass work and normalisation as mlt.h).
+// Parameters:
+//   integer maxdepth 5, bootstrapsamples 100000, chains 1000, mutationsperpixel 100
+//   float bidirectional 1, lens 1, caustic 1, multichain 1   relative selection weights
+// Splats are unfiltered (the pixel holding the raster point), as mlt's.
+#pragma once
+#include <atomic>
+#include <string>
+#include <vector>
+
+#include "integrators/integrator.h"
+#include "integrators/pmlt/mutations.h"
+#include "lights/light_sampler.h"
+
+namespace gradus {
+
+struct PMLTSettings {
+    int maxDepth;
+    int bootstrapSamples;
+    int chains;
+    int mutationsPerPixel;
+    // Selection weights (relative) by MutationType.
+    Float bidirectional, lens, caustic, multiChain;
+    Float weight(pmlt::MutationType t) const {
+        switch (t) {
+        case pmlt::MutationType::Bidirectional: return bidirectional;
+        case pmlt::MutationType::Lens: return lens;
+        case pmlt::MutationType::Caustic: return caustic;
+        case pmlt::MutationType::MultiChain: return multiChain;
+        }
+        return 0;
+    }
+};
+
+class PMLTIntegrator : public Integrator {
+  public:
+    explicit PMLTIntegrator(const EntityDesc &desc);
+    std::string name() const override { return "pmlt"; }
+    void preprocess(const Scene &scene, Film &film) override;
+    int defaultSamplesPerPixel() const override { return set_.mutationsPerPixel; }
+    void beginPass(PassContext &ctx) override;
+    void runPass(PassContext &ctx) override;
+    void finish(const Film &film, const RenderStats &stats, Image *out) override;
+    std::string statistics() const override;
+    std::string saveState() const override;
+    void loadState(const std::string &state) override;
+    bool independentPasses() const override { return false; }
+
+    const PMLTSettings &settings() const { return set_; }
+    double b() const { return b_; }
+    struct TypeCounts {
+        int64_t proposed = 0, accepted = 0, notApplicable = 0, zero = 0;
+        double acceptSum = 0;  // sum of acceptance probabilities
+    };
+    TypeCounts counts(pmlt::MutationType t) const;
+    int64_t startMismatches() const { return nStartMismatch_; }
+    const std::string &warning() const { return warning_; }
+
+  private:
+    struct Candidate {
+        int64_t sample;
+        int8_t s, t;
+        double cdf;
+    };
+    struct Chain {
+        pmlt::Path x;
+        Spectrum F;
+        Float I = 0;
+        Point2 pRaster;
+    };
+    void bootstrap(PassContext &ctx);
+    // Bidirectional sample k of the bootstrap (camera and light subpaths, in arena).
+    struct Sample;
+    bool makeSample(uint64_t key, int64_t k, Arena &arena, Sample *s) const;
+
+    PMLTSettings set_;
+    FileLoc loc_;
+    LightSampler lightSampler_;
+    BidirContext ctx_;
+    pmlt::FilmDomain film_;
+    pmlt::MutationSettings mset_;
+    std::vector<Candidate> candidates_;
+    double b_ = 0;
+    std::string warning_;
+    std::vector<Chain> chains_;
+    int64_t mutationsIssued_ = 0;
+    std::vector<const Light *> lights_;  // checkpoint indices of light vertices
+
+    struct AtomicCounts {
+        std::atomic<int64_t> proposed{0}, accepted{0}, notApplicable{0}, zero{0};
+        std::atomic<int64_t> acceptMicro{0};  // sum of acceptance probabilities x 1e6
+    };
+    AtomicCounts typeCounts_[pmlt::kMutationTypes];
+    std::atomic<int64_t> nMutations_{0}, nStartMismatch_{0};
+    int64_t nBootstrapSamples_ = 0;
+    double rescale_ = 1;
+};
+
+}  // namespace gradus

@@ -1,0 +1,57 @@
+// pmlt renders: parameters, statistics, the normalisation (every mutation
+// splats luminance b in all, so the image mean is b), chain starts rebuilt
+// from their bootstrap strategies, and a bootstrap without light.
+#include "integrators/pmlt/pmlt.h"
+#include "mlt/mlt_test_util.h"
+
+namespace gradus::pmlt_test {
+namespace {
+
+using mlt_test::BoxScene;
+using mlt_test::MeanLum;
+using mlt_test::Render;
+
+const PMLTIntegrator &P(const mlt_test::Rendered &r) { return dynamic_cast<const PMLTIntegrator &>(*r.integrator); }
+
+std::string Line(const std::string &extra = "") {
+    return "Integrator \"pmlt\" \"integer maxdepth\" [4] \"integer bootstrapsamples\" [4000] "
+           "\"integer chains\" [64] " + extra;
+}
+
+TEST(PMLTRender, ParametersStatisticsAndImageMeanIsB) {
+    mlt_test::Rendered r = Render(BoxScene(Line("\"integer mutationsperpixel\" [6] \"float caustic\" [0.5]")), 0, 3);
+    const PMLTIntegrator &p = P(r);
+    EXPECT_EQ(p.settings().maxDepth, 4);
+    EXPECT_EQ(p.settings().caustic, 0.5);
+    EXPECT_EQ(r.stats.spp, 6);
+    EXPECT_EQ(p.startMismatches(), 0) << "a chain start must rebuild its bootstrap strategy's path";
+    int64_t total = 0;
+    for (auto t : {pmlt::MutationType::Bidirectional, pmlt::MutationType::Lens}) {
+        const auto c = p.counts(t);
+        EXPECT_GT(c.accepted, 0) << pmlt::MutationName(t);
+        total += c.proposed + c.zero + c.notApplicable;
+    }
+    for (auto t : {pmlt::MutationType::Caustic, pmlt::MutationType::MultiChain})
+        total += p.counts(t).proposed + p.counts(t).zero + p.counts(t).notApplicable;
+    EXPECT_EQ(total, 6 * 144);
+    ASSERT_GT(p.b(), 0);
+    // Unfiltered splats of total luminance b per mutation, 6 x 144 mutations, film / (6 spp).
+    EXPECT_NEAR(MeanLum(r.image), p.b(), 1e-4 * p.b());
+    for (const char *want : {"bidirectional: ", "lens: ", "caustic: ", "multichain: ", "b = ", "chains: 64"})
+        EXPECT_NE(r.statistics.find(want), std::string::npos) << want << " in\n" << r.statistics;
+}
+
+// pbrt-v4 #77: a bootstrap that finds no light gives a black image and a message, not a crash.
+TEST(PMLTRender, SealedLightGivesBlackImageAndWarning) {
+    mlt_test::Rendered r = Render(BoxScene(Line(), 12, "sealed"), 2, 1);
+    EXPECT_EQ(P(r).b(), 0);
+    EXPECT_NE(P(r).warning().find("carries light"), std::string::npos);
+    EXPECT_EQ(MeanLum(r.image), 0);
+}
+
+TEST(PMLTRender, BidirectionalMutationIsRequired) {
+    EXPECT_THROW(Render(BoxScene(Line("\"float bidirectional\" [0]")), 1, 1), Error);
+}
+
+}  // namespace
+}  // namespace gradus::pmlt_test

@@ -19,8 +19,14 @@
 //      state with 1 - a (expected values), b F / I each; the film divides by
 //      the mutations per pixel (pass work and normalisation as mlt.h).
 // Parameters:
-//   integer maxdepth 5, bootstrapsamples 100000, chains 1000, mutationsperpixel 100
-//   float bidirectional 1, lens 1, caustic 1, multichain 1   relative selection weights
+//   integer maxdepth 5                 maximum path depth (edges - 1)
+//   integer bootstrapsamples 100000    bidirectional samples of the bootstrap
+//   integer chains 1000                Markov chains
+//   integer mutationsperpixel 100      mutations per pixel when --spp is not given
+//   float bidirectional 1              selection weights (relative) of the mutations;
+//   float lens 1                         the bidirectional mutation's must be positive
+//   float caustic 1
+//   float multichain 1
 // Splats are unfiltered (the pixel holding the raster point), as mlt's.
 #pragma once
 #include <atomic>

@@ -62,6 +62,17 @@ class PixelSampleIntegrator : public Integrator, public SampleEstimator {
     const Scene *scene_ = nullptr;
 };
 
+// Scales the main image's R, G, B channels (Metropolis integrators whose
+// interrupted last pass skipped chains: issued / performed mutations).
+inline void ScaleColorChannels(Image *out, double factor) {
+    const auto &names = out->channelNames();
+    for (int ch = 0; ch < out->numChannels(); ++ch) {
+        if (names[size_t(ch)] != "R" && names[size_t(ch)] != "G" && names[size_t(ch)] != "B") continue;
+        for (int y = 0; y < out->height(); ++y)
+            for (int x = 0; x < out->width(); ++x) out->at(x, y, ch) = float(out->at(x, y, ch) * factor);
+    }
+}
+
 using IntegratorFactory = std::function<std::unique_ptr<Integrator>(const EntityDesc &desc)>;
 
 struct IntegratorInfo {

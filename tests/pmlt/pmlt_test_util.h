@@ -52,10 +52,8 @@ struct BidirSample {
     int nC = 0, nL = 0;
     bool make(const SceneSetup &su, RNG &rng, Arena &arena) {
         RNGSampler u(rng);
-        const Point2 uf = u.get2D();
         CameraSample cs;
-        cs.pFilm = Point2(su.film.pixels.pMin.x + uf.x * su.film.pixels.width(),
-                          su.film.pixels.pMin.y + uf.y * su.film.pixels.height());
+        cs.pFilm = su.film.sample(u.get2D());
         cs.pLens = u.get2D();
         Ray ray;
         if (su.ctx.camera->generateRay(cs, &ray) == 0) return false;

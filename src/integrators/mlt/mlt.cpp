@@ -8,6 +8,7 @@
 
 #include "core/error.h"
 #include "integrators/factories.h"
+#include "render/state_bytes.h"
 
 namespace gradus {
 
@@ -244,36 +245,27 @@ void MLTIntegrator::bootstrap(PassContext &ctx) {
 
 namespace {
 constexpr uint32_t kMLTStateMagic = 0x544c4d32;  // "2MLT"
-template <typename T>
-void Put(std::string *s, const T &v) { s->append(reinterpret_cast<const char *>(&v), sizeof v); }
-template <typename T>
-bool Get(const std::string &s, size_t *at, T *v) {
-    if (s.size() - *at < sizeof(T)) return false;
-    std::memcpy(v, s.data() + *at, sizeof(T));
-    *at += sizeof(T);
-    return true;
-}
 }  // namespace
 
 std::string MLTIntegrator::saveState() const {
     std::string s;
-    Put(&s, kMLTStateMagic);
-    Put(&s, b_);
-    Put(&s, mutationsIssued_);
+    PutBytes(&s, kMLTStateMagic);
+    PutBytes(&s, b_);
+    PutBytes(&s, mutationsIssued_);
     for (const auto *c : {&nMutations_, &nSmall_, &nLarge_, &nSmallAccepted_, &nLargeAccepted_, &nZeroProposals_,
                           &nNonFinite_, &nStartMismatch_})
-        Put(&s, int64_t(c->load()));
-    Put(&s, nBootstrapNonZero_);
-    Put(&s, uint64_t(bDepth_.size()));
-    for (double v : bDepth_) Put(&s, v);
-    Put(&s, uint64_t(warning_.size()));
+        PutBytes(&s, int64_t(c->load()));
+    PutBytes(&s, nBootstrapNonZero_);
+    PutBytes(&s, uint64_t(bDepth_.size()));
+    for (double v : bDepth_) PutBytes(&s, v);
+    PutBytes(&s, uint64_t(warning_.size()));
     s += warning_;
-    Put(&s, uint64_t(chains_.size()));
+    PutBytes(&s, uint64_t(chains_.size()));
     for (const Chain &c : chains_) {
-        Put(&s, int32_t(c.depth));
-        Put(&s, c.L);
-        Put(&s, c.I);
-        Put(&s, c.pRaster);
+        PutBytes(&s, int32_t(c.depth));
+        PutBytes(&s, c.L);
+        PutBytes(&s, c.I);
+        PutBytes(&s, c.pRaster);
         c.u.save(&s);
     }
     return s;
@@ -283,30 +275,30 @@ void MLTIntegrator::loadState(const std::string &s) {
     size_t at = 0;
     uint32_t magic = 0;
     auto bad = [] { throw Error("checkpoint: mlt state is inconsistent"); };
-    if (!Get(s, &at, &magic) || magic != kMLTStateMagic) bad();
-    if (!Get(s, &at, &b_) || !Get(s, &at, &mutationsIssued_)) bad();
+    if (!GetBytes(s, &at, &magic) || magic != kMLTStateMagic) bad();
+    if (!GetBytes(s, &at, &b_) || !GetBytes(s, &at, &mutationsIssued_)) bad();
     for (auto *c : {&nMutations_, &nSmall_, &nLarge_, &nSmallAccepted_, &nLargeAccepted_, &nZeroProposals_,
                     &nNonFinite_, &nStartMismatch_}) {
         int64_t v;
-        if (!Get(s, &at, &v)) bad();
+        if (!GetBytes(s, &at, &v)) bad();
         c->store(v);
     }
     uint64_t n = 0;
-    if (!Get(s, &at, &nBootstrapNonZero_) || !Get(s, &at, &n) || n > uint64_t(set_.maxDepth) + 1) bad();
+    if (!GetBytes(s, &at, &nBootstrapNonZero_) || !GetBytes(s, &at, &n) || n > uint64_t(set_.maxDepth) + 1) bad();
     bDepth_.assign(size_t(n), 0.0);
     for (double &v : bDepth_)
-        if (!Get(s, &at, &v)) bad();
-    if (!Get(s, &at, &n) || n > s.size() - at) bad();
+        if (!GetBytes(s, &at, &v)) bad();
+    if (!GetBytes(s, &at, &n) || n > s.size() - at) bad();
     warning_ = s.substr(at, n);
     at += n;
-    if (!Get(s, &at, &n)) bad();
+    if (!GetBytes(s, &at, &n)) bad();
     if (n != uint64_t(set_.chains) && n != 0) bad();
     chains_.clear();
     chains_.reserve(n);
     for (uint64_t k = 0; k < n; ++k) {
         Chain c(PrimarySampler(set_.sigma, set_.largeStepProbability));
         int32_t depth;
-        if (!Get(s, &at, &depth) || !Get(s, &at, &c.L) || !Get(s, &at, &c.I) || !Get(s, &at, &c.pRaster) ||
+        if (!GetBytes(s, &at, &depth) || !GetBytes(s, &at, &c.L) || !GetBytes(s, &at, &c.I) || !GetBytes(s, &at, &c.pRaster) ||
             !c.u.load(s, &at))
             bad();
         c.depth = depth;
@@ -413,12 +405,7 @@ void MLTIntegrator::finish(const Film &, const RenderStats &, Image *out) {
     rescale_ = 1;
     if (done > 0 && done != mutationsIssued_) {
         rescale_ = double(mutationsIssued_) / double(done);
-        const auto &names = out->channelNames();
-        for (int ch = 0; ch < out->numChannels(); ++ch) {
-            if (names[size_t(ch)] != "R" && names[size_t(ch)] != "G" && names[size_t(ch)] != "B") continue;
-            for (int y = 0; y < out->height(); ++y)
-                for (int x = 0; x < out->width(); ++x) out->at(x, y, ch) = float(out->at(x, y, ch) * rescale_);
-        }
+        ScaleColorChannels(out, rescale_);
     }
     Metadata &m = out->metadata;
     m["mlt_b"] = MetaValue::Double(b_);

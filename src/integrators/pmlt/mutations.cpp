@@ -240,17 +240,11 @@ ProposalResult Mutator::bidirectional(const State &xs, Sampler &u, Arena &arena,
         Vec3 dir;
         if (a == 0) {
             CameraSample cs;
-            const Point2 uf = u.get2D();
-            cs.pFilm = Point2(film_.pixels.pMin.x + uf.x * film_.pixels.width(),
-                              film_.pixels.pMin.y + uf.y * film_.pixels.height());
+            cs.pFilm = film_.sample(u.get2D());
             cs.pLens = u.get2D();
             Ray ray;
             if (ctx_.camera->generateRay(cs, &ray) == 0) return ProposalResult::Zero;
-            PathVertex c;
-            c.type = VertexType::Camera;
-            c.p = ray.o;
-            c.ng = c.ns = ctx_.camera->lensNormal();
-            y.v.push_back(c);
+            y.v.push_back(LensVertex(ctx_, ray));
             yb.push_back(BSDF());
             dir = Normalize(ray.d);
         } else {
@@ -365,14 +359,8 @@ ProposalResult Mutator::lens(const State &xs, bool multiChain, Sampler &u, Arena
     if (ctx_.camera->generateRay(cs, &ray) == 0) return ProposalResult::Zero;
     Path &y = ys->x;
     std::vector<BSDF> &yb = ys->bsdf;
-    y.v.clear();
-    yb.clear();
-    PathVertex cam;
-    cam.type = VertexType::Camera;
-    cam.p = ray.o;
-    cam.ng = cam.ns = ctx_.camera->lensNormal();
-    y.v.push_back(cam);
-    yb.push_back(BSDF());
+    y.v.assign(1, LensVertex(ctx_, ray));
+    yb.assign(1, BSDF());
     Vec3 dir = Normalize(ray.d);
     for (int j = 1; j <= m; ++j) {
         PathVertex v;

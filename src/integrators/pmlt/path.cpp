@@ -155,6 +155,14 @@ bool Evaluate(const BidirContext &ctx, const FilmDomain &film, const Path &x, co
     return e->I > 0;
 }
 
+PathVertex LensVertex(const BidirContext &ctx, const Ray &ray) {
+    PathVertex c;
+    c.type = VertexType::Camera;
+    c.p = ray.o;
+    c.ng = c.ns = ctx.camera->lensNormal();
+    return c;
+}
+
 bool StrategyPath(const BidirContext &ctx, SubpathView light, SubpathView camera, int s, int t,
                   const ConnectSamples &cu, Path *x) {
     x->v.clear();

@@ -41,6 +41,9 @@ namespace gradus::pmlt {
 struct FilmDomain {
     Bounds2i pixels;     // the film's pixel bounds (crop window)
     Float scale = 1;     // full-film pixels / pixel-bounds pixels
+    Point2 sample(Point2 u) const {
+        return Point2(pixels.pMin.x + u.x * pixels.width(), pixels.pMin.y + u.y * pixels.height());
+    }
     bool contains(Point2 p) const {
         return p.x >= pixels.pMin.x && p.y >= pixels.pMin.y && p.x < pixels.pMax.x && p.y < pixels.pMax.y;
     }
@@ -82,6 +85,9 @@ bool Evaluate(const BidirContext &ctx, const FilmDomain &film, const Path &x, co
 // both ends of the edge (t-1, t) must be connectible (not scattering
 // specularly, not a delta-direction light) and the edge not degenerate.
 bool ValidSplit(const BidirContext &ctx, const Path &x, const PathEval &e, int t);
+
+// The lens vertex of a camera ray.
+PathVertex LensVertex(const BidirContext &ctx, const Ray &ray);
 
 // The full path of bidirectional strategy (s, t) of a light and a camera
 // subpath (what ConnectBDPT evaluates), the vertex the connection samples

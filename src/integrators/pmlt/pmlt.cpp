@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "integrators/factories.h"
+#include "render/state_bytes.h"
 #include "samplers/rng_sampler.h"
 
 namespace gradus {
@@ -81,10 +82,8 @@ struct PMLTIntegrator::Sample {
 bool PMLTIntegrator::makeSample(uint64_t key, int64_t k, Arena &arena, Sample *s) const {
     RNG rng(Hash(key, uint64_t(k)));
     RNGSampler u(rng);
-    const Point2 uf = u.get2D();
     CameraSample cs;
-    cs.pFilm = Point2(film_.pixels.pMin.x + uf.x * film_.pixels.width(),
-                      film_.pixels.pMin.y + uf.y * film_.pixels.height());
+    cs.pFilm = film_.sample(u.get2D());
     cs.pLens = u.get2D();
     Ray ray;
     s->w = ctx_.camera->generateRay(cs, &ray);
@@ -274,12 +273,7 @@ void PMLTIntegrator::finish(const Film &, const RenderStats &, Image *out) {
     rescale_ = 1;
     if (done > 0 && done != mutationsIssued_) {
         rescale_ = double(mutationsIssued_) / double(done);
-        const auto &names = out->channelNames();
-        for (int ch = 0; ch < out->numChannels(); ++ch) {
-            if (names[size_t(ch)] != "R" && names[size_t(ch)] != "G" && names[size_t(ch)] != "B") continue;
-            for (int y = 0; y < out->height(); ++y)
-                for (int x = 0; x < out->width(); ++x) out->at(x, y, ch) = float(out->at(x, y, ch) * rescale_);
-        }
+        ScaleColorChannels(out, rescale_);
     }
     Metadata &m = out->metadata;
     m["pmlt_b"] = MetaValue::Double(b_);
@@ -314,29 +308,20 @@ std::string PMLTIntegrator::statistics() const {
 // ---------------------------------------------------------------- checkpoints
 namespace {
 constexpr uint32_t kPMLTStateMagic = 0x544c4d50;  // "PMLT"
-template <typename T>
-void Put(std::string *s, const T &v) { s->append(reinterpret_cast<const char *>(&v), sizeof v); }
-template <typename T>
-bool Get(const std::string &s, size_t *at, T *v) {
-    if (s.size() - *at < sizeof(T)) return false;
-    std::memcpy(v, s.data() + *at, sizeof(T));
-    *at += sizeof(T);
-    return true;
-}
 }  // namespace
 
 std::string PMLTIntegrator::saveState() const {
     std::string s;
-    Put(&s, kPMLTStateMagic);
-    Put(&s, b_);
-    Put(&s, mutationsIssued_);
-    Put(&s, int64_t(nMutations_.load()));
-    Put(&s, uint64_t(chains_.size()));
+    PutBytes(&s, kPMLTStateMagic);
+    PutBytes(&s, b_);
+    PutBytes(&s, mutationsIssued_);
+    PutBytes(&s, int64_t(nMutations_.load()));
+    PutBytes(&s, uint64_t(chains_.size()));
     for (const Chain &c : chains_) {
-        Put(&s, c.F);
-        Put(&s, c.I);
-        Put(&s, c.pRaster);
-        Put(&s, uint32_t(c.x.v.size()));
+        PutBytes(&s, c.F);
+        PutBytes(&s, c.I);
+        PutBytes(&s, c.pRaster);
+        PutBytes(&s, uint32_t(c.x.v.size()));
         for (PathVertex v : c.x.v) {
             // Pointers are stored as the light's index (light vertices) and
             // rebuilt from the geometry record (surface vertices).
@@ -344,8 +329,8 @@ std::string PMLTIntegrator::saveState() const {
             if (v.type == VertexType::Light && v.light)
                 light = int32_t(std::find(lights_.begin(), lights_.end(), v.light) - lights_.begin());
             v.material = nullptr;
-            Put(&s, v);
-            Put(&s, light);
+            PutBytes(&s, v);
+            PutBytes(&s, light);
         }
     }
     return s;
@@ -357,20 +342,20 @@ void PMLTIntegrator::loadState(const std::string &s) {
     auto bad = [] { throw Error("checkpoint: pmlt state is inconsistent"); };
     int64_t done = 0;
     uint64_t n = 0;
-    if (!Get(s, &at, &magic) || magic != kPMLTStateMagic || !Get(s, &at, &b_) || !Get(s, &at, &mutationsIssued_) ||
-        !Get(s, &at, &done) || !Get(s, &at, &n) || n > uint64_t(set_.chains))
+    if (!GetBytes(s, &at, &magic) || magic != kPMLTStateMagic || !GetBytes(s, &at, &b_) || !GetBytes(s, &at, &mutationsIssued_) ||
+        !GetBytes(s, &at, &done) || !GetBytes(s, &at, &n) || n > uint64_t(set_.chains))
         bad();
     nMutations_ = done;
     chains_.assign(size_t(n), Chain());
     for (Chain &c : chains_) {
         uint32_t nv = 0;
-        if (!Get(s, &at, &c.F) || !Get(s, &at, &c.I) || !Get(s, &at, &c.pRaster) || !Get(s, &at, &nv) ||
+        if (!GetBytes(s, &at, &c.F) || !GetBytes(s, &at, &c.I) || !GetBytes(s, &at, &c.pRaster) || !GetBytes(s, &at, &nv) ||
             nv > uint32_t(set_.maxDepth) + 2)
             bad();
         c.x.v.resize(nv);
         for (PathVertex &v : c.x.v) {
             int32_t light = -1;
-            if (!Get(s, &at, &v) || !Get(s, &at, &light)) bad();
+            if (!GetBytes(s, &at, &v) || !GetBytes(s, &at, &light)) bad();
             if (v.type == VertexType::Surface) {
                 if (v.geomId < 0 || size_t(v.geomId) >= ctx_.scene->geometry.size()) bad();
                 v.material = ctx_.scene->geometry[size_t(v.geomId)].material;

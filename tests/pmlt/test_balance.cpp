@@ -15,7 +15,9 @@
 // false-positive rate <= 1e-3 for any dependence between the pairs).
 // Bins: path length (2 .. 7 vertices) x film quadrant for the bidirectional
 // mutation; film cells of 4 x 4 pixels for the perturbations (which keep the
-// length). Scenes: specular-box of the conformance table (bidirectional) and
+// length). Scenes: specular-box of the conformance table (bidirectional;
+// manifold through its mirror and glass sphere, film offsets up to half the
+// width) and
 // a caustic scene (lens, caustic, multi-chain: their path types are rare in
 // the box), 80 000 and 150 000 samples, several proposals per state for the
 // perturbations; perturbation ranges wider than the defaults (more flow
@@ -23,7 +25,8 @@
 // Power: the same proposals accepted with a = min(1, I(y) / I(x)), i.e.
 // without the transition densities, must be rejected for each mutation (the
 // test sees a kernel that is wrong by T(y -> x) / T(x -> y)). Measured:
-// largest |t|/critical 0.44 - 0.53 with the densities, 1.17 - 2.05 without.
+// largest |t|/critical 0.35 - 0.59 with the densities, 1.16 - 2.12 without,
+// except the manifold perturbation (0.45 and 0.43: no power, see below).
 #include <array>
 #include <map>
 
@@ -37,7 +40,7 @@ constexpr int kTypes = pmlt::kMutationTypes;
 constexpr int kMinSamples = 50;
 // Proposals drawn from each state, per mutation type (more for the
 // perturbations of rare path types: their flows are sums over the repeats).
-constexpr int kRepeats[kTypes] = {1, 2, 16, 128};
+constexpr int kRepeats[kTypes] = {1, 2, 16, 128, 16};
 
 struct Flow {
     double s1 = 0, s2 = 0;
@@ -63,15 +66,18 @@ int Bin(const pmlt::State &s, bool byLength, int width, int height) {
     return (s.x.size() - 2) * 4 + quadrant;
 }
 
-Balance Measure(const std::string &sceneText, int samples, uint64_t seed, const std::vector<pmlt::MutationType> &types) {
+Balance Measure(const std::string &sceneText, int samples, uint64_t seed, const std::vector<pmlt::MutationType> &types,
+                Float lensRange) {
     SceneSetup su(sceneText);
     const int width = su.film.pixels.width(), height = su.film.pixels.height();
     // Wider perturbations than the defaults: more flow between bins and
     // density ratios D(y) / D(x) further from 1 (balance must hold for any range).
     pmlt::MutationSettings ms;
     ms.maxDepth = su.maxDepth;
-    ms.lensR2 = Float(0.25) * Float(width);
+    ms.lensR2 = lensRange * Float(width);
     ms.theta2 = 0.4;
+    EmbreeManifoldScene mscene(*su.job.scene);
+    ms.mscene = &mscene;
     const pmlt::Mutator mut(su.ctx, su.film, ms);
     Arena arena, propArena;
     Balance bal;
@@ -182,19 +188,21 @@ std::string CausticScene() {
 struct Case {
     const char *scene;
     int samples;
+    Float lensRange;  // largest film offset / film width
     std::vector<pmlt::MutationType> types;  // the mutations with enough flow in this scene
 };
 
 TEST(PMLTMutation, DetailedBalance) {
     const std::vector<std::pair<Case, std::string>> cases = {
-        {{"specular-box", 80000, {pmlt::MutationType::Bidirectional}},
+        {{"specular-box", 80000, 0.5, {pmlt::MutationType::Bidirectional, pmlt::MutationType::Manifold}},
          ConformanceScene("specular-box")},
-        {{"caustic", 150000, {pmlt::MutationType::Lens, pmlt::MutationType::Caustic, pmlt::MutationType::MultiChain}},
+        {{"caustic", 150000, 0.25,
+          {pmlt::MutationType::Lens, pmlt::MutationType::Caustic, pmlt::MutationType::MultiChain}},
          CausticScene()}};
     std::vector<Balance> bals;
     int pairs = 0;
     for (const auto &[c, text] : cases) {
-        bals.push_back(Measure(text, c.samples, 0xba1a, c.types));
+        bals.push_back(Measure(text, c.samples, 0xba1a, c.types, c.lensRange));
         for (pmlt::MutationType type : c.types)
             for (const auto &[p, f] : bals.back().flows[size_t(type)][0])
                 pairs += std::min(f.forward, f.backward) >= kMinSamples;
@@ -213,6 +221,14 @@ TEST(PMLTMutation, DetailedBalance) {
                       << "); without T: " << naive.maxMargin << " (" << naive.worst << ")\n";
             EXPECT_GT(ok.pairs, 0) << name << ": no bin pair had enough flow to test";
             EXPECT_LE(ok.maxMargin, 1) << name << ": detailed balance violated, " << ok.worst;
+            // The manifold perturbation's density ratios stay within a few percent
+            // of 1 over the film offsets whose walks succeed (measured: the kernel
+            // without them reaches |t|/critical 0.43, like the correct one): this
+            // test cannot resolve that error, so its power is not claimed there.
+            // Its chain factor J is the manifold library's ChainSolidAnglePerArea
+            // (tested against finite differences in tests/gbdpt), the other
+            // factors are the densities checked by PMLTPath.
+            if (type == pmlt::MutationType::Manifold) continue;
             EXPECT_GT(naive.maxMargin, 1) << name << ": the test cannot see a kernel without its transition densities";
         }
 }

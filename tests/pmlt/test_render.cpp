@@ -31,13 +31,14 @@ TEST(PMLTRender, ParametersStatisticsAndImageMeanIsB) {
         EXPECT_GT(c.accepted, 0) << pmlt::MutationName(t);
         total += c.proposed + c.zero + c.notApplicable;
     }
-    for (auto t : {pmlt::MutationType::Caustic, pmlt::MutationType::MultiChain})
+    for (auto t : {pmlt::MutationType::Caustic, pmlt::MutationType::MultiChain, pmlt::MutationType::Manifold})
         total += p.counts(t).proposed + p.counts(t).zero + p.counts(t).notApplicable;
     EXPECT_EQ(total, 6 * 144);
     ASSERT_GT(p.b(), 0);
     // Unfiltered splats of total luminance b per mutation, 6 x 144 mutations, film / (6 spp).
     EXPECT_NEAR(MeanLum(r.image), p.b(), 1e-4 * p.b());
-    for (const char *want : {"bidirectional: ", "lens: ", "caustic: ", "multichain: ", "b = ", "chains: 64"})
+    for (const char *want : {"bidirectional: ", "lens: ", "caustic: ", "multichain: ", "manifold: ", "manifold walks: ", "b = ",
+                             "chains: 64"})
         EXPECT_NE(r.statistics.find(want), std::string::npos) << want << " in\n" << r.statistics;
 }
 

@@ -7,16 +7,11 @@
 
 namespace gradus::pmlt {
 
-namespace {
-
-Vec3 Dir(const PathVertex &from, const PathVertex &to) { return Normalize(to.p - from.p); }
-
-// Traces from `from` along dir and makes the vertex hit (an infinite-light
-// vertex for an escaped ray when allowed and the scene has infinite lights).
 bool Trace(const BidirContext &ctx, const PathVertex &from, const Vec3 &dir, Arena &arena, bool allowInfinite,
-           PathVertex *v, BSDF *b) {
+           PathVertex *v, BSDF *b, SurfaceInteraction *si) {
     Ray ray = AsInteraction(from).spawnRay(dir);
-    SurfaceInteraction isect;
+    SurfaceInteraction local;
+    SurfaceInteraction &isect = si ? *si : local;
     const Scene::SurfaceHit h = ctx.scene->intersectSurface(&ray, &isect);
     if (h == Scene::SurfaceHit::Stuck) return false;
     if (h == Scene::SurfaceHit::Miss) {
@@ -37,6 +32,8 @@ bool Trace(const BidirContext &ctx, const PathVertex &from, const Vec3 &dir, Are
     return true;
 }
 
+namespace {
+
 // Samples a scattering direction at v (arrived at from wo); marks v specular
 // when a specular lobe was chosen.
 bool Scatter(PathVertex *v, const BSDF &b, const Vec3 &wo, TransportMode mode, Sampler &u, Vec3 *wi) {
@@ -50,8 +47,8 @@ bool Scatter(PathVertex *v, const BSDF &b, const Vec3 &wo, TransportMode mode, S
     return true;
 }
 
-// Follows the specular lobe (reflection or transmission) that x took at its
-// vertex j, at the new vertex v arrived at from wo.
+}  // namespace
+
 bool FollowSpecular(const Path &x, int j, PathVertex *v, const BSDF &b, const Vec3 &wo, TransportMode mode,
                     Vec3 *wi) {
     const PathVertex &xj = x.v[size_t(j)];
@@ -63,6 +60,8 @@ bool FollowSpecular(const Path &x, int j, PathVertex *v, const BSDF &b, const Ve
     *wi = bs.wi;
     return true;
 }
+
+namespace {
 
 // A film offset (density ~ 1/r on [r1, r2], uniform angle; symmetric).
 Point2 PerturbFilm(Point2 p, Float r1, Float r2, Sampler &u) {
@@ -104,6 +103,7 @@ const char *MutationName(MutationType t) {
     case MutationType::Lens: return "lens";
     case MutationType::Caustic: return "caustic";
     case MutationType::MultiChain: return "multichain";
+    case MutationType::Manifold: return "manifold";
     }
     return "?";
 }
@@ -120,13 +120,14 @@ Mutator::Mutator(const BidirContext &ctx, const FilmDomain &film, const Mutation
 }
 
 ProposalResult Mutator::propose(MutationType type, const State &x, Sampler &u, Arena &arena, State *y,
-                                Float *accept) const {
+                                Float *accept, MutationStats *stats) const {
     *accept = 0;
     switch (type) {
     case MutationType::Bidirectional: return bidirectional(x, u, arena, y, accept);
     case MutationType::Lens: return lens(x, false, u, arena, y, accept);
     case MutationType::MultiChain: return lens(x, true, u, arena, y, accept);
     case MutationType::Caustic: return caustic(x, u, arena, y, accept);
+    case MutationType::Manifold: return manifold(x, u, arena, y, accept, stats);
     }
     return ProposalResult::NotApplicable;
 }
@@ -334,6 +335,33 @@ ProposalResult Mutator::bidirectional(const State &xs, Sampler &u, Arena &arena,
 }
 
 // ---------------------------------------------------------------- perturbations
+bool Mutator::traceEyeChain(const State &xs, int b, Sampler &u, Arena &arena, State *ys,
+                            SurfaceInteraction *siB) const {
+    const Point2 pFilm = PerturbFilm(xs.e.pRaster, set_.lensR1, set_.lensR2, u);
+    const Point2 uLens = u.get2D();
+    if (!film_.contains(pFilm)) return false;
+    CameraSample cs;
+    cs.pFilm = pFilm;
+    cs.pLens = uLens;  // uniform lens points: a constant density, the same in both directions
+    Ray ray;
+    if (ctx_.camera->generateRay(cs, &ray) == 0) return false;
+    Path &y = ys->x;
+    std::vector<BSDF> &yb = ys->bsdf;
+    y.v.assign(1, LensVertex(ctx_, ray));
+    yb.assign(1, BSDF());
+    Vec3 dir = Normalize(ray.d);
+    for (int j = 1; j <= b; ++j) {
+        PathVertex v;
+        BSDF bsdf;
+        if (!Trace(ctx_, y.v.back(), dir, arena, j == xs.x.size() - 1, &v, &bsdf, j == b ? siB : nullptr))
+            return false;
+        if (j < b && !FollowSpecular(xs.x, j, &v, bsdf, -dir, TransportMode::Radiance, &dir)) return false;
+        y.v.push_back(v);
+        yb.push_back(bsdf);
+    }
+    return true;
+}
+
 ProposalResult Mutator::lens(const State &xs, bool multiChain, Sampler &u, Arena &arena, State *ys,
                              Float *accept) const {
     const Path &x = xs.x;
@@ -349,31 +377,23 @@ ProposalResult Mutator::lens(const State &xs, bool multiChain, Sampler &u, Arena
         ++m;
         while (m < n - 1 && x.v[size_t(m)].delta()) ++m;
     }
-    const Point2 pFilm = PerturbFilm(xs.e.pRaster, set_.lensR1, set_.lensR2, u);
-    const Point2 uLens = u.get2D();
-    if (!film_.contains(pFilm)) return ProposalResult::Zero;
-    CameraSample cs;
-    cs.pFilm = pFilm;
-    cs.pLens = uLens;  // uniform lens points: a constant density, the same in both directions
-    Ray ray;
-    if (ctx_.camera->generateRay(cs, &ray) == 0) return ProposalResult::Zero;
+    if (!traceEyeChain(xs, c, u, arena, ys, nullptr)) return ProposalResult::Zero;
     Path &y = ys->x;
     std::vector<BSDF> &yb = ys->bsdf;
-    y.v.assign(1, LensVertex(ctx_, ray));
-    yb.assign(1, BSDF());
-    Vec3 dir = Normalize(ray.d);
-    for (int j = 1; j <= m; ++j) {
+    for (int j = c + 1; j <= m; ++j) {
+        // Multi-chain: at a non-specular vertex a new direction near the old
+        // path's outgoing one, at a specular one the old path's lobe.
+        PathVertex &prev = y.v.back();
+        Vec3 dir;
+        if (!x.v[size_t(j - 1)].delta()) {
+            dir = PerturbDirection(Dir(x.v[size_t(j - 1)], x.v[size_t(j)]), set_.theta1, set_.theta2, u);
+        } else if (!FollowSpecular(x, j - 1, &prev, yb.back(), Dir(prev, y.v[y.v.size() - 2]),
+                                   TransportMode::Radiance, &dir)) {
+            return ProposalResult::Zero;
+        }
         PathVertex v;
         BSDF b;
-        if (!Trace(ctx_, y.v.back(), dir, arena, j == n - 1, &v, &b)) return ProposalResult::Zero;
-        if (j < m) {
-            if (x.v[size_t(j)].delta()) {
-                if (!FollowSpecular(x, j, &v, b, -dir, TransportMode::Radiance, &dir)) return ProposalResult::Zero;
-            } else {
-                // Multi-chain: a new direction near the old path's outgoing one.
-                dir = PerturbDirection(Dir(x.v[size_t(j)], x.v[size_t(j + 1)]), set_.theta1, set_.theta2, u);
-            }
-        }
+        if (!Trace(ctx_, prev, dir, arena, j == n - 1, &v, &b)) return ProposalResult::Zero;
         y.v.push_back(v);
         yb.push_back(b);
     }

@@ -23,6 +23,10 @@
 //               direction and trace the next chain, up to a connectible pair
 //   caustic:    paths E D S+ (D | L) ...: perturb the direction at x_c towards
 //               x_{c-1}, trace the chain back to x_1, connect x_1 to the lens
+//   manifold:   paths E S* D S+ (D | L) ... (Jakob and Marschner 2012): the film
+//               offset of the lens perturbation moves x_b (after the eye chain
+//               S*), then a manifold walk moves the second chain S+ so that it
+//               joins x_b to the unchanged x_c (manifold_perturbation.cpp)
 // A mutation applies to a path by its pattern of specular vertices alone,
 // which every perturbation keeps: the selection probabilities cancel.
 #pragma once
@@ -30,19 +34,26 @@
 #include <vector>
 
 #include "core/arena.h"
+#include "integrators/manifold/manifold_scene.h"
 #include "integrators/pmlt/path.h"
 #include "samplers/sampler.h"
 
 namespace gradus::pmlt {
 
-enum class MutationType { Bidirectional, Lens, Caustic, MultiChain };
-constexpr int kMutationTypes = 4;
+enum class MutationType { Bidirectional, Lens, Caustic, MultiChain, Manifold };
+constexpr int kMutationTypes = 5;
 const char *MutationName(MutationType t);
 
 struct MutationSettings {
     int maxDepth = 5;
     Float lensR1 = 0.1, lensR2 = 0;      // film offsets in pixels (r2 0: 10% of the film's larger side)
     Float theta1 = 1e-4, theta2 = 0.1;  // direction offsets in radians
+    const EmbreeManifoldScene *mscene = nullptr;  // manifold perturbation (none: not applicable)
+};
+
+// Counters a proposal adds to (manifold walks).
+struct MutationStats {
+    int64_t walks = 0, walkFailures = 0;
 };
 
 // A state of a chain: the path, its evaluation and its BSDFs (which point
@@ -61,8 +72,8 @@ class Mutator {
     // Proposes y from x; on Proposed, *accept = a(x -> y) > 0 and y holds the
     // new path (its new BSDFs allocated in `arena`). Zero: the proposal
     // carries nothing or its reverse move is impossible (a = 0).
-    ProposalResult propose(MutationType type, const State &x, Sampler &u, Arena &arena, State *y,
-                           Float *accept) const;
+    ProposalResult propose(MutationType type, const State &x, Sampler &u, Arena &arena, State *y, Float *accept,
+                           MutationStats *stats = nullptr) const;
 
     // Transition density pieces of the bidirectional mutation (tests).
     Float deletionProbability(int n, int nd) const;
@@ -73,6 +84,12 @@ class Mutator {
     ProposalResult bidirectional(const State &x, Sampler &u, Arena &arena, State *y, Float *accept) const;
     ProposalResult lens(const State &x, bool multiChain, Sampler &u, Arena &arena, State *y, Float *accept) const;
     ProposalResult caustic(const State &x, Sampler &u, Arena &arena, State *y, Float *accept) const;
+    ProposalResult manifold(const State &x, Sampler &u, Arena &arena, State *y, Float *accept,
+                            MutationStats *stats) const;
+    // The perturbed film position and the eye chain x_1 .. x_b re-traced from
+    // it with x's specular lobes (lens, multi-chain and manifold perturbations).
+    bool traceEyeChain(const State &x, int b, Sampler &u, Arena &arena, State *y,
+                       SurfaceInteraction *siB) const;
     bool allowedPosition(int n, int nd, int a) const;
     bool allowedAddition(int n, int nd, int a, int na) const;
     Float bidirDensity(const State &s, int a, int nd, int na, int n) const;
@@ -81,6 +98,18 @@ class Mutator {
     FilmDomain film_;
     MutationSettings set_;
 };
+
+// Traces from `from` along dir and makes the vertex hit (an infinite-light
+// vertex for an escaped ray when allowed and the scene has infinite lights);
+// si, when given, receives the hit's interaction.
+bool Trace(const BidirContext &ctx, const PathVertex &from, const Vec3 &dir, Arena &arena, bool allowInfinite,
+           PathVertex *v, BSDF *b, SurfaceInteraction *si = nullptr);
+// Follows the specular lobe (reflection or transmission) that x took at its
+// vertex j, at the new vertex v arrived at from wo; marks v specular.
+bool FollowSpecular(const Path &x, int j, PathVertex *v, const BSDF &b, const Vec3 &wo, TransportMode mode,
+                    Vec3 *wi);
+// Unit direction between two vertices.
+inline Vec3 Dir(const PathVertex &from, const PathVertex &to) { return Normalize(to.p - from.p); }
 
 // Builds the BSDFs of every vertex of x (Radiance mode) in arena.
 void BuildBSDFs(const BidirContext &ctx, const Path &x, Arena &arena, std::vector<BSDF> *bsdf);

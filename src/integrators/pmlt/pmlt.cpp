@@ -37,6 +37,7 @@ ParamTable<PMLTSettings> Table() {
     t.real("lens", &S::lens, 1, "selection weight of the lens perturbation", Range{0, 1e9});
     t.real("caustic", &S::caustic, 1, "selection weight of the caustic perturbation", Range{0, 1e9});
     t.real("multichain", &S::multiChain, 1, "selection weight of the multi-chain perturbation", Range{0, 1e9});
+    t.real("manifold", &S::manifold, 1, "selection weight of the manifold perturbation", Range{0, 1e9});
     return t;
 }
 
@@ -70,6 +71,10 @@ void PMLTIntegrator::preprocess(const Scene &scene, Film &film) {
     const Point2i full = film.fullResolution();
     film_.scale = film_.pixels.area() > 0 ? Float(int64_t(full.x) * full.y) / Float(film_.pixels.area()) : 1;
     mset_.maxDepth = set_.maxDepth;
+    if (set_.manifold > 0) {
+        mscene_ = std::make_unique<EmbreeManifoldScene>(scene);
+        mset_.mscene = mscene_.get();
+    }
 }
 
 struct PMLTIntegrator::Sample {
@@ -215,6 +220,7 @@ void PMLTIntegrator::runPass(PassContext &ctx) {
         pmlt::BuildBSDFs(ctx_, xs.x, cur, &xs.bsdf);
         if (!pmlt::Evaluate(ctx_, film_, xs.x, xs.bsdf.data(), &xs.e)) return;
         RNGSampler u(rng);
+        pmlt::MutationStats mst;
         int64_t prop[pmlt::kMutationTypes] = {}, acc[pmlt::kMutationTypes] = {}, na[pmlt::kMutationTypes] = {},
                 zero[pmlt::kMutationTypes] = {}, accMicro[pmlt::kMutationTypes] = {};
         for (int64_t k = 0; k < count; ++k) {
@@ -222,7 +228,7 @@ void PMLTIntegrator::runPass(PassContext &ctx) {
             int type = 0;
             while (type + 1 < pmlt::kMutationTypes && r >= cdf[type]) ++type;
             Float a = 0;
-            const pmlt::ProposalResult res = mut.propose(MutationType(type), xs, u, wk.arena, &ys, &a);
+            const pmlt::ProposalResult res = mut.propose(MutationType(type), xs, u, wk.arena, &ys, &a, &mst);
             if (res == pmlt::ProposalResult::NotApplicable) ++na[type];
             if (res == pmlt::ProposalResult::Zero) ++zero[type];
             if (res == pmlt::ProposalResult::Proposed) {
@@ -246,6 +252,8 @@ void PMLTIntegrator::runPass(PassContext &ctx) {
         ch.I = xs.e.I;
         ch.pRaster = xs.e.pRaster;
         nMutations_ += count;
+        nWalks_ += mst.walks;
+        nWalkFailures_ += mst.walkFailures;
         for (int k = 0; k < pmlt::kMutationTypes; ++k) {
             AtomicCounts &c = typeCounts_[k];
             c.proposed += prop[k];
@@ -299,6 +307,14 @@ std::string PMLTIntegrator::statistics() const {
         if (c.proposed > 0) o << " (mean acceptance " << 100.0 * c.acceptSum / double(c.proposed) << "%)";
         o << "\n";
     }
+    o << "  manifold walks: " << nWalks_ << ", failed or not reversible: " << nWalkFailures_;
+    if (nWalks_ > 0) {
+        // Process-wide walk counters (manifold.h): the reasons of the failures.
+        const ManifoldStatsSnapshot ms = GetManifoldStats();
+        for (size_t k = 1; k < ms.byStatus.size(); ++k)
+            if (ms.byStatus[k] > 0) o << "; " << ToString(ManifoldStatus(k)) << " " << ms.byStatus[k];
+    }
+    o << "\n";
     if (nStartMismatch_ > 0) o << "  chain starts that could not be rebuilt: " << nStartMismatch_ << "\n";
     if (rescale_ != 1) o << "  interrupted pass: image scaled by " << rescale_ << " (mutations issued / run)\n";
     if (!warning_.empty()) o << "  " << warning_ << "\n";

@@ -13,7 +13,7 @@
 //      then E[b g(X_0)] is the integral of I g for any g (resampling the
 //      MIS-weighted samples), so there is no start-up bias.
 //   3. Mutations (pmlt/mutations.h) with selection weights `bidirectional`,
-//      `lens`, `caustic`, `multichain`; a mutation that does not apply to the
+//      `lens`, `caustic`, `multichain`, `manifold`; a mutation that does not apply to the
 //      path's pattern of specular vertices leaves the state (a rejected
 //      proposal). Each mutation splats the proposal with a and the current
 //      state with 1 - a (expected values), b F / I each; the film divides by
@@ -27,9 +27,11 @@
 //   float lens 1                         the bidirectional mutation's must be positive
 //   float caustic 1
 //   float multichain 1
+//   float manifold 1
 // Splats are unfiltered (the pixel holding the raster point), as mlt's.
 #pragma once
 #include <atomic>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -45,13 +47,14 @@ struct PMLTSettings {
     int chains;
     int mutationsPerPixel;
     // Selection weights (relative) by MutationType.
-    Float bidirectional, lens, caustic, multiChain;
+    Float bidirectional, lens, caustic, multiChain, manifold;
     Float weight(pmlt::MutationType t) const {
         switch (t) {
         case pmlt::MutationType::Bidirectional: return bidirectional;
         case pmlt::MutationType::Lens: return lens;
         case pmlt::MutationType::Caustic: return caustic;
         case pmlt::MutationType::MultiChain: return multiChain;
+        case pmlt::MutationType::Manifold: return manifold;
         }
         return 0;
     }
@@ -79,6 +82,7 @@ class PMLTIntegrator : public Integrator {
     };
     TypeCounts counts(pmlt::MutationType t) const;
     int64_t startMismatches() const { return nStartMismatch_; }
+    int64_t manifoldWalks() const { return nWalks_; }
     const std::string &warning() const { return warning_; }
 
   private:
@@ -116,7 +120,8 @@ class PMLTIntegrator : public Integrator {
         std::atomic<int64_t> acceptMicro{0};  // sum of acceptance probabilities x 1e6
     };
     AtomicCounts typeCounts_[pmlt::kMutationTypes];
-    std::atomic<int64_t> nMutations_{0}, nStartMismatch_{0};
+    std::atomic<int64_t> nMutations_{0}, nStartMismatch_{0}, nWalks_{0}, nWalkFailures_{0};
+    std::unique_ptr<EmbreeManifoldScene> mscene_;
     int64_t nBootstrapSamples_ = 0;
     double rescale_ = 1;
 };

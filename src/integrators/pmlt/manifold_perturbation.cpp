@@ -1,0 +1,131 @@
+// The manifold perturbation of pmlt (Jakob and Marschner 2012, Sec. 5; the
+// "manifold perturbation" of gradient-domain-mlt.md Sec. 5.1-5.2).
+//
+// Path pattern E S* D S+ (D | L): the eye chain x_1 .. x_b (S* then the
+// non-specular x_b), the second chain x_{b+1} .. x_{c-1} (specular), x_c
+// non-specular and kept with everything after it. The film position moves by
+// the lens perturbation's symmetric kernel, the eye chain is re-traced with
+// the old lobes to x_b', and a manifold walk (integrators/manifold) moves the
+// second chain, its half-vectors held, until it joins x_b' to x_c. Walks that
+// fail or do not walk back to x (the walk may find another solution) are
+// rejected, so the move is a bijection for each film offset.
+//
+// Acceptance. In the delta-free measure of path.h the specular vertices of the
+// second chain are fixed by their Dirac constraints given x_b and x_c;
+// integrating them out leaves the factor K = (d omega_b / dA_c) / P_trace,
+// where d omega_b / dA_c is the chain's solid angle at x_b per unit area at x_c
+// (JM12's generalised geometry term over |cos_b|; ChainSolidAnglePerArea) and
+// P_trace the delta-free density of x_{b+1} .. x_c traced from a unit
+// solid-angle density at x_b (the same factors the lens perturbation uses:
+// one solid angle -> area conversion, then p_E / P_lobe per specular vertex).
+// With D_b the density of x_1 .. x_b per film area (as for the lens
+// perturbation) and the symmetric film kernel,
+//   a = min(1, [I(y) K(y) / D_b(y)] / [I(x) K(x) / D_b(x)]),
+// the Metropolis-Hastings ratio of a deterministic move with a symmetric
+// random parameter (G-MLT Eqs. 12-15 give the same Jacobian in the measure
+// with the specular vertices eliminated).
+#include <algorithm>
+#include <cmath>
+
+#include "integrators/gradient/subpath_shift.h"
+#include "integrators/pmlt/mutations.h"
+
+namespace gradus::pmlt {
+
+namespace {
+
+// Delta-free density of x_{b+1} .. x_c traced from x_b with a unit solid-angle density.
+double TraceDensity(const State &s, int b, int c) {
+    double d = ConvertDensity(1, s.x.v[size_t(b)], s.x.v[size_t(b + 1)]);
+    for (int j = b + 2; j <= c; ++j) d *= s.e.pE[size_t(j)] / s.e.lobeE[size_t(j - 1)];
+    return d;
+}
+
+// Density of x_1 .. x_b per unit film area (up to the constant film factor).
+double EyeDensity(const State &s, int b) {
+    double d = s.e.pE[1];
+    for (int j = 2; j <= b; ++j) d *= s.e.pE[size_t(j)] / s.e.lobeE[size_t(j - 1)];
+    return d;
+}
+
+}  // namespace
+
+ProposalResult Mutator::manifold(const State &xs, Sampler &u, Arena &arena, State *ys, Float *accept,
+                                 MutationStats *stats) const {
+    const Path &x = xs.x;
+    const int n = x.size();
+    if (!set_.mscene) return ProposalResult::NotApplicable;
+    int b = 1;
+    while (b < n - 1 && x.v[size_t(b)].delta()) ++b;
+    if (b >= n - 1 || !x.v[size_t(b + 1)].delta()) return ProposalResult::NotApplicable;
+    int c = b + 1;
+    while (c < n - 1 && x.v[size_t(c)].delta()) ++c;
+    const PathVertex &xc = x.v[size_t(c)];
+    const int endGeom = xc.type == VertexType::Surface ? xc.geomId
+                        : xc.type == VertexType::Light  ? set_.mscene->geomOfLight(xc.light)
+                                                        : -1;
+    // Point and infinite emitters have no surface for the chain to end on.
+    if (xc.isInfiniteLight() || endGeom < 0 || c - b + 1 > kMaxManifoldVertices)
+        return ProposalResult::NotApplicable;
+
+    // The base chain x_b .. x_c.
+    SubpathShiftContext sc;
+    sc.bidir = &ctx_;
+    sc.mscene = set_.mscene;
+    const Scene &scene = *ctx_.scene;
+    const int k = c - b - 1;
+    ChainInterior in;
+    for (int j = 0; j < k; ++j) {
+        const int i = b + 1 + j;
+        const PathVertex &v = x.v[size_t(i)];
+        if (!VertexInteraction(scene, v, x.v[size_t(i - 1)].p, &in.si[j])) return ProposalResult::Zero;
+        in.bsdf[j] = &xs.bsdf[size_t(i)];
+        in.wo[j] = Dir(v, x.v[size_t(i - 1)]);
+        in.wi[j] = Dir(v, x.v[size_t(i + 1)]);
+        in.transmit[j] = Transmits(in.wo[j], in.wi[j], Vec3(xs.bsdf[size_t(i)].ns()));
+        in.specular[j] = true;
+        in.geomId[j] = v.geomId;
+    }
+    SurfaceInteraction siXb;
+    if (!VertexInteraction(scene, x.v[size_t(b)], x.v[size_t(b - 1)].p, &siXb)) return ProposalResult::Zero;
+    ManifoldChain base;
+    if (!BuildChain(sc, set_.mscene->fromInteraction(siXb), in, k, EndpointSP(xc.p, Vec3(xc.ng), endGeom), &base))
+        return ProposalResult::Zero;
+
+    // The perturbed eye chain, then the walk of the second chain to x_c.
+    SurfaceInteraction siYb;
+    if (!traceEyeChain(xs, b, u, arena, ys, &siYb)) return ProposalResult::Zero;
+    if (ys->x.v.back().type != VertexType::Surface) return ProposalResult::Zero;
+    SubpathShiftStats sst;
+    ManifoldChain offset;
+    WalkedInterior walked;
+    Float J = 0;
+    const bool ok = WalkSecondChain(sc, base, set_.mscene->fromInteraction(siYb), in, arena, &sst, &offset, &walked, &J);
+    if (stats) {
+        stats->walks += int64_t(sst.walks);
+        stats->walkFailures += int64_t(sst.walkFailures);
+    }
+    if (!ok) return ProposalResult::Zero;
+    Path &y = ys->x;
+    std::vector<BSDF> &yb = ys->bsdf;
+    for (int j = 0; j < k; ++j) {
+        PathVertex v;
+        MakeSurfaceVertex(ctx_, walked.si[j], walked.bsdf[j], &v);
+        v.flags |= VERTEX_DELTA;
+        y.v.push_back(v);
+        yb.push_back(walked.bsdf[j]);
+    }
+    y.v.insert(y.v.end(), x.v.begin() + c, x.v.end());
+    yb.insert(yb.end(), xs.bsdf.begin() + c, xs.bsdf.end());
+    for (int i = 1; i < n; ++i) y.v[size_t(i)].wo = PackedVec3(Dir(y.v[size_t(i)], y.v[size_t(i - 1)]));
+    if (!Evaluate(ctx_, film_, y, yb.data(), &ys->e)) return ProposalResult::Zero;
+    // a = [I(y) K(y) / D_b(y)] / [I(x) K(x) / D_b(x)], K = (d omega_b / dA_c) / P_trace;
+    // J = (d omega_b / dA_c)(y) / (d omega_b / dA_c)(x) from the walk (G-MLT Eq. 14's chain factor).
+    const double ratio = double(ys->e.I) / double(xs.e.I) * J * (TraceDensity(xs, b, c) / TraceDensity(*ys, b, c)) *
+                         (EyeDensity(xs, b) / EyeDensity(*ys, b));
+    if (!std::isfinite(ratio) || !(ratio > 0)) return ProposalResult::Zero;
+    *accept = Float(std::min(1.0, ratio));
+    return ProposalResult::Proposed;
+}
+
+}  // namespace gradus::pmlt

@@ -107,12 +107,13 @@ Balance Measure(const std::string &sceneText, int samples, uint64_t seed, const 
                     for (int type = int(mt), rep = 0; rep < kRepeats[type]; ++rep) {
                     RNGSampler u(rng);
                     pmlt::State y;
-                    Float a = 0;
-                    if (mut.propose(pmlt::MutationType(type), x, u, propArena, &y, &a) !=
+                    double ratio = 0;
+                    if (mut.propose(pmlt::MutationType(type), x, u, propArena, &y, &ratio) !=
                         pmlt::ProposalResult::Proposed) {
                         propArena.reset();
                         continue;
                     }
+                    const double a = std::min(1.0, ratio);
                     ++bal.proposals[type];
                     const bool byLength = type == int(pmlt::MutationType::Bidirectional);
                     const int A = Bin(x, byLength, width, height), B = Bin(y, byLength, width, height);

@@ -50,23 +50,31 @@ double EyeDensity(const State &s, int b) {
 
 }  // namespace
 
-ProposalResult Mutator::manifold(const State &xs, Sampler &u, Arena &arena, State *ys, Float *accept,
-                                 MutationStats *stats) const {
-    const Path &x = xs.x;
+bool ManifoldPattern(const Path &x, const EmbreeManifoldScene *mscene, int *bOut, int *cOut, int *endGeom) {
     const int n = x.size();
-    if (!set_.mscene) return ProposalResult::NotApplicable;
+    if (!mscene) return false;
     int b = 1;
     while (b < n - 1 && x.v[size_t(b)].delta()) ++b;
-    if (b >= n - 1 || !x.v[size_t(b + 1)].delta()) return ProposalResult::NotApplicable;
+    if (b >= n - 1 || !x.v[size_t(b + 1)].delta()) return false;
     int c = b + 1;
     while (c < n - 1 && x.v[size_t(c)].delta()) ++c;
     const PathVertex &xc = x.v[size_t(c)];
-    const int endGeom = xc.type == VertexType::Surface ? xc.geomId
-                        : xc.type == VertexType::Light  ? set_.mscene->geomOfLight(xc.light)
-                                                        : -1;
+    *endGeom = xc.type == VertexType::Surface ? xc.geomId
+               : xc.type == VertexType::Light  ? mscene->geomOfLight(xc.light)
+                                               : -1;
+    *bOut = b;
+    *cOut = c;
     // Point and infinite emitters have no surface for the chain to end on.
-    if (xc.isInfiniteLight() || endGeom < 0 || c - b + 1 > kMaxManifoldVertices)
-        return ProposalResult::NotApplicable;
+    return !xc.isInfiniteLight() && *endGeom >= 0 && c - b + 1 <= kMaxManifoldVertices;
+}
+
+ProposalResult Mutator::manifold(const State &xs, Sampler &u, Arena &arena, State *ys, double *ratioOut,
+                                 MutationStats *stats) const {
+    const Path &x = xs.x;
+    const int n = x.size();
+    int b, c, endGeom;
+    if (!ManifoldPattern(x, set_.mscene, &b, &c, &endGeom)) return ProposalResult::NotApplicable;
+    const PathVertex &xc = x.v[size_t(c)];
 
     // The base chain x_b .. x_c.
     SubpathShiftContext sc;
@@ -124,7 +132,7 @@ ProposalResult Mutator::manifold(const State &xs, Sampler &u, Arena &arena, Stat
     const double ratio = double(ys->e.I) / double(xs.e.I) * J * (TraceDensity(xs, b, c) / TraceDensity(*ys, b, c)) *
                          (EyeDensity(xs, b) / EyeDensity(*ys, b));
     if (!std::isfinite(ratio) || !(ratio > 0)) return ProposalResult::Zero;
-    *accept = Float(std::min(1.0, ratio));
+    *ratioOut = ratio;
     return ProposalResult::Proposed;
 }
 

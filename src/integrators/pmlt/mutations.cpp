@@ -120,14 +120,15 @@ Mutator::Mutator(const BidirContext &ctx, const FilmDomain &film, const Mutation
 }
 
 ProposalResult Mutator::propose(MutationType type, const State &x, Sampler &u, Arena &arena, State *y,
-                                Float *accept, MutationStats *stats) const {
-    *accept = 0;
+                                double *ratioOut, MutationStats *stats) const {
+    *ratioOut = 0;
+    if (!applies(type, x.x)) return ProposalResult::NotApplicable;
     switch (type) {
-    case MutationType::Bidirectional: return bidirectional(x, u, arena, y, accept);
-    case MutationType::Lens: return lens(x, false, u, arena, y, accept);
-    case MutationType::MultiChain: return lens(x, true, u, arena, y, accept);
-    case MutationType::Caustic: return caustic(x, u, arena, y, accept);
-    case MutationType::Manifold: return manifold(x, u, arena, y, accept, stats);
+    case MutationType::Bidirectional: return bidirectional(x, u, arena, y, ratioOut);
+    case MutationType::Lens: return lens(x, false, u, arena, y, ratioOut);
+    case MutationType::MultiChain: return lens(x, true, u, arena, y, ratioOut);
+    case MutationType::Caustic: return caustic(x, u, arena, y, ratioOut);
+    case MutationType::Manifold: return manifold(x, u, arena, y, ratioOut, stats);
     }
     return ProposalResult::NotApplicable;
 }
@@ -190,7 +191,7 @@ Float Mutator::bidirDensity(const State &s, int a, int nd, int na, int n) const 
     return Float(double(pd) / positions * pa * sum / double(na + 1 - tmin));
 }
 
-ProposalResult Mutator::bidirectional(const State &xs, Sampler &u, Arena &arena, State *ys, Float *accept) const {
+ProposalResult Mutator::bidirectional(const State &xs, Sampler &u, Arena &arena, State *ys, double *ratioOut) const {
     const Path &x = xs.x;
     const int n = x.size();
     // Deleted count, position, added count, split (Veach 1997, Sec. 11.4.2).
@@ -330,11 +331,59 @@ ProposalResult Mutator::bidirectional(const State &xs, Sampler &u, Arena &arena,
     if (!(tFwd > 0) || !(tRev > 0)) return ProposalResult::Zero;
     const double ratio = double(ys->e.I) * tRev / (double(xs.e.I) * tFwd);
     if (!std::isfinite(ratio) || !(ratio > 0)) return ProposalResult::Zero;
-    *accept = Float(std::min(1.0, ratio));
+    *ratioOut = ratio;
     return ProposalResult::Proposed;
 }
 
 // ---------------------------------------------------------------- perturbations
+bool LensPattern(const Path &x, int *cOut, int *mOut) {
+    // c: the first non-specular vertex after the lens; m: the first
+    // non-specular vertex from c on whose successor is connectible (or the emitter).
+    const int n = x.size();
+    int c = 1;
+    while (c < n - 1 && x.v[size_t(c)].delta()) ++c;
+    auto connectsAfter = [&](int k) { return k == n - 1 || !x.v[size_t(k + 1)].delta(); };
+    int m = c;
+    while (!connectsAfter(m)) {
+        ++m;
+        while (m < n - 1 && x.v[size_t(m)].delta()) ++m;
+    }
+    *cOut = c;
+    *mOut = m;
+    return m > c;
+}
+
+bool CausticPattern(const Path &x, int *cOut) {
+    const int n = x.size();
+    if (n < 4 || x.v[1].delta() || !x.v[2].delta()) return false;
+    int c = 2;
+    while (c < n - 1 && x.v[size_t(c)].delta()) ++c;
+    *cOut = c;
+    return !x.v[size_t(c)].isInfiniteLight();
+}
+
+bool Mutator::applies(MutationType type, const Path &x) const {
+    int c, m;
+    switch (type) {
+    case MutationType::Bidirectional: return true;  // a full regeneration is always possible
+    case MutationType::Lens: return !LensPattern(x, &c, &m);
+    case MutationType::MultiChain: return LensPattern(x, &c, &m);
+    case MutationType::Caustic: return CausticPattern(x, &c);
+    case MutationType::Manifold: {
+        int b, geom;
+        return ManifoldPattern(x, set_.mscene, &b, &c, &geom);
+    }
+    }
+    return false;
+}
+
+Float Mutator::selectionProbability(MutationType type, const Path &x, const Float *weights) const {
+    Float sum = 0;
+    for (int k = 0; k < kMutationTypes; ++k)
+        if (applies(MutationType(k), x)) sum += weights[k];
+    return applies(type, x) && sum > 0 ? weights[int(type)] / sum : 0;
+}
+
 bool Mutator::traceEyeChain(const State &xs, int b, Sampler &u, Arena &arena, State *ys,
                             SurfaceInteraction *siB) const {
     const Point2 pFilm = PerturbFilm(xs.e.pRaster, set_.lensR1, set_.lensR2, u);
@@ -363,20 +412,11 @@ bool Mutator::traceEyeChain(const State &xs, int b, Sampler &u, Arena &arena, St
 }
 
 ProposalResult Mutator::lens(const State &xs, bool multiChain, Sampler &u, Arena &arena, State *ys,
-                             Float *accept) const {
+                             double *ratioOut) const {
     const Path &x = xs.x;
     const int n = x.size();
-    // c: the first non-specular vertex after the lens; m: the first
-    // non-specular vertex from c on whose successor is connectible (or the emitter).
-    int c = 1;
-    while (c < n - 1 && x.v[size_t(c)].delta()) ++c;
-    auto connectsAfter = [&](int k) { return k == n - 1 || !x.v[size_t(k + 1)].delta(); };
-    if (multiChain == connectsAfter(c)) return ProposalResult::NotApplicable;
-    int m = c;
-    while (!connectsAfter(m)) {
-        ++m;
-        while (m < n - 1 && x.v[size_t(m)].delta()) ++m;
-    }
+    int c, m;
+    if (LensPattern(x, &c, &m) != multiChain) return ProposalResult::NotApplicable;
     if (!traceEyeChain(xs, c, u, arena, ys, nullptr)) return ProposalResult::Zero;
     Path &y = ys->x;
     std::vector<BSDF> &yb = ys->bsdf;
@@ -413,18 +453,16 @@ ProposalResult Mutator::lens(const State &xs, bool multiChain, Sampler &u, Arena
     };
     const double ratio = (double(ys->e.I) / D(*ys)) / (double(xs.e.I) / D(xs));
     if (!std::isfinite(ratio) || !(ratio > 0)) return ProposalResult::Zero;
-    *accept = Float(std::min(1.0, ratio));
+    *ratioOut = ratio;
     return ProposalResult::Proposed;
 }
 
-ProposalResult Mutator::caustic(const State &xs, Sampler &u, Arena &arena, State *ys, Float *accept) const {
+ProposalResult Mutator::caustic(const State &xs, Sampler &u, Arena &arena, State *ys, double *ratioOut) const {
     const Path &x = xs.x;
     const int n = x.size();
-    if (n < 4 || x.v[1].delta() || !x.v[2].delta()) return ProposalResult::NotApplicable;
-    int c = 2;
-    while (c < n - 1 && x.v[size_t(c)].delta()) ++c;
+    int c;
+    if (!CausticPattern(x, &c)) return ProposalResult::NotApplicable;
     const PathVertex &xc = x.v[size_t(c)];
-    if (xc.isInfiniteLight()) return ProposalResult::NotApplicable;
     Vec3 dir = PerturbDirection(Dir(xc, x.v[size_t(c - 1)]), set_.theta1, set_.theta2, u);
     // Trace from x_c back through the chain (light order), then join x_1' to the lens.
     std::vector<PathVertex> nv;
@@ -458,7 +496,7 @@ ProposalResult Mutator::caustic(const State &xs, Sampler &u, Arena &arena, State
     };
     const double ratio = (double(ys->e.I) / D(*ys)) / (double(xs.e.I) / D(xs));
     if (!std::isfinite(ratio) || !(ratio > 0)) return ProposalResult::Zero;
-    *accept = Float(std::min(1.0, ratio));
+    *ratioOut = ratio;
     return ProposalResult::Proposed;
 }
 

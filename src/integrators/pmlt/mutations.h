@@ -69,11 +69,20 @@ enum class ProposalResult { Proposed, NotApplicable, Zero };
 class Mutator {
   public:
     Mutator(const BidirContext &ctx, const FilmDomain &film, const MutationSettings &s);
-    // Proposes y from x; on Proposed, *accept = a(x -> y) > 0 and y holds the
-    // new path (its new BSDFs allocated in `arena`). Zero: the proposal
-    // carries nothing or its reverse move is impossible (a = 0).
-    ProposalResult propose(MutationType type, const State &x, Sampler &u, Arena &arena, State *y, Float *accept,
+    // Proposes y from x with the mutation `type`; on Proposed, *ratio =
+    // I(y) T(y -> x) / (I(x) T(x -> y)) > 0 for this mutation (the acceptance
+    // probability is min(1, ratio x the selection probability ratio, below))
+    // and y holds the new path (its new BSDFs allocated in `arena`). Zero:
+    // the proposal carries nothing or its reverse move is impossible.
+    ProposalResult propose(MutationType type, const State &x, Sampler &u, Arena &arena, State *y, double *ratio,
                            MutationStats *stats = nullptr) const;
+    // Whether `type` applies to the path (its pattern of specular vertices and
+    // emitter; perturbations keep it, the bidirectional mutation always applies).
+    bool applies(MutationType type, const Path &x) const;
+    // Probability of selecting `type` at x among the applicable mutations with
+    // these weights (a mutation that changes the pattern multiplies its ratio
+    // by selectionProbability(y) / selectionProbability(x)).
+    Float selectionProbability(MutationType type, const Path &x, const Float *weights) const;
 
     // Transition density pieces of the bidirectional mutation (tests).
     Float deletionProbability(int n, int nd) const;
@@ -81,10 +90,10 @@ class Mutator {
     Float additionProbability(int n, int nd, int a, int na) const;
 
   private:
-    ProposalResult bidirectional(const State &x, Sampler &u, Arena &arena, State *y, Float *accept) const;
-    ProposalResult lens(const State &x, bool multiChain, Sampler &u, Arena &arena, State *y, Float *accept) const;
-    ProposalResult caustic(const State &x, Sampler &u, Arena &arena, State *y, Float *accept) const;
-    ProposalResult manifold(const State &x, Sampler &u, Arena &arena, State *y, Float *accept,
+    ProposalResult bidirectional(const State &x, Sampler &u, Arena &arena, State *y, double *ratioOut) const;
+    ProposalResult lens(const State &x, bool multiChain, Sampler &u, Arena &arena, State *y, double *ratioOut) const;
+    ProposalResult caustic(const State &x, Sampler &u, Arena &arena, State *y, double *ratioOut) const;
+    ProposalResult manifold(const State &x, Sampler &u, Arena &arena, State *y, double *ratioOut,
                             MutationStats *stats) const;
     // The perturbed film position and the eye chain x_1 .. x_b re-traced from
     // it with x's specular lobes (lens, multi-chain and manifold perturbations).
@@ -110,6 +119,12 @@ bool FollowSpecular(const Path &x, int j, PathVertex *v, const BSDF &b, const Ve
                     Vec3 *wi);
 // Unit direction between two vertices.
 inline Vec3 Dir(const PathVertex &from, const PathVertex &to) { return Normalize(to.p - from.p); }
+
+// Path patterns of the perturbations (indices as in mutations.h / manifold_perturbation.cpp).
+// Lens: true when x_c is followed by a specular vertex (multi-chain), c and m set.
+bool LensPattern(const Path &x, int *c, int *m);
+bool CausticPattern(const Path &x, int *c);
+bool ManifoldPattern(const Path &x, const EmbreeManifoldScene *mscene, int *b, int *c, int *endGeom);
 
 // Builds the BSDFs of every vertex of x (Radiance mode) in arena.
 void BuildBSDFs(const BidirContext &ctx, const Path &x, Arena &arena, std::vector<BSDF> *bsdf);

@@ -205,8 +205,8 @@ void PMLTIntegrator::runPass(PassContext &ctx) {
     const int64_t first = mutationsIssued_;
     mutationsIssued_ += M;
     auto share = [nChains](int64_t x, int64_t i) { return x > i ? (x - i - 1) / nChains + 1 : 0; };
-    double wsum = 0, cdf[pmlt::kMutationTypes];
-    for (int k = 0; k < pmlt::kMutationTypes; ++k) cdf[k] = (wsum += set_.weight(MutationType(k)));
+    Float weights[pmlt::kMutationTypes];
+    for (int k = 0; k < pmlt::kMutationTypes; ++k) weights[k] = set_.weight(MutationType(k));
     const double b = b_;
     const pmlt::Mutator mut(ctx_, film_, mset_);
     ctx.forEachItem(nChains, kMutationTag, [&](int64_t i, RNG &rng, SampleRecorder &rec, Worker &wk) {
@@ -224,11 +224,23 @@ void PMLTIntegrator::runPass(PassContext &ctx) {
         int64_t prop[pmlt::kMutationTypes] = {}, acc[pmlt::kMutationTypes] = {}, na[pmlt::kMutationTypes] = {},
                 zero[pmlt::kMutationTypes] = {}, accMicro[pmlt::kMutationTypes] = {};
         for (int64_t k = 0; k < count; ++k) {
+            // Selection among the mutations that apply to x's pattern (weights
+            // renormalised); one that changes the pattern (the bidirectional
+            // mutation) has the selection ratio P(t | y) / P(t | x) in its
+            // acceptance (Veach 1997, Eq. 11.5 with the mixture's components).
+            double cdf[pmlt::kMutationTypes], wsum = 0;
+            for (int t = 0; t < pmlt::kMutationTypes; ++t)
+                cdf[t] = (wsum += mut.applies(MutationType(t), xs.x) ? weights[t] : 0);
             const double r = rng.uniform() * wsum;
             int type = 0;
             while (type + 1 < pmlt::kMutationTypes && r >= cdf[type]) ++type;
+            double ratio = 0;
+            const pmlt::ProposalResult res = mut.propose(MutationType(type), xs, u, wk.arena, &ys, &ratio, &mst);
             Float a = 0;
-            const pmlt::ProposalResult res = mut.propose(MutationType(type), xs, u, wk.arena, &ys, &a, &mst);
+            if (res == pmlt::ProposalResult::Proposed) {
+                const double sel = mut.selectionProbability(MutationType(type), ys.x, weights) * wsum / weights[type];
+                a = Float(std::min(1.0, ratio * sel));
+            }
             if (res == pmlt::ProposalResult::NotApplicable) ++na[type];
             if (res == pmlt::ProposalResult::Zero) ++zero[type];
             if (res == pmlt::ProposalResult::Proposed) {

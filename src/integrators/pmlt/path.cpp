@@ -58,7 +58,9 @@ bool SpecularLobe(const BSDF &bsdf, const Vec3 &wo, const Vec3 &wi, TransportMod
     for (Float uc : {Float(0), Float(0.25), Float(0.5), Float(0.75), Float(OneMinusEpsilon)}) {
         BSDFSample s;
         if (!bsdf.sample(wo, uc, Point2(0.5, 0.5), mode, &s) || !s.isSpecular() || !(s.pdf > 0)) continue;
-        if (Dot(s.wi, wi) > 1 - 1e-6) {
+        // 1e-5: an angle of 4.5e-3 rad, far below the separation of a BSDF's
+        // specular lobes, above the error of float hit points on short edges.
+        if (Dot(s.wi, wi) > 1 - 1e-5) {
             *f = s.f;
             *prob = s.pdf;
             return true;

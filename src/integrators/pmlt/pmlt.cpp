@@ -32,6 +32,10 @@ ParamTable<PMLTSettings> Table() {
     t.integer("chains", &S::chains, 1000, "Markov chains", AtLeast(1));
     t.integer("mutationsperpixel", &S::mutationsPerPixel, 100, "mutations per pixel when --spp is not given",
               AtLeast(1));
+    t.integer("directsamples", &S::directSamples, 0,
+              "direct light (at most one scattering vertex) by this many samples per pixel in the first pass "
+              "instead of the chains (0: the chains render it)",
+              AtLeast(0));
     t.real("bidirectional", &S::bidirectional, 1, "selection weight of the bidirectional mutation",
            Range{0, 1e9});
     t.real("lens", &S::lens, 1, "selection weight of the lens perturbation", Range{0, 1e9});
@@ -71,6 +75,18 @@ void PMLTIntegrator::preprocess(const Scene &scene, Film &film) {
     const Point2i full = film.fullResolution();
     film_.scale = film_.pixels.area() > 0 ? Float(int64_t(full.x) * full.y) / Float(film_.pixels.area()) : 1;
     mset_.maxDepth = set_.maxDepth;
+    if (set_.directSamples > 0) {
+        EntityDesc d;
+        d.type = "path";
+        d.loc = loc_;
+        Param depth;
+        depth.type = "integer";
+        depth.name = "maxdepth";
+        depth.numbers = {1};
+        d.params.add(depth);
+        direct_ = CreateIntegrator(d);
+        direct_->preprocess(scene, film);
+    }
     if (set_.manifold > 0) {
         mscene_ = std::make_unique<EmbreeManifoldScene>(scene);
         mset_.mscene = mscene_.get();
@@ -116,6 +132,7 @@ void PMLTIntegrator::bootstrap(PassContext &ctx) {
                     for (int s = 0; s <= smp.nL; ++s) {
                         const int depth = s + t - 2;
                         if (depth < 0 || depth > set_.maxDepth || (s == 1 && t == 1)) continue;
+                        if (direct_ && s + t <= 3) continue;  // rendered by renderDirect
                         ConnectResult r;
                         if (!ConnectBDPT(ctx_, SubpathView{smp.lv, smp.lb, s}, SubpathView{smp.cv, smp.cb, t}, s, t,
                                          ConnectNumbers(ckey, k, s, t), &r))
@@ -148,8 +165,9 @@ void PMLTIntegrator::bootstrap(PassContext &ctx) {
     if (!(b_ > 0)) {
         b_ = 0;
         warning_ = "pmlt: none of the " + std::to_string(N) +
-                   " bootstrap samples carries light (b = 0); no chains run and the image is black "
-                   "(raise \"bootstrapsamples\" if the light is hard to reach)";
+                   " bootstrap samples carries light (b = 0); no chains run and the image is black" +
+                   std::string(direct_ ? " but for the direct light" : "") +
+                   " (raise \"bootstrapsamples\" if the light is hard to reach)";
         std::fprintf(stderr, "warning: %s\n", warning_.c_str());
         candidates_.clear();
         return;
@@ -161,34 +179,38 @@ void PMLTIntegrator::bootstrap(PassContext &ctx) {
     ctx.parallelFor(set_.chains, 8, [&](int64_t c0, int64_t c1, Worker &wk) {
         for (int64_t c = c0; c < c1; ++c) {
             RNG pick(Hash(chainKey, uint64_t(c)));
-            const double xr = pick.uniform() * sum;
-            size_t i = size_t(std::upper_bound(candidates_.begin(), candidates_.end(), xr,
-                                               [](double v, const Candidate &cd) { return v < cd.cdf; }) -
-                              candidates_.begin());
-            i = std::min(i, candidates_.size() - 1);
-            const Candidate &cd = candidates_[i];
             Chain &ch = chains_[size_t(c)];
-            Sample smp;
-            bool ok = makeSample(key, cd.sample, wk.arena, &smp);
-            if (ok) {
-                const int s = cd.s, t = cd.t;
-                ok = pmlt::StrategyPath(ctx_, SubpathView{smp.lv, smp.lb, s}, SubpathView{smp.cv, smp.cb, t}, s, t,
-                                        ConnectNumbers(ckey, cd.sample, s, t), &ch.x);
+            ch.I = 0;
+            // A start whose path does not evaluate (a strategy the bdpt estimator
+            // evaluated but Evaluate rejects: float hit points on very short
+            // edges) is counted and replaced by another draw; its share of b is
+            // below the counted fraction.
+            for (int attempt = 0; attempt < 16 && !(ch.I > 0); ++attempt) {
+                const double xr = pick.uniform() * sum;
+                size_t i = size_t(std::upper_bound(candidates_.begin(), candidates_.end(), xr,
+                                                   [](double v, const Candidate &cd) { return v < cd.cdf; }) -
+                                  candidates_.begin());
+                i = std::min(i, candidates_.size() - 1);
+                const Candidate &cd = candidates_[i];
+                Sample smp;
+                pmlt::State st;
+                bool ok = makeSample(key, cd.sample, wk.arena, &smp) &&
+                          pmlt::StrategyPath(ctx_, SubpathView{smp.lv, smp.lb, cd.s}, SubpathView{smp.cv, smp.cb, cd.t},
+                                             cd.s, cd.t, ConnectNumbers(ckey, cd.sample, cd.s, cd.t), &st.x);
                 if (ok) {
-                    pmlt::State st;
-                    st.x = ch.x;
                     pmlt::BuildBSDFs(ctx_, st.x, wk.arena, &st.bsdf);
                     ok = pmlt::Evaluate(ctx_, film_, st.x, st.bsdf.data(), &st.e);
+                }
+                if (ok) {
+                    ch.x = st.x;
                     ch.F = st.e.F;
                     ch.I = st.e.I;
                     ch.pRaster = st.e.pRaster;
+                } else {
+                    ++mismatch;
                 }
+                wk.arena.reset();
             }
-            if (!ok) {
-                ch.I = 0;
-                ++mismatch;
-            }
-            wk.arena.reset();
         }
     });
     nStartMismatch_ += mismatch.load();
@@ -198,7 +220,35 @@ void PMLTIntegrator::beginPass(PassContext &ctx) {
     if (ctx.pass() == 0) bootstrap(ctx);
 }
 
+void PMLTIntegrator::renderDirect(PassContext &ctx) {
+    const auto &est = dynamic_cast<const SampleEstimator &>(*direct_);
+    direct_->beginPass(ctx);
+    const int N = set_.directSamples;
+    // N samples per pixel of the scene's sampler (indices 0 .. N-1), the
+    // camera sample drawn as the loop's per-pixel work draws it.
+    ctx.forEachTile([&](int, const Bounds2i &tb, FilmTile &tile, Worker &w) {
+        uint64_t nonFinite = 0;
+        for (int y = tb.pMin.y; y < tb.pMax.y; ++y)
+            for (int x = tb.pMin.x; x < tb.pMax.x; ++x)
+                for (int j = 0; j < N; ++j) {
+                    Sampler &sampler = *w.sampler;
+                    const Point2i pixel{x, y};
+                    sampler.startPixelSample(pixel, j);
+                    CameraSample cs;
+                    const Point2 u = sampler.get2D();
+                    cs.pFilm = Point2(x + u.x, y + u.y);
+                    cs.pLens = sampler.get2D();
+                    SampleRecorder rec(tile, pixel, cs.pFilm);
+                    est.estimate(cs, sampler, w.arena, rec);
+                    nonFinite += rec.nonFinite;
+                    w.arena.reset();
+                }
+        ctx.addNonFinite(nonFinite);
+    });
+}
+
 void PMLTIntegrator::runPass(PassContext &ctx) {
+    if (direct_ && ctx.pass() == 0) renderDirect(ctx);
     if (chains_.empty()) return;
     const int64_t nChains = int64_t(chains_.size());
     const int64_t M = int64_t(ctx.sampleCount()) * film_.pixels.area();
@@ -237,7 +287,9 @@ void PMLTIntegrator::runPass(PassContext &ctx) {
             double ratio = 0;
             const pmlt::ProposalResult res = mut.propose(MutationType(type), xs, u, wk.arena, &ys, &ratio, &mst);
             Float a = 0;
-            if (res == pmlt::ProposalResult::Proposed) {
+            if (res == pmlt::ProposalResult::Proposed && direct_ && ys.x.size() <= 3) {
+                ++zero[type];  // outside the chains' target (directsamples)
+            } else if (res == pmlt::ProposalResult::Proposed) {
                 const double sel = mut.selectionProbability(MutationType(type), ys.x, weights) * wsum / weights[type];
                 a = Float(std::min(1.0, ratio * sel));
             }
@@ -327,7 +379,8 @@ std::string PMLTIntegrator::statistics() const {
             if (ms.byStatus[k] > 0) o << "; " << ToString(ManifoldStatus(k)) << " " << ms.byStatus[k];
     }
     o << "\n";
-    if (nStartMismatch_ > 0) o << "  chain starts that could not be rebuilt: " << nStartMismatch_ << "\n";
+    if (nStartMismatch_ > 0)
+        o << "  chain starts that could not be rebuilt (drawn again): " << nStartMismatch_ << "\n";
     if (rescale_ != 1) o << "  interrupted pass: image scaled by " << rescale_ << " (mutations issued / run)\n";
     if (!warning_.empty()) o << "  " << warning_ << "\n";
     return o.str();

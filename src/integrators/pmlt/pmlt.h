@@ -23,11 +23,20 @@
 //   integer bootstrapsamples 100000    bidirectional samples of the bootstrap
 //   integer chains 1000                Markov chains
 //   integer mutationsperpixel 100      mutations per pixel when --spp is not given
+//   integer directsamples 0            direct light separately (below); 0: the chains render it
 //   float bidirectional 1              selection weights (relative) of the mutations;
 //   float lens 1                         the bidirectional mutation's must be positive
 //   float caustic 1
 //   float multichain 1
 //   float manifold 1
+// directsamples N > 0 (G-MLT paper, Sec. 7: "direct lighting is computed
+// separately using low discrepancy sampling"): paths with at most one
+// scattering vertex (emitters seen directly, one-bounce light) leave the
+// chains' target (the bootstrap, b and the mutations ignore them) and are
+// estimated in the first pass by N samples per pixel of the scene's sampler
+// with the path tracer at maxdepth 1 (next-event estimation and BSDF sampling
+// under MIS), through the pixel filter; the film adds that average to the
+// chains' splats.
 // Splats are unfiltered (the pixel holding the raster point), as mlt's.
 #pragma once
 #include <atomic>
@@ -46,6 +55,7 @@ struct PMLTSettings {
     int bootstrapSamples;
     int chains;
     int mutationsPerPixel;
+    int directSamples;
     // Selection weights (relative) by MutationType.
     Float bidirectional, lens, caustic, multiChain, manifold;
     Float weight(pmlt::MutationType t) const {
@@ -122,6 +132,8 @@ class PMLTIntegrator : public Integrator {
     AtomicCounts typeCounts_[pmlt::kMutationTypes];
     std::atomic<int64_t> nMutations_{0}, nStartMismatch_{0}, nWalks_{0}, nWalkFailures_{0};
     std::unique_ptr<EmbreeManifoldScene> mscene_;
+    std::unique_ptr<Integrator> direct_;  // directsamples: the path tracer at maxdepth 1
+    void renderDirect(PassContext &ctx);
     int64_t nBootstrapSamples_ = 0;
     double rescale_ = 1;
 };

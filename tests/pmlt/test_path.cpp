@@ -84,9 +84,14 @@ TEST(PMLTPath, ContributionEqualsBidirectionalEstimateTimesDensity) {
 TEST(PMLTMutation, ChoiceProbabilitiesSumToOne) {
     SceneSetup su(ConformanceScene("diffuse-box"));
     pmlt::MutationSettings ms;
-    ms.maxDepth = 5;
+    ms.maxDepth = 9;
     pmlt::Mutator m(su.ctx, su.film, ms);
     for (int n = 2; n <= ms.maxDepth + 2; ++n) {
+        for (int nd = 0; nd <= n; ++nd) {  // the closed form against the rules
+            int count = 0;
+            for (int a = 0; a + nd <= n; ++a) count += m.allowedPosition(n, nd, a);
+            EXPECT_EQ(m.positionCount(n, nd), count) << "n " << n << " nd " << nd;
+        }
         double sum = 0;
         for (int nd = 0; nd <= n; ++nd) sum += m.deletionProbability(n, nd);
         EXPECT_NEAR(sum, 1, 1e-12) << "n " << n;

@@ -319,7 +319,6 @@ void MLTIntegrator::runPass(PassContext &ctx) {
     const int64_t first = mutationsIssued_;
     mutationsIssued_ += M;
     // Mutation j of the render goes to chain j mod chains: chain i's share of [0, x).
-    auto share = [nChains](int64_t x, int64_t i) { return x > i ? (x - i - 1) / nChains + 1 : 0; };
     const double b = b_;
     // largestepmis (mlt.h): the large steps' density per mutation at each depth,
     // q_d = largestepprobability x b_d / b, b_d / b being the probability that a
@@ -334,7 +333,7 @@ void MLTIntegrator::runPass(PassContext &ctx) {
         }
     }
     ctx.forEachItem(nChains, kMutationTag, [&](int64_t i, RNG &rng, SampleRecorder &rec, Worker &wk) {
-        const int64_t count = share(first + M, i) - share(first, i);
+        const int64_t count = ChainShare(first + M, i, nChains) - ChainShare(first, i, nChains);
         Chain &c = chains_[size_t(i)];
         if (count == 0 || !(c.I > 0)) return;
         c.u.setRNG(&rng);
@@ -401,18 +400,9 @@ void MLTIntegrator::runPass(PassContext &ctx) {
 void MLTIntegrator::finish(const Film &, const RenderStats &, Image *out) {
     // The film divides by the samples per pixel of the passes run; an
     // interrupt can skip chains of the last pass: scale by issued / performed.
-    const int64_t done = nMutations_.load();
-    rescale_ = 1;
-    if (done > 0 && done != mutationsIssued_) {
-        rescale_ = double(mutationsIssued_) / double(done);
-        ScaleColorChannels(out, rescale_);
-    }
-    Metadata &m = out->metadata;
-    m["mlt_b"] = MetaValue::Double(b_);
-    m["mlt_mutations"] = MetaValue::Int(done);
-    m["mlt_chains"] = MetaValue::Int(int64_t(chains_.size()));
-    m["mlt_bootstrap_nonzero"] = MetaValue::Int(nBootstrapNonZero_);
-    if (!warning_.empty()) m["mlt_warning"] = warning_;
+    rescale_ = FinishMetropolisImage(out, "mlt", b_, mutationsIssued_, nMutations_.load(), int64_t(chains_.size()),
+                                     warning_);
+    out->metadata["mlt_bootstrap_nonzero"] = MetaValue::Int(nBootstrapNonZero_);
 }
 
 std::vector<int64_t> MLTIntegrator::chainsPerDepth() const {

@@ -117,6 +117,15 @@ Mutator::Mutator(const BidirContext &ctx, const FilmDomain &film, const Mutation
     : ctx_(ctx), film_(film), set_(s) {
     if (set_.lensR2 <= 0) set_.lensR2 = Float(0.1) * Float(std::max(film.pixels.width(), film.pixels.height()));
     set_.lensR2 = std::max(set_.lensR2, set_.lensR1 * Float(1.0001));
+    // Tables of the bidirectional mutation's choice probabilities (O(1) each).
+    const int maxN = set_.maxDepth + 2;
+    deleteNorm_.assign(size_t(maxN) + 1, 0.0);
+    for (int n = 2; n <= maxN; ++n)
+        for (int k = 0; k <= n; ++k)
+            if (positionCount(n, k) > 0) deleteNorm_[size_t(n)] += DeleteWeight(k);
+    addOffset_ = maxN + 1;
+    addPrefix_.assign(size_t(2 * addOffset_ + 2), 0.0);
+    for (size_t i = 1; i < addPrefix_.size(); ++i) addPrefix_[i] = addPrefix_[i - 1] + AddWeight(int(i) - 1 - addOffset_);
 }
 
 ProposalResult Mutator::propose(MutationType type, const State &x, Sampler &u, Arena &arena, State *y,
@@ -148,17 +157,19 @@ bool Mutator::allowedPosition(int n, int nd, int a) const {
 }
 
 int Mutator::positionCount(int n, int nd) const {
-    int c = 0;
-    for (int a = 0; a + nd <= n; ++a) c += allowedPosition(n, nd, a);
-    return c;
+    // allowedPosition in closed form: a in [0, n - nd] without a = 1 and
+    // without a = n - nd - 1 (a lone kept emitter); insertions a in [2, n - 2].
+    if (nd < 0 || nd > n) return 0;
+    if (nd == 0) return std::max(0, n - 3);
+    const int A = n - nd;
+    return (A + 1) - (A >= 1 ? 1 : 0) - (A >= 1 && A - 1 != 1 ? 1 : 0);
 }
 
 Float Mutator::deletionProbability(int n, int nd) const {
     if (positionCount(n, nd) == 0) return 0;
-    Float sum = 0;
-    for (int k = 0; k <= n; ++k)
-        if (positionCount(n, k) > 0) sum += DeleteWeight(k);
-    return DeleteWeight(nd) / sum;
+    // Normaliser over the deletion counts that have a position (cached per n).
+    if (n >= int(deleteNorm_.size())) return 0;
+    return DeleteWeight(nd) / deleteNorm_[size_t(n)];
 }
 
 bool Mutator::allowedAddition(int n, int nd, int a, int na) const {
@@ -171,10 +182,16 @@ bool Mutator::allowedAddition(int n, int nd, int a, int na) const {
 
 Float Mutator::additionProbability(int n, int nd, int a, int na) const {
     if (!allowedAddition(n, nd, a, na)) return 0;
-    Float sum = 0;
-    for (int k = 0; k <= set_.maxDepth + 2; ++k)
-        if (allowedAddition(n, nd, a, k)) sum += AddWeight(k - nd);
-    return AddWeight(na - nd) / sum;
+    // The allowed counts are a contiguous range [lo, hi] (less na = 0 when
+    // that is not allowed): the normaliser from prefix sums of AddWeight.
+    const int lo = std::max(0, 2 - (n - nd)), hi = set_.maxDepth + 2 - (n - nd);
+    auto prefix = [&](int delta) {  // sum of AddWeight(d) for d < delta
+        const int i = std::clamp(delta + addOffset_, 0, int(addPrefix_.size()) - 1);
+        return addPrefix_[size_t(i)];
+    };
+    double sum = prefix(hi - nd + 1) - prefix(lo - nd);
+    if (lo == 0 && !allowedAddition(n, nd, a, 0)) sum -= AddWeight(-nd);
+    return Float(AddWeight(na - nd) / sum);
 }
 
 // T of the move that deleted the vertices the state's path holds at [a, a + na)

@@ -88,6 +88,9 @@ class Mutator {
     Float deletionProbability(int n, int nd) const;
     int positionCount(int n, int nd) const;
     Float additionProbability(int n, int nd, int a, int na) const;
+    // The rules behind them (tests compare the closed forms with them).
+    bool allowedPosition(int n, int nd, int a) const;
+    bool allowedAddition(int n, int nd, int a, int na) const;
 
   private:
     ProposalResult bidirectional(const State &x, Sampler &u, Arena &arena, State *y, double *ratioOut) const;
@@ -99,13 +102,14 @@ class Mutator {
     // it with x's specular lobes (lens, multi-chain and manifold perturbations).
     bool traceEyeChain(const State &x, int b, Sampler &u, Arena &arena, State *y,
                        SurfaceInteraction *siB) const;
-    bool allowedPosition(int n, int nd, int a) const;
-    bool allowedAddition(int n, int nd, int a, int na) const;
     Float bidirDensity(const State &s, int a, int nd, int na, int n) const;
 
     const BidirContext &ctx_;
     FilmDomain film_;
     MutationSettings set_;
+    std::vector<double> deleteNorm_;  // per path size n: sum of the deletion weights with a position
+    std::vector<double> addPrefix_;   // prefix sums of the addition weights over delta = na - nd
+    int addOffset_ = 0;               // addPrefix_[delta + addOffset_] = sum of weights below delta
 };
 
 // Traces from `from` along dir and makes the vertex hit (an infinite-light

@@ -254,13 +254,12 @@ void PMLTIntegrator::runPass(PassContext &ctx) {
     const int64_t M = int64_t(ctx.sampleCount()) * film_.pixels.area();
     const int64_t first = mutationsIssued_;
     mutationsIssued_ += M;
-    auto share = [nChains](int64_t x, int64_t i) { return x > i ? (x - i - 1) / nChains + 1 : 0; };
     Float weights[pmlt::kMutationTypes];
     for (int k = 0; k < pmlt::kMutationTypes; ++k) weights[k] = set_.weight(MutationType(k));
     const double b = b_;
     const pmlt::Mutator mut(ctx_, film_, mset_);
     ctx.forEachItem(nChains, kMutationTag, [&](int64_t i, RNG &rng, SampleRecorder &rec, Worker &wk) {
-        const int64_t count = share(first + M, i) - share(first, i);
+        const int64_t count = ChainShare(first + M, i, nChains) - ChainShare(first, i, nChains);
         Chain &ch = chains_[size_t(i)];
         if (count == 0 || !(ch.I > 0)) return;
         thread_local Arena cur;
@@ -341,17 +340,8 @@ PMLTIntegrator::TypeCounts PMLTIntegrator::counts(MutationType t) const {
 }
 
 void PMLTIntegrator::finish(const Film &, const RenderStats &, Image *out) {
-    const int64_t done = nMutations_.load();
-    rescale_ = 1;
-    if (done > 0 && done != mutationsIssued_) {
-        rescale_ = double(mutationsIssued_) / double(done);
-        ScaleColorChannels(out, rescale_);
-    }
-    Metadata &m = out->metadata;
-    m["pmlt_b"] = MetaValue::Double(b_);
-    m["pmlt_mutations"] = MetaValue::Int(done);
-    m["pmlt_chains"] = MetaValue::Int(int64_t(chains_.size()));
-    if (!warning_.empty()) m["pmlt_warning"] = warning_;
+    rescale_ = FinishMetropolisImage(out, "pmlt", b_, mutationsIssued_, nMutations_.load(), int64_t(chains_.size()),
+                                     warning_);
 }
 
 std::string PMLTIntegrator::statistics() const {

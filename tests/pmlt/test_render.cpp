@@ -50,29 +50,33 @@ TEST(PMLTRender, SealedLightGivesBlackImageAndWarning) {
     EXPECT_EQ(MeanLum(r.image), 0);
 }
 
-// directsamples: the chains render paths of two or more scattering vertices,
-// the first pass the rest by the path tracer at maxdepth 1. K = 30 runs of
-// each against bdpt at 16 spp, reduced to the 10 pixel-set means of
-// mlt/unbiased_util.h, Welch's t per set at alpha = 1e-4 / 10 (Bonferroni:
-// false-positive rate <= 1e-4); the same runs scaled by 1.05 or 1/1.05 must be
-// rejected (power for a bias of 5%).
-TEST(PMLTRender, DirectSamplesAgreeWithBdpt) {
+// directsamples (the chains render paths of two or more scattering vertices,
+// the first pass the rest by the path tracer at maxdepth 1) and rrdepth
+// (Russian roulette in the bootstrap's subpaths from the second bounce on:
+// an unbiased weighting of the candidates, so b and the starts stay
+// unbiased). K = 30 runs of each against bdpt at 16 spp, reduced to the 10
+// pixel-set means of mlt/unbiased_util.h, Welch's t per set at alpha =
+// 1e-4 / 20 (Bonferroni over both configurations: false-positive rate
+// <= 1e-4); the same runs scaled by 1.05 or 1/1.05 must be rejected (power for
+// a bias of 5%).
+TEST(PMLTRender, DirectSamplesAndRouletteAgreeWithBdpt) {
     const int K = 30, S = 16;
-    const std::string pm = BoxScene(Line("\"integer directsamples\" [4]"));
     const std::string bd = BoxScene("Integrator \"bdpt\" \"integer maxdepth\" [4]");
-    std::vector<std::vector<double>> rp, rb;
-    for (int k = 0; k < K; ++k) {
-        rp.push_back(mlt_test::Reduce(Render(pm, S, uint64_t(50001 + k)).image));
-        rb.push_back(mlt_test::Reduce(Render(bd, S, uint64_t(60001 + k)).image));
-    }
-    const double alpha = 1e-4 / 10;
-    const mlt_test::Comparison c = mlt_test::Compare(rp, rb, 1, alpha);
-    std::cout << "[ pmlt ] directsamples vs bdpt: |t|/crit " << c.maxMargin << " (" << c.describe << ")\n";
-    EXPECT_LE(c.maxMargin, 1) << c.describe;
-    for (double scale : {1.05, 1 / 1.05}) {
-        const mlt_test::Comparison p = mlt_test::Compare(rp, rb, scale, alpha);
-        std::cout << "[ pmlt ] power x" << scale << ": " << p.maxMargin << "\n";
-        EXPECT_GT(p.maxMargin, 1) << "a " << scale << " bias is not detected";
+    std::vector<std::vector<double>> rb;
+    for (int k = 0; k < K; ++k) rb.push_back(mlt_test::Reduce(Render(bd, S, uint64_t(60001 + k)).image));
+    const double alpha = 1e-4 / 20;
+    for (const char *extra : {"\"integer directsamples\" [4]", "\"integer rrdepth\" [1]"}) {
+        const std::string pm = BoxScene(Line(extra));
+        std::vector<std::vector<double>> rp;
+        for (int k = 0; k < K; ++k) rp.push_back(mlt_test::Reduce(Render(pm, S, uint64_t(50001 + k)).image));
+        const mlt_test::Comparison c = mlt_test::Compare(rp, rb, 1, alpha);
+        std::cout << "[ pmlt ] " << extra << " vs bdpt: |t|/crit " << c.maxMargin << " (" << c.describe << ")\n";
+        EXPECT_LE(c.maxMargin, 1) << extra << ": " << c.describe;
+        for (double scale : {1.05, 1 / 1.05}) {
+            const mlt_test::Comparison p = mlt_test::Compare(rp, rb, scale, alpha);
+            std::cout << "[ pmlt ] power x" << scale << ": " << p.maxMargin << "\n";
+            EXPECT_GT(p.maxMargin, 1) << extra << ": a " << scale << " bias is not detected";
+        }
     }
 }
 

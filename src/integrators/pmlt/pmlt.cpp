@@ -36,6 +36,10 @@ ParamTable<PMLTSettings> Table() {
               "direct light (at most one scattering vertex) by this many samples per pixel in the first pass "
               "instead of the chains (0: the chains render it)",
               AtLeast(0));
+    t.integer("rrdepth", &S::rrDepth, -1,
+              "Russian roulette in the bootstrap's bidirectional subpaths after this many bounces (-1: off); "
+              "an unbiased weighting of the candidates, it shortens the bootstrap at large maxdepth",
+              AtLeast(-1));
     t.real("bidirectional", &S::bidirectional, 1, "selection weight of the bidirectional mutation",
            Range{0, 1e9});
     t.real("lens", &S::lens, 1, "selection weight of the lens perturbation", Range{0, 1e9});
@@ -70,7 +74,9 @@ void PMLTIntegrator::preprocess(const Scene &scene, Film &film) {
     for (const auto &l : scene.lights) lights_.push_back(l.get());
     lightSampler_ = LightSampler(scene.lights, "power", loc_);
     ctx_.init(scene, lightSampler_, MISHeuristic::Balance);
-    ctx_.rrDepth = -1;
+    // Russian roulette only in the bootstrap's subpaths (makeSample); the
+    // mutations build paths of a chosen length and never use it.
+    ctx_.rrDepth = set_.rrDepth;
     film_.pixels = film.pixelBounds();
     const Point2i full = film.fullResolution();
     film_.scale = film_.pixels.area() > 0 ? Float(int64_t(full.x) * full.y) / Float(film_.pixels.area()) : 1;

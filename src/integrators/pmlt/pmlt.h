@@ -24,6 +24,8 @@
 //   integer chains 1000                Markov chains
 //   integer mutationsperpixel 100      mutations per pixel when --spp is not given
 //   integer directsamples 0            direct light separately (below); 0: the chains render it
+//   integer rrdepth -1                 Russian roulette in the bootstrap's subpaths after this many
+//                                        bounces (-1: off; the G-MLT paper's renders use 5)
 //   float bidirectional 1              selection weights (relative) of the mutations;
 //   float lens 1                         the bidirectional mutation's must be positive
 //   float caustic 1
@@ -56,6 +58,7 @@ struct PMLTSettings {
     int chains;
     int mutationsPerPixel;
     int directSamples;
+    int rrDepth;
     // Selection weights (relative) by MutationType.
     Float bidirectional, lens, caustic, multiChain, manifold;
     Float weight(pmlt::MutationType t) const {

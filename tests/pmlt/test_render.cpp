@@ -80,6 +80,20 @@ TEST(PMLTRender, DirectSamplesAndRouletteAgreeWithBdpt) {
     }
 }
 
+// bootstrapconnections caps the bootstrap by a count fixed by the parameters:
+// maxdepth 4 has (4 + 2)^2 / 2 = 18 connections per sample.
+TEST(PMLTRender, BootstrapConnectionsCapTheSampleCount) {
+    auto count = [](const std::string &extra) {
+        mlt_test::Rendered r = Render(BoxScene(Line(extra)), 1, 1);
+        EXPECT_GT(P(r).b(), 0);
+        return P(r).bootstrapSampleCount();
+    };
+    EXPECT_EQ(count(""), 4000);                                          // 4000 x 18 below the default cap
+    EXPECT_EQ(count("\"integer bootstrapconnections\" [36000]"), 2000);  // 36000 / 18
+    EXPECT_EQ(count("\"integer bootstrapconnections\" [18]"), 1000);     // at least 1000
+    EXPECT_EQ(count("\"integer bootstrapconnections\" [0]"), 4000);      // no cap
+}
+
 TEST(PMLTRender, BidirectionalMutationIsRequired) {
     EXPECT_THROW(Render(BoxScene(Line("\"float bidirectional\" [0]")), 1, 1), Error);
 }

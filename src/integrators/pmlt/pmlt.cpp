@@ -29,6 +29,10 @@ ParamTable<PMLTSettings> Table() {
     t.integer("maxdepth", &S::maxDepth, 5, "maximum path depth (edges - 1)", AtLeast(0));
     t.integer("bootstrapsamples", &S::bootstrapSamples, 100000,
               "bidirectional samples of the bootstrap (b and the chain starts)", AtLeast(1));
+    t.integer("bootstrapconnections", &S::bootstrapConnections, 50000000,
+              "cap on the bootstrap's connections, ~(maxdepth + 2)^2 / 2 per sample (0: no cap; at least 1000 "
+              "samples)",
+              AtLeast(0));
     t.integer("chains", &S::chains, 1000, "Markov chains", AtLeast(1));
     t.integer("mutationsperpixel", &S::mutationsPerPixel, 100, "mutations per pixel when --spp is not given",
               AtLeast(1));
@@ -122,8 +126,17 @@ bool PMLTIntegrator::makeSample(uint64_t key, int64_t k, Arena &arena, Sample *s
     return true;
 }
 
+int64_t PMLTIntegrator::bootstrapSampleCount() const {
+    // Fixed by the parameters alone (not by the samples' work), so b stays an
+    // unbiased mean for any cap.
+    const int64_t n = set_.maxDepth + 2, perSample = std::max<int64_t>(1, n * n / 2);
+    if (set_.bootstrapConnections <= 0) return set_.bootstrapSamples;
+    return std::min<int64_t>(set_.bootstrapSamples,
+                             std::max<int64_t>(1000, int64_t(set_.bootstrapConnections) / perSample));
+}
+
 void PMLTIntegrator::bootstrap(PassContext &ctx) {
-    const int64_t N = set_.bootstrapSamples;
+    const int64_t N = bootstrapSampleCount();
     const uint64_t key = ctx.seed() ^ kBootstrapTag, ckey = ctx.seed() ^ kConnectTag;
     constexpr int64_t kGrain = 256;
     std::vector<std::vector<Candidate>> chunks(size_t((N + kGrain - 1) / kGrain));

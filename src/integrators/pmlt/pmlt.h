@@ -21,6 +21,10 @@
 // Parameters:
 //   integer maxdepth 5                 maximum path depth (edges - 1)
 //   integer bootstrapsamples 100000    bidirectional samples of the bootstrap
+//   integer bootstrapconnections 50000000  cap on the bootstrap's connections (0: none): a sample
+//                                        of maxdepth d evaluates ~(d + 2)^2 / 2 strategies, so
+//                                        N = min(bootstrapsamples, cap / ((d + 2)^2 / 2)), at
+//                                        least 1000 (no cut up to maxdepth 29 with the defaults)
 //   integer chains 1000                Markov chains
 //   integer mutationsperpixel 100      mutations per pixel when --spp is not given
 //   integer directsamples 0            direct light separately (below); 0: the chains render it
@@ -55,6 +59,7 @@ namespace gradus {
 struct PMLTSettings {
     int maxDepth;
     int bootstrapSamples;
+    int bootstrapConnections;
     int chains;
     int mutationsPerPixel;
     int directSamples;
@@ -89,6 +94,7 @@ class PMLTIntegrator : public Integrator {
 
     const PMLTSettings &settings() const { return set_; }
     double b() const { return b_; }
+    int64_t bootstrapSampleCount() const;  // N after the bootstrapconnections cap
     struct TypeCounts {
         int64_t proposed = 0, accepted = 0, notApplicable = 0, zero = 0;
         double acceptSum = 0;  // sum of acceptance probabilities

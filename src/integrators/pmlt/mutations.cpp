@@ -196,7 +196,7 @@ Float Mutator::additionProbability(int n, int nd, int a, int na) const {
 
 // T of the move that deleted the vertices the state's path holds at [a, a + na)
 // (its `na` new vertices) from a path of n vertices with nd there: Veach 1997,
-// Eq. 11.10, P_d P_pos P_a times the split-averaged density of those vertices.
+// Ch. 11 (bidirectional mutation), P_d P_pos P_a times the split-averaged density of those vertices.
 Float Mutator::bidirDensity(const State &s, int a, int nd, int na, int n) const {
     const Float pd = deletionProbability(n, nd);
     const int positions = positionCount(n, nd);
@@ -211,7 +211,7 @@ Float Mutator::bidirDensity(const State &s, int a, int nd, int na, int n) const 
 ProposalResult Mutator::bidirectional(const State &xs, Sampler &u, Arena &arena, State *ys, double *ratioOut) const {
     const Path &x = xs.x;
     const int n = x.size();
-    // Deleted count, position, added count, split (Veach 1997, Sec. 11.4.2).
+    // Deleted count, position, added count, split (Veach 1997, Ch. 11, bidirectional mutation).
     int nd = 0;
     {
         Float r = u.get1D();
@@ -342,7 +342,7 @@ ProposalResult Mutator::bidirectional(const State &xs, Sampler &u, Arena &arena,
     }
     for (int i = 1; i < np; ++i) y.v[size_t(i)].wo = PackedVec3(Dir(y.v[size_t(i)], y.v[size_t(i - 1)]));
     if (!Evaluate(ctx_, film_, y, yb.data(), &ys->e)) return ProposalResult::Zero;
-    // a = min(1, I(y) T(y -> x) / (I(x) T(x -> y))) (Veach 1997, Eqs. 11.5, 11.10).
+    // a = min(1, I(y) T(y -> x) / (I(x) T(x -> y))) (Metropolis-Hastings; Veach 1997, Ch. 11).
     const Float tFwd = bidirDensity(*ys, a, nd, na, n);
     const Float tRev = bidirDensity(xs, a, na, nd, np);
     if (!(tFwd > 0) || !(tRev > 0)) return ProposalResult::Zero;
@@ -459,8 +459,11 @@ ProposalResult Mutator::lens(const State &xs, bool multiChain, Sampler &u, Arena
     yb.insert(yb.end(), xs.bsdf.begin() + m + 1, xs.bsdf.end());
     for (int i = 1; i < n; ++i) y.v[size_t(i)].wo = PackedVec3(Dir(y.v[size_t(i)], y.v[size_t(i - 1)]));
     if (!Evaluate(ctx_, film_, y, yb.data(), &ys->e)) return ProposalResult::Zero;
-    // D: density of x_1 .. x_m given the perturbed film position and
-    // directions (mutations.h); the kernels are symmetric.
+    // Veach 1997, Ch. 11 (lens and multi-chain perturbations): with
+    // symmetric kernels T(x -> y) / T(y -> x) = D(y) / D(x), D the density of
+    // x_1 .. x_m per unit film area and per unit solid angle of each perturbed
+    // direction: the camera's p_E(x_1), then p_E / P_lobe through a specular
+    // vertex (its lobe is forced) or the solid angle -> area conversion.
     auto D = [&](const State &s) {
         double d = s.e.pE[1];
         for (int j = 2; j <= m; ++j)
@@ -506,6 +509,9 @@ ProposalResult Mutator::caustic(const State &xs, Sampler &u, Arena &arena, State
     yb.insert(yb.end(), xs.bsdf.begin() + c, xs.bsdf.end());
     for (int i = 1; i < n; ++i) y.v[size_t(i)].wo = PackedVec3(Dir(y.v[size_t(i)], y.v[size_t(i - 1)]));
     if (!Evaluate(ctx_, film_, y, yb.data(), &ys->e)) return ProposalResult::Zero;
+    // Veach 1997, Ch. 11 (caustic perturbation): D per unit solid angle of
+    // the perturbed direction at x_c: the conversion to area at x_{c-1}, then
+    // p_L / P_lobe per specular vertex traced back to x_1.
     auto D = [&](const State &s) {
         double d = ConvertDensity(1, s.x.v[size_t(c)], s.x.v[size_t(c - 1)]);
         for (int j = 1; j <= c - 2; ++j) d *= s.e.pL[size_t(j)] / s.e.lobeL[size_t(j + 1)];

@@ -1,15 +1,15 @@
 // The mutations of path-space MLT (Veach and Guibas 1997; Veach 1997,
-// Sec. 11.4) on pmlt::Path, each with its acceptance probability
-// a(x -> y) = min(1, I(y) T(y -> x) / (I(x) T(x -> y))) (Veach 1997, Eq. 11.5).
+// Ch. 11) on pmlt::Path, each with its acceptance probability
+// a(x -> y) = min(1, I(y) T(y -> x) / (I(x) T(x -> y))) (Metropolis-Hastings).
 //
-// Bidirectional mutation (Sec. 11.4.2): deletes the vertices [a, a + n_d)
+// Bidirectional mutation: deletes the vertices [a, a + n_d)
 // and inserts n_a new ones, t' sampled from the kept camera prefix and
 // s' = n_a - t' from the kept light suffix, joined by a shadow-tested edge.
 // T(x -> y) = P_d(n_d) P_pos(a) P_a(n_a) sum_{t'} P_split(t') p_{t'}(y), the sum
-// over every split that could have produced the new vertices (Eq. 11.10),
+// over every split that could have produced the new vertices,
 // p_{t'} the product of their densities in that technique (path.h).
 //
-// Perturbations (Sec. 11.4.3-11.4.4) regenerate a run of vertices from a
+// Perturbations (lens, caustic, multi-chain) regenerate a run of vertices from a
 // perturbed film position or direction, tracing specular vertices with the
 // lobe (reflection or transmission) the old path took. The perturbation
 // kernels are symmetric (film offset of density ~ 1/r in [r1, r2]; direction

@@ -3,7 +3,7 @@
 //
 // A path is its vertices (integrators/common/path_vertex.h) plus, per vertex,
 // whether the path scatters there through a specular lobe (VERTEX_DELTA).
-// Evaluate() computes the measurement contribution F(x) (Veach 1997, Eq. 8.7)
+// Evaluate() computes the measurement contribution F(x) (Veach 1997, Ch. 8, the path integral)
 // and, for every vertex, the area densities with which the camera side (pE)
 // and the light side (pL) of the bidirectional sampler generate it: the
 // quantities every mutation's transition density is built of.
@@ -14,8 +14,8 @@
 // mu = eta^2 |cos_ns| d(omega), which specular reflection and refraction
 // preserve (eta: refractive index on the side of the direction, 1 outside,
 // BxDF::eta inside), so the delta is the same distribution from both sides
-// and cancels between F and every density (Veach 1997, Sec. 10.3.5 argues the
-// same in projected solid angle, which suffices for reflection):
+// and cancels between F and every density (for reflection the projected solid angle of
+// Veach 1997 would do):
 //   f_i   = f_lobe |cos_o,ns| eta_o^2      (f_lobe: the lobe's value, BSDFSample::f)
 //   p_ω   = P_lobe |cos_o,ns| eta_o^2      (P_lobe: its discrete probability)
 // for the direction o that the query generates. Then F / p_j, the ratios

@@ -295,7 +295,7 @@ void PMLTIntegrator::runPass(PassContext &ctx) {
             // Selection among the mutations that apply to x's pattern (weights
             // renormalised); one that changes the pattern (the bidirectional
             // mutation) has the selection ratio P(t | y) / P(t | x) in its
-            // acceptance (Veach 1997, Eq. 11.5 with the mixture's components).
+            // acceptance (Metropolis-Hastings for a mixture of kernels).
             double cdf[pmlt::kMutationTypes], wsum = 0;
             for (int t = 0; t < pmlt::kMutationTypes; ++t)
                 cdf[t] = (wsum += mut.applies(MutationType(t), xs.x) ? weights[t] : 0);
@@ -317,7 +317,7 @@ void PMLTIntegrator::runPass(PassContext &ctx) {
                 ++prop[type];
                 accMicro[type] += int64_t(a * 1e6);
             }
-            // Expected values (Veach 1997, Sec. 11.5): the proposal with weight a,
+            // Expected values (Veach and Guibas 1997, "expected values"): the proposal with weight a,
             // the current state with 1 - a, each as b F / I.
             if (a > 0) rec.splat(ys.e.pRaster, ys.e.F * Float(b * a / ys.e.I));
             if (a < 1) rec.splat(xs.e.pRaster, xs.e.F * Float(b * (1 - a) / xs.e.I));

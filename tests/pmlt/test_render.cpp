@@ -88,7 +88,7 @@ TEST(PMLTRender, BootstrapConnectionsCapTheSampleCount) {
         EXPECT_GT(P(r).b(), 0);
         return P(r).bootstrapSampleCount();
     };
-    EXPECT_EQ(count(""), 4000);                                          // 4000 x 18 below the default cap
+    EXPECT_EQ(count(""), 4000);                                          // no cap by default
     EXPECT_EQ(count("\"integer bootstrapconnections\" [36000]"), 2000);  // 36000 / 18
     EXPECT_EQ(count("\"integer bootstrapconnections\" [18]"), 1000);     // at least 1000
     EXPECT_EQ(count("\"integer bootstrapconnections\" [0]"), 4000);      // no cap

@@ -29,9 +29,9 @@ ParamTable<PMLTSettings> Table() {
     t.integer("maxdepth", &S::maxDepth, 5, "maximum path depth (edges - 1)", AtLeast(0));
     t.integer("bootstrapsamples", &S::bootstrapSamples, 100000,
               "bidirectional samples of the bootstrap (b and the chain starts)", AtLeast(1));
-    t.integer("bootstrapconnections", &S::bootstrapConnections, 50000000,
-              "cap on the bootstrap's connections, ~(maxdepth + 2)^2 / 2 per sample (0: no cap; at least 1000 "
-              "samples)",
+    t.integer("bootstrapconnections", &S::bootstrapConnections, 0,
+              "cap on the bootstrap's connections, ~(maxdepth + 2)^2 / 2 per sample without Russian roulette "
+              "(0: no cap; at least 1000 samples)",
               AtLeast(0));
     t.integer("chains", &S::chains, 1000, "Markov chains", AtLeast(1));
     t.integer("mutationsperpixel", &S::mutationsPerPixel, 100, "mutations per pixel when --spp is not given",
@@ -40,9 +40,10 @@ ParamTable<PMLTSettings> Table() {
               "direct light (at most one scattering vertex) by this many samples per pixel in the first pass "
               "instead of the chains (0: the chains render it)",
               AtLeast(0));
-    t.integer("rrdepth", &S::rrDepth, -1,
-              "Russian roulette in the bootstrap's bidirectional subpaths after this many bounces (-1: off); "
-              "an unbiased weighting of the candidates, it shortens the bootstrap at large maxdepth",
+    t.integer("rrdepth", &S::rrDepth, 3,
+              "Russian roulette in the bootstrap's bidirectional subpaths after this many bounces (-1: off), "
+              "as bdpt's default; an unbiased weighting of the candidates that keeps the bootstrap's cost "
+              "that of bdpt samples at any maxdepth",
               AtLeast(-1));
     t.real("bidirectional", &S::bidirectional, 1, "selection weight of the bidirectional mutation",
            Range{0, 1e9});

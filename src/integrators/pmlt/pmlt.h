@@ -21,15 +21,15 @@
 // Parameters:
 //   integer maxdepth 5                 maximum path depth (edges - 1)
 //   integer bootstrapsamples 100000    bidirectional samples of the bootstrap
-//   integer bootstrapconnections 50000000  cap on the bootstrap's connections (0: none): a sample
-//                                        of maxdepth d evaluates ~(d + 2)^2 / 2 strategies, so
-//                                        N = min(bootstrapsamples, cap / ((d + 2)^2 / 2)), at
-//                                        least 1000 (no cut up to maxdepth 29 with the defaults)
+//   integer bootstrapconnections 0     cap on the bootstrap's connections (0: none): a sample
+//                                        of full-length subpaths (rrdepth -1) evaluates
+//                                        ~(d + 2)^2 / 2 strategies at maxdepth d, so
+//                                        N = min(bootstrapsamples, cap / ((d + 2)^2 / 2)), at least 1000
 //   integer chains 1000                Markov chains
 //   integer mutationsperpixel 100      mutations per pixel when --spp is not given
 //   integer directsamples 0            direct light separately (below); 0: the chains render it
-//   integer rrdepth -1                 Russian roulette in the bootstrap's subpaths after this many
-//                                        bounces (-1: off; the G-MLT paper's renders use 5)
+//   integer rrdepth 3                  Russian roulette in the bootstrap's subpaths after this many
+//                                        bounces (-1: off), bdpt's default (the G-MLT paper uses 5)
 //   float bidirectional 1              selection weights (relative) of the mutations;
 //   float lens 1                         the bidirectional mutation's must be positive
 //   float caustic 1

@@ -293,6 +293,9 @@ ProposalResult Mutator::bidirectional(const State &xs, Sampler &u, Arena &arena,
             const Light *light = ctx_.lightSampler->sample(u.get1D(), &pmf);
             const Point2 u1 = u.get2D(), u2 = u.get2D();
             if (!light || pmf == 0) return ProposalResult::Zero;
+            // An emitter at infinity alone would be joined along a direction its
+            // sampling did not choose (ValidSplit excludes that technique).
+            if (sp == 1 && (light->flags & (LIGHT_INFINITE | LIGHT_DELTA_DIRECTION))) return ProposalResult::Zero;
             LightLeSample les;
             if (!light->sampleLe(u1, u2, &les) || les.pdfPos == 0 || les.pdfDir == 0 || les.L.isBlack())
                 return ProposalResult::Zero;
@@ -383,8 +386,13 @@ bool Mutator::applies(MutationType type, const Path &x) const {
     int c, m;
     switch (type) {
     case MutationType::Bidirectional: return true;  // a full regeneration is always possible
-    case MutationType::Lens: return !LensPattern(x, &c, &m);
-    case MutationType::MultiChain: return LensPattern(x, &c, &m);
+    case MutationType::Lens:
+    case MutationType::MultiChain: {
+        const bool multi = LensPattern(x, &c, &m);
+        // The perturbed x_m joins x_{m+1}: not a vertex at infinity (a direction).
+        if (m + 1 < x.size() && x.v[size_t(m + 1)].isInfiniteLight()) return false;
+        return multi == (type == MutationType::MultiChain);
+    }
     case MutationType::Caustic: return CausticPattern(x, &c);
     case MutationType::Manifold: {
         int b, geom;

@@ -196,11 +196,18 @@ bool ValidSplit(const BidirContext &ctx, const Path &x, const PathEval &e, int t
     const int n = x.size();
     if (t < 1 || t > n) return false;
     if (t == n) return e.pE[size_t(n - 1)] > 0;
+    // The emitter joined straight to the lens, bdpt's (1, 1): not a technique.
+    // A point or spot light would otherwise be seen by the camera, which no
+    // other technique (nor pbrt-v3) renders.
+    if (t == 1 && n == 2) return false;
     const PathVertex &a = x.v[size_t(t - 1)], &b = x.v[size_t(t)];
     if (a.delta() || b.delta()) return false;
     if (a.type == VertexType::Surface && a.material == nullptr) return false;
     if (b.type == VertexType::Light && b.light && (b.light->flags & LIGHT_DELTA_DIRECTION)) return false;
-    if (a.isInfiniteLight()) return false;
+    // No connection ends at infinity: a vertex at infinity stands for a
+    // direction, which a connection from a moved vertex would not keep (the
+    // bidirectional mutation never samples one alone, mutations.cpp).
+    if (a.isInfiniteLight() || b.isInfiniteLight()) return false;
     return EdgeConnectible(ctx, a, b);
 }
 

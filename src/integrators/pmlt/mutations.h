@@ -121,8 +121,6 @@ bool Trace(const BidirContext &ctx, const PathVertex &from, const Vec3 &dir, Are
 // vertex j, at the new vertex v arrived at from wo; marks v specular.
 bool FollowSpecular(const Path &x, int j, PathVertex *v, const BSDF &b, const Vec3 &wo, TransportMode mode,
                     Vec3 *wi);
-// Unit direction between two vertices.
-inline Vec3 Dir(const PathVertex &from, const PathVertex &to) { return Normalize(to.p - from.p); }
 
 // Path patterns of the perturbations (indices as in mutations.h / manifold_perturbation.cpp).
 // Lens: true when x_c is followed by a specular vertex (multi-chain), c and m set.

@@ -8,12 +8,6 @@ namespace gradus::pmlt {
 
 namespace {
 
-Vec3 Dir(const PathVertex &from, const PathVertex &to) {
-    const Vec3 d = to.p - from.p;
-    const Float l2 = d.lengthSquared();
-    return l2 > 0 ? d / std::sqrt(l2) : Vec3(0, 0, 0);
-}
-
 Float CosAt(const BidirContext &ctx, const PathVertex &v, const Vec3 &w) {
     if (v.type == VertexType::Camera) return AbsDot(Vec3(ctx.camera->lensNormal()), w);
     return v.onSurface() ? AbsDot(Vec3(v.ng), w) : Float(1);
@@ -35,6 +29,12 @@ Spectrum EmitterValue(const BidirContext &ctx, const PathVertex &e, const PathVe
 }
 
 }  // namespace
+
+Vec3 Dir(const PathVertex &from, const PathVertex &to) {
+    const Vec3 d = to.p - from.p;
+    const Float l2 = d.lengthSquared();
+    return l2 > 0 ? d / std::sqrt(l2) : Vec3(0, 0, 0);
+}
 
 Float EtaSquared(const BSDF &bsdf, const Vec3 &w) {
     const Float eta = bsdf.eta();

@@ -102,6 +102,8 @@ bool StrategyPath(const BidirContext &ctx, SubpathView light, SubpathView camera
 bool SpecularLobe(const BSDF &bsdf, const Vec3 &wo, const Vec3 &wi, TransportMode mode, Spectrum *f, Float *prob);
 // Samples the specular lobe that reflects (transmit = false) or transmits wo.
 bool SampleSpecularLobe(const BSDF &bsdf, const Vec3 &wo, bool transmit, TransportMode mode, BSDFSample *s);
+// Unit direction between two vertices (zero for coincident ones).
+Vec3 Dir(const PathVertex &from, const PathVertex &to);
 // Squared refractive index on the side of w at a vertex with this BSDF (1 outside).
 Float EtaSquared(const BSDF &bsdf, const Vec3 &w);
 // Geometry term of an edge (geometric normals; lens normal at the camera;

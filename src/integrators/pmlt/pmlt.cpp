@@ -234,6 +234,9 @@ void PMLTIntegrator::bootstrap(PassContext &ctx) {
         }
     });
     nStartMismatch_ += mismatch.load();
+    // The candidates serve the chain starts only (up to millions of entries).
+    nCandidates_ = int64_t(candidates_.size());
+    std::vector<Candidate>().swap(candidates_);
 }
 
 void PMLTIntegrator::beginPass(PassContext &ctx) {
@@ -367,7 +370,7 @@ void PMLTIntegrator::finish(const Film &, const RenderStats &, Image *out) {
 std::string PMLTIntegrator::statistics() const {
     std::ostringstream o;
     o << "Path-space MLT:\n";
-    o << "  bootstrap: " << nBootstrapSamples_ << " bidirectional samples, " << candidates_.size()
+    o << "  bootstrap: " << nBootstrapSamples_ << " bidirectional samples, " << nCandidates_
       << " contributing strategies, b = " << b_ << "\n";
     int64_t active = 0;
     for (const Chain &c : chains_) active += c.I > 0;

@@ -127,7 +127,8 @@ class PMLTIntegrator : public Integrator {
     BidirContext ctx_;
     pmlt::FilmDomain film_;
     pmlt::MutationSettings mset_;
-    std::vector<Candidate> candidates_;
+    std::vector<Candidate> candidates_;  // bootstrap strategies (freed once the chains start)
+    int64_t nCandidates_ = 0;
     double b_ = 0;
     std::string warning_;
     std::vector<Chain> chains_;

@@ -34,6 +34,9 @@ class Camera {
     // Samples a lens point as seen from ref (for t = 1 connections).
     virtual bool sampleWi(const Interaction &ref, Point2 u, CameraWiSample *s) const = 0;
     virtual Normal3 lensNormal() const = 0;  // world-space view direction (the lens plane normal)
+    // The ray from a given world-space lens point through film position pFilm
+    // (the lens point held, as G-MLT's shift holds x_0); false if none.
+    virtual bool rayThrough(const Point3 &lensPoint, Point2 pFilm, Ray *ray) const = 0;
     Point2i fullResolution;
 };
 
@@ -46,6 +49,7 @@ class PerspectiveCamera : public Camera {
     void pdfWe(const Ray &ray, Float *pdfPos, Float *pdfDir) const override;
     bool sampleWi(const Interaction &ref, Point2 u, CameraWiSample *s) const override;
     Normal3 lensNormal() const override { return viewDir_; }
+    bool rayThrough(const Point3 &lensPoint, Point2 pFilm, Ray *ray) const override;
     Float lensRadius() const { return lensRadius_; }
     // Raster position of a camera-space direction from the lens centre (for tests).
     const Transform &rasterFromCamera() const { return rasterFromCamera_; }

@@ -41,6 +41,21 @@ Float PerspectiveCamera::generateRay(const CameraSample &s, Ray *ray) const {
     return 1;
 }
 
+bool PerspectiveCamera::rayThrough(const Point3 &lensPoint, Point2 pFilm, Ray *ray) const {
+    const Vec3 d = Normalize(Vec3(cameraFromRaster_.applyPoint(Point3(pFilm.x, pFilm.y, 0))));
+    if (lensRadius_ <= 0) {
+        *ray = Ray(worldFromCamera_.applyPoint(Point3(0, 0, 0)), Normalize(worldFromCamera_.applyVector(d)));
+        return true;
+    }
+    // Thin lens: every ray through the film point meets the focal plane at the
+    // point the chief ray (through the lens centre) meets it.
+    const Point3 pFocus = worldFromCamera_.applyPoint(Point3(d * (focalDistance_ / d.z)));
+    const Vec3 w = pFocus - lensPoint;
+    if (!(w.lengthSquared() > 0)) return false;
+    *ray = Ray(lensPoint, Normalize(w));
+    return true;
+}
+
 // We of pbrt-v3's perspective camera: 1 / (A * lensArea * cos^4 theta) inside the image.
 Spectrum PerspectiveCamera::We(const Ray &ray, Point2 *pRaster) const {
     Float cosTheta = Dot(ray.d, viewDir_);

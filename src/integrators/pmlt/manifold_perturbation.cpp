@@ -32,23 +32,17 @@
 
 namespace gradus::pmlt {
 
-namespace {
-
-// Delta-free density of x_{b+1} .. x_c traced from x_b with a unit solid-angle density.
 double TraceDensity(const State &s, int b, int c) {
     double d = ConvertDensity(1, s.x.v[size_t(b)], s.x.v[size_t(b + 1)]);
     for (int j = b + 2; j <= c; ++j) d *= s.e.pE[size_t(j)] / s.e.lobeE[size_t(j - 1)];
     return d;
 }
 
-// Density of x_1 .. x_b per unit film area (up to the constant film factor).
 double EyeDensity(const State &s, int b) {
     double d = s.e.pE[1];
     for (int j = 2; j <= b; ++j) d *= s.e.pE[size_t(j)] / s.e.lobeE[size_t(j - 1)];
     return d;
 }
-
-}  // namespace
 
 bool ManifoldPattern(const Path &x, const EmbreeManifoldScene *mscene, int *bOut, int *cOut, int *endGeom) {
     const int n = x.size();
@@ -70,10 +64,24 @@ bool ManifoldPattern(const Path &x, const EmbreeManifoldScene *mscene, int *bOut
 
 ProposalResult Mutator::manifold(const State &xs, Sampler &u, Arena &arena, State *ys, double *ratioOut,
                                  MutationStats *stats) const {
+    int b, c, endGeom;
+    if (!ManifoldPattern(xs.x, set_.mscene, &b, &c, &endGeom)) return ProposalResult::NotApplicable;
+    Ray ray;
+    if (!perturbedRay(xs, u, &ray)) return ProposalResult::Zero;
+    double jacobian = 0;
+    const ProposalResult r = manifoldMove(xs, b, c, endGeom, ray, arena, ys, &jacobian, stats);
+    if (r != ProposalResult::Proposed) return r;
+    // a = [I(y) K(y) / D_b(y)] / [I(x) K(x) / D_b(x)] (symmetric film kernel).
+    const double ratio = double(ys->e.I) / double(xs.e.I) * jacobian;
+    if (!std::isfinite(ratio) || !(ratio > 0)) return ProposalResult::Zero;
+    *ratioOut = ratio;
+    return ProposalResult::Proposed;
+}
+
+ProposalResult Mutator::manifoldMove(const State &xs, int b, int c, int endGeom, const Ray &ray, Arena &arena,
+                                     State *ys, double *jacobian, MutationStats *stats) const {
     const Path &x = xs.x;
     const int n = x.size();
-    int b, c, endGeom;
-    if (!ManifoldPattern(x, set_.mscene, &b, &c, &endGeom)) return ProposalResult::NotApplicable;
     const PathVertex &xc = x.v[size_t(c)];
 
     // The base chain x_b .. x_c.
@@ -100,9 +108,9 @@ ProposalResult Mutator::manifold(const State &xs, Sampler &u, Arena &arena, Stat
     if (!BuildChain(sc, set_.mscene->fromInteraction(siXb), in, k, EndpointSP(xc.p, Vec3(xc.ng), endGeom), &base))
         return ProposalResult::Zero;
 
-    // The perturbed eye chain, then the walk of the second chain to x_c.
+    // The eye chain along the ray, then the walk of the second chain to x_c.
     SurfaceInteraction siYb;
-    if (!traceEyeChain(xs, b, u, arena, ys, &siYb)) return ProposalResult::Zero;
+    if (!traceEyeChain(xs, b, ray, arena, ys, &siYb)) return ProposalResult::Zero;
     if (ys->x.v.back().type != VertexType::Surface) return ProposalResult::Zero;
     SubpathShiftStats sst;
     ManifoldChain offset;
@@ -113,7 +121,7 @@ ProposalResult Mutator::manifold(const State &xs, Sampler &u, Arena &arena, Stat
         stats->walks += int64_t(sst.walks);
         stats->walkFailures += int64_t(sst.walkFailures);
     }
-    if (!ok) return ProposalResult::Zero;
+    if (!ok) return ProposalResult::Zero;  // the walk failed or is not reversible (stats)
     Path &y = ys->x;
     std::vector<BSDF> &yb = ys->bsdf;
     for (int j = 0; j < k; ++j) {
@@ -127,12 +135,9 @@ ProposalResult Mutator::manifold(const State &xs, Sampler &u, Arena &arena, Stat
     yb.insert(yb.end(), xs.bsdf.begin() + c, xs.bsdf.end());
     for (int i = 1; i < n; ++i) y.v[size_t(i)].wo = PackedVec3(Dir(y.v[size_t(i)], y.v[size_t(i - 1)]));
     if (!Evaluate(ctx_, film_, y, yb.data(), &ys->e)) return ProposalResult::Zero;
-    // a = [I(y) K(y) / D_b(y)] / [I(x) K(x) / D_b(x)], K = (d omega_b / dA_c) / P_trace;
+    // K(y) / D_b(y) over K(x) / D_b(x) with K = (d omega_b / dA_c) / P_trace;
     // J = (d omega_b / dA_c)(y) / (d omega_b / dA_c)(x) from the walk (G-MLT Eq. 14's chain factor).
-    const double ratio = double(ys->e.I) / double(xs.e.I) * J * (TraceDensity(xs, b, c) / TraceDensity(*ys, b, c)) *
-                         (EyeDensity(xs, b) / EyeDensity(*ys, b));
-    if (!std::isfinite(ratio) || !(ratio > 0)) return ProposalResult::Zero;
-    *ratioOut = ratio;
+    *jacobian = J * (TraceDensity(xs, b, c) / TraceDensity(*ys, b, c)) * (EyeDensity(xs, b) / EyeDensity(*ys, b));
     return ProposalResult::Proposed;
 }
 

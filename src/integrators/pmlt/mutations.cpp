@@ -345,6 +345,10 @@ ProposalResult Mutator::bidirectional(const State &xs, Sampler &u, Arena &arena,
     }
     for (int i = 1; i < np; ++i) y.v[size_t(i)].wo = PackedVec3(Dir(y.v[size_t(i)], y.v[size_t(i - 1)]));
     if (!Evaluate(ctx_, film_, y, yb.data(), &ys->e)) return ProposalResult::Zero;
+    // Only techniques T counts may make y: a path from a split that is not one
+    // (the emitter joined straight to the lens, bdpt's (1, 1)) would be
+    // proposed with a density T leaves out, over-weighting such paths.
+    if (!ValidSplit(ctx_, y, ys->e, t)) return ProposalResult::Zero;
     // a = min(1, I(y) T(y -> x) / (I(x) T(x -> y))) (Metropolis-Hastings; Veach 1997, Ch. 11).
     const Float tFwd = bidirDensity(*ys, a, nd, na, n);
     const Float tRev = bidirDensity(xs, a, na, nd, np);
@@ -409,16 +413,18 @@ Float Mutator::selectionProbability(MutationType type, const Path &x, const Floa
     return applies(type, x) && sum > 0 ? weights[int(type)] / sum : 0;
 }
 
-bool Mutator::traceEyeChain(const State &xs, int b, Sampler &u, Arena &arena, State *ys,
-                            SurfaceInteraction *siB) const {
+bool Mutator::perturbedRay(const State &xs, Sampler &u, Ray *ray) const {
     const Point2 pFilm = PerturbFilm(xs.e.pRaster, set_.lensR1, set_.lensR2, u);
     const Point2 uLens = u.get2D();
     if (!film_.contains(pFilm)) return false;
     CameraSample cs;
     cs.pFilm = pFilm;
     cs.pLens = uLens;  // uniform lens points: a constant density, the same in both directions
-    Ray ray;
-    if (ctx_.camera->generateRay(cs, &ray) == 0) return false;
+    return ctx_.camera->generateRay(cs, ray) != 0;
+}
+
+bool Mutator::traceEyeChain(const State &xs, int b, const Ray &ray, Arena &arena, State *ys,
+                            SurfaceInteraction *siB) const {
     Path &y = ys->x;
     std::vector<BSDF> &yb = ys->bsdf;
     y.v.assign(1, LensVertex(ctx_, ray));
@@ -442,7 +448,8 @@ ProposalResult Mutator::lens(const State &xs, bool multiChain, Sampler &u, Arena
     const int n = x.size();
     int c, m;
     if (LensPattern(x, &c, &m) != multiChain) return ProposalResult::NotApplicable;
-    if (!traceEyeChain(xs, c, u, arena, ys, nullptr)) return ProposalResult::Zero;
+    Ray ray;
+    if (!perturbedRay(xs, u, &ray) || !traceEyeChain(xs, c, ray, arena, ys, nullptr)) return ProposalResult::Zero;
     Path &y = ys->x;
     std::vector<BSDF> &yb = ys->bsdf;
     for (int j = c + 1; j <= m; ++j) {
@@ -483,6 +490,50 @@ ProposalResult Mutator::lens(const State &xs, bool multiChain, Sampler &u, Arena
     if (!std::isfinite(ratio) || !(ratio > 0)) return ProposalResult::Zero;
     *ratioOut = ratio;
     return ProposalResult::Proposed;
+}
+
+Mutator::ShiftStatus Mutator::shift(const State &xs, Point2 pFilm, Arena &arena, State *ys, double *jacobian,
+                                    MutationStats *stats) const {
+    const Path &x = xs.x;
+    const int n = x.size();
+    if (!film_.contains(pFilm)) return ShiftStatus::OffFilm;
+    // x_0 and the lens point held, the film point moved (G-MLT Sec. 5.1).
+    Ray ray;
+    if (!ctx_.camera->rayThrough(x.v[0].p, pFilm, &ray)) return ShiftStatus::Mismatch;
+    int b = 1;
+    while (b < n - 1 && x.v[size_t(b)].delta()) ++b;
+    if (b < n - 1 && x.v[size_t(b + 1)].delta()) {
+        // A second chain S_m = x_{b+1} .. x_{c-1}: the manifold perturbation's
+        // move for this film point; its Jacobian is the walk's (Eqs. 13-15).
+        int bm, c, endGeom;
+        if (!ManifoldPattern(x, set_.mscene, &bm, &c, &endGeom)) return ShiftStatus::Unsupported;
+        MutationStats local;
+        const ProposalResult r = manifoldMove(xs, b, c, endGeom, ray, arena, ys, jacobian, &local);
+        if (stats) {
+            stats->walks += local.walks;
+            stats->walkFailures += local.walkFailures;
+        }
+        if (r != ProposalResult::Proposed) return local.walkFailures > 0 ? ShiftStatus::WalkFailed : ShiftStatus::Blocked;
+        return std::isfinite(*jacobian) && *jacobian > 0 ? ShiftStatus::Shifted : ShiftStatus::Blocked;
+    }
+    // S_e then x_b' joined to the unchanged x_{b+1} (or x_b' the emitter).
+    if (b < n - 1 && x.v[size_t(b + 1)].isInfiniteLight()) return ShiftStatus::Unsupported;  // a direction, not a point
+    if (!traceEyeChain(xs, b, ray, arena, ys, nullptr)) return ShiftStatus::Mismatch;
+    Path &y = ys->x;
+    std::vector<BSDF> &yb = ys->bsdf;
+    if (b < n - 1) {
+        if (y.v.back().type != VertexType::Surface) return ShiftStatus::Mismatch;
+        if (!Visible(ctx_, y.v.back(), x.v[size_t(b + 1)])) return ShiftStatus::Blocked;
+        y.v.insert(y.v.end(), x.v.begin() + b + 1, x.v.end());
+        yb.insert(yb.end(), xs.bsdf.begin() + b + 1, xs.bsdf.end());
+    }
+    for (int i = 1; i < n; ++i) y.v[size_t(i)].wo = PackedVec3(Dir(y.v[size_t(i)], y.v[size_t(i - 1)]));
+    if (!Evaluate(ctx_, film_, y, yb.data(), &ys->e)) return ShiftStatus::Blocked;
+    // |d mu(y) / d mu(x)| = D_b(x) / D_b(y): x_1 .. x_b as functions of the
+    // film point (whose shift has unit Jacobian) and x_{b+1} on held; the
+    // delta-free form of G-MLT Eq. 15 with the eye chain's specular vertices.
+    *jacobian = EyeDensity(xs, b) / EyeDensity(*ys, b);
+    return std::isfinite(*jacobian) && *jacobian > 0 ? ShiftStatus::Shifted : ShiftStatus::Blocked;
 }
 
 ProposalResult Mutator::caustic(const State &xs, Sampler &u, Arena &arena, State *ys, double *ratioOut) const {

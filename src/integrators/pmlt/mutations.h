@@ -76,6 +76,18 @@ class Mutator {
     // the proposal carries nothing or its reverse move is impossible.
     ProposalResult propose(MutationType type, const State &x, Sampler &u, Arena &arena, State *y, double *ratio,
                            MutationStats *stats = nullptr) const;
+    // G-MLT's shift (gradient-domain-mlt.md Sec. 5.1): the path moved to film
+    // position pFilm with x_0 held: the eye chain S_e re-traced to x_b', then
+    // x_b' joined to x_{b+1} (no second chain) or the second chain S_m walked
+    // so that x_c onward stays (manifold perturbation). On Shifted, y is the
+    // evaluated offset (I(y) > 0) and *jacobian = |d mu(y) / d mu(x)| in the
+    // delta-free measure of path.h: D(x) / D(y), D the density of the moved
+    // vertices per film area (G-MLT Eqs. 12-15). Failures
+    // depend on the path's pattern and a reversible walk only, so a pair that
+    // fails from one side fails from the other (Sec. 4.2.2).
+    enum class ShiftStatus { Shifted, Blocked, Mismatch, WalkFailed, Unsupported, OffFilm };
+    ShiftStatus shift(const State &x, Point2 pFilm, Arena &arena, State *y, double *jacobian,
+                      MutationStats *stats = nullptr) const;
     // Whether `type` applies to the path (its pattern of specular vertices and
     // emitter; perturbations keep it, the bidirectional mutation always applies).
     bool applies(MutationType type, const Path &x) const;
@@ -98,10 +110,18 @@ class Mutator {
     ProposalResult caustic(const State &x, Sampler &u, Arena &arena, State *y, double *ratioOut) const;
     ProposalResult manifold(const State &x, Sampler &u, Arena &arena, State *y, double *ratioOut,
                             MutationStats *stats) const;
-    // The perturbed film position and the eye chain x_1 .. x_b re-traced from
-    // it with x's specular lobes (lens, multi-chain and manifold perturbations).
-    bool traceEyeChain(const State &x, int b, Sampler &u, Arena &arena, State *y,
+    // The eye chain x_1 .. x_b re-traced along `ray` with x's specular lobes
+    // (lens, multi-chain and manifold perturbations, the G-MLT shift).
+    bool traceEyeChain(const State &x, int b, const Ray &ray, Arena &arena, State *y,
                        SurfaceInteraction *siB) const;
+    // A camera ray through a perturbed film position (lens perturbation's
+    // kernel) and a uniform lens point.
+    bool perturbedRay(const State &x, Sampler &u, Ray *ray) const;
+    // The manifold move of a path of ManifoldPattern (b, c): the eye chain
+    // re-traced along `ray`, the second chain walked to x_c. *jacobian =
+    // [K(y) / D_b(y)] / [K(x) / D_b(x)] (manifold_perturbation.cpp).
+    ProposalResult manifoldMove(const State &x, int b, int c, int endGeom, const Ray &ray, Arena &arena, State *y,
+                                double *jacobian, MutationStats *stats) const;
     Float bidirDensity(const State &s, int a, int nd, int na, int n) const;
 
     const BidirContext &ctx_;
@@ -127,6 +147,13 @@ bool FollowSpecular(const Path &x, int j, PathVertex *v, const BSDF &b, const Ve
 bool LensPattern(const Path &x, int *c, int *m);
 bool CausticPattern(const Path &x, int *c);
 bool ManifoldPattern(const Path &x, const EmbreeManifoldScene *mscene, int *b, int *c, int *endGeom);
+
+// Densities of a state's vertices per film area (x_1 .. x_b, the eye chain
+// and its end: p_E(x_1), then p_E / P_lobe through each specular vertex) and
+// of x_{b+1} .. x_c traced from x_b with a unit solid-angle density
+// (manifold_perturbation.cpp).
+double EyeDensity(const State &s, int b);
+double TraceDensity(const State &s, int b, int c);
 
 // Builds the BSDFs of every vertex of x (Radiance mode) in arena.
 void BuildBSDFs(const BidirContext &ctx, const Path &x, Arena &arena, std::vector<BSDF> *bsdf);

@@ -22,8 +22,11 @@ constexpr uint64_t kBootstrapTag = 0x706d6c7400000001ULL;
 constexpr uint64_t kChainTag = 0x706d6c7400000002ULL;
 constexpr uint64_t kMutationTag = 0x706d6c7400000003ULL;
 constexpr uint64_t kConnectTag = 0x706d6c7400000004ULL;
+constexpr uint64_t kDirectionTag = 0x706d6c7400000005ULL;
 
-ParamTable<PMLTSettings> Table() {
+}  // namespace
+
+ParamTable<PMLTSettings> PMLTParamTable() {
     using S = PMLTSettings;
     ParamTable<S> t("pmlt");
     t.integer("maxdepth", &S::maxDepth, 5, "maximum path depth (edges - 1)", AtLeast(0));
@@ -54,6 +57,8 @@ ParamTable<PMLTSettings> Table() {
     return t;
 }
 
+namespace {
+
 // Connection numbers of strategy (s, t) of bootstrap sample k (reproducible
 // when a chain starts there).
 ConnectSamples ConnectNumbers(uint64_t key, int64_t k, int s, int t) {
@@ -67,9 +72,11 @@ ConnectSamples ConnectNumbers(uint64_t key, int64_t k, int s, int t) {
 
 }  // namespace
 
-std::vector<ParamInfo> PMLTParameters() { return Table().describe(); }
+std::vector<ParamInfo> PMLTParameters() { return PMLTParamTable().describe(); }
 
-PMLTIntegrator::PMLTIntegrator(const EntityDesc &desc) : set_(Table().parse(desc)), loc_(desc.loc) {
+PMLTIntegrator::PMLTIntegrator(const EntityDesc &desc) : PMLTIntegrator(desc, PMLTParamTable().parse(desc)) {}
+
+PMLTIntegrator::PMLTIntegrator(const EntityDesc &desc, const PMLTSettings &set) : set_(set), loc_(desc.loc) {
     if (!(set_.bidirectional > 0))
         throw Error(loc_, "pmlt: \"bidirectional\" must be positive (the perturbations alone are not ergodic)");
 }
@@ -104,13 +111,6 @@ void PMLTIntegrator::preprocess(const Scene &scene, Film &film) {
     }
 }
 
-struct PMLTIntegrator::Sample {
-    PathVertex *cv = nullptr, *lv = nullptr;
-    BSDF *cb = nullptr, *lb = nullptr;
-    int nC = 0, nL = 0;
-    Float w = 0;
-};
-
 bool PMLTIntegrator::makeSample(uint64_t key, int64_t k, Arena &arena, Sample *s) const {
     RNG rng(Hash(key, uint64_t(k)));
     RNGSampler u(rng);
@@ -125,6 +125,15 @@ bool PMLTIntegrator::makeSample(uint64_t key, int64_t k, Arena &arena, Sample *s
     s->nC = GenerateCameraSubpath(ctx_, ray, u, arena, set_.maxDepth + 2, s->cv, s->cb);
     s->nL = GenerateLightSubpath(ctx_, u, arena, set_.maxDepth + 1, s->lv, s->lb);
     return true;
+}
+
+double PMLTIntegrator::candidateWeight(const Sample &, int64_t, int, int, const ConnectSamples &, double lum,
+                                       uint64_t, Arena &) const {
+    return lum;
+}
+
+int PMLTIntegrator::CandidateDirection(uint64_t key, int64_t k, int s, int t) {
+    return int(Hash(key ^ kDirectionTag, uint64_t(k), uint64_t(s), uint64_t(t)) & 3);
 }
 
 int64_t PMLTIntegrator::bootstrapSampleCount() const {
@@ -154,8 +163,9 @@ void PMLTIntegrator::bootstrap(PassContext &ctx) {
                         if (depth < 0 || depth > set_.maxDepth || (s == 1 && t == 1)) continue;
                         if (direct_ && s + t <= 3) continue;  // rendered by renderDirect
                         ConnectResult r;
+                        const ConnectSamples cu = ConnectNumbers(ckey, k, s, t);
                         if (!ConnectBDPT(ctx_, SubpathView{smp.lv, smp.lb, s}, SubpathView{smp.cv, smp.cb, t}, s, t,
-                                         ConnectNumbers(ckey, k, s, t), &r))
+                                         cu, &r))
                             continue;
                         if (r.splat && !film_.contains(r.pRaster)) continue;
                         const Spectrum L = r.L * (r.splat ? film_.scale : smp.w);
@@ -163,7 +173,7 @@ void PMLTIntegrator::bootstrap(PassContext &ctx) {
                             ++nonFinite;
                             continue;
                         }
-                        const double y = L.y();
+                        const double y = L.y() > 0 ? candidateWeight(smp, k, s, t, cu, L.y(), key, wk.arena) : 0;
                         if (y > 0) out.push_back(Candidate{k, int8_t(s), int8_t(t), y});
                     }
             }
@@ -226,6 +236,7 @@ void PMLTIntegrator::bootstrap(PassContext &ctx) {
                     ch.F = st.e.F;
                     ch.I = st.e.I;
                     ch.pRaster = st.e.pRaster;
+                    ch.dir = int8_t(CandidateDirection(key, cd.sample, cd.s, cd.t));
                 } else {
                     ++mismatch;
                 }
@@ -293,40 +304,25 @@ void PMLTIntegrator::runPass(PassContext &ctx) {
         if (!pmlt::Evaluate(ctx_, film_, xs.x, xs.bsdf.data(), &xs.e)) return;
         RNGSampler u(rng);
         pmlt::MutationStats mst;
-        int64_t prop[pmlt::kMutationTypes] = {}, acc[pmlt::kMutationTypes] = {}, na[pmlt::kMutationTypes] = {},
-                zero[pmlt::kMutationTypes] = {}, accMicro[pmlt::kMutationTypes] = {};
+        ItemCounts cnt;
         for (int64_t k = 0; k < count; ++k) {
-            // Selection among the mutations that apply to x's pattern (weights
-            // renormalised); one that changes the pattern (the bidirectional
-            // mutation) has the selection ratio P(t | y) / P(t | x) in its
-            // acceptance (Metropolis-Hastings for a mixture of kernels).
-            double cdf[pmlt::kMutationTypes], wsum = 0;
-            for (int t = 0; t < pmlt::kMutationTypes; ++t)
-                cdf[t] = (wsum += mut.applies(MutationType(t), xs.x) ? weights[t] : 0);
-            const double r = rng.uniform() * wsum;
-            int type = 0;
-            while (type + 1 < pmlt::kMutationTypes && r >= cdf[type]) ++type;
+            double wsum = 0;
+            const int type = SelectMutation(mut, xs.x, weights, rng.uniform(), &wsum);
             double ratio = 0;
             const pmlt::ProposalResult res = mut.propose(MutationType(type), xs, u, wk.arena, &ys, &ratio, &mst);
             Float a = 0;
             if (res == pmlt::ProposalResult::Proposed && direct_ && ys.x.size() <= 3) {
-                ++zero[type];  // outside the chains' target (directsamples)
+                ++cnt.zero[type];  // outside the chains' target (directsamples)
             } else if (res == pmlt::ProposalResult::Proposed) {
-                const double sel = mut.selectionProbability(MutationType(type), ys.x, weights) * wsum / weights[type];
-                a = Float(std::min(1.0, ratio * sel));
+                a = Float(std::min(1.0, ratio * SelectionRatio(mut, type, ys.x, weights, wsum)));
             }
-            if (res == pmlt::ProposalResult::NotApplicable) ++na[type];
-            if (res == pmlt::ProposalResult::Zero) ++zero[type];
-            if (res == pmlt::ProposalResult::Proposed) {
-                ++prop[type];
-                accMicro[type] += int64_t(a * 1e6);
-            }
+            cnt.record(type, res, a);
             // Expected values (Veach and Guibas 1997, "expected values"): the proposal with weight a,
             // the current state with 1 - a, each as b F / I.
             if (a > 0) rec.splat(ys.e.pRaster, ys.e.F * Float(b * a / ys.e.I));
             if (a < 1) rec.splat(xs.e.pRaster, xs.e.F * Float(b * (1 - a) / xs.e.I));
             if (a > 0 && rng.uniform() < a) {
-                ++acc[type];
+                ++cnt.acc[type];
                 std::swap(xs, ys);
                 cur.reset();
                 pmlt::BuildBSDFs(ctx_, xs.x, cur, &xs.bsdf);
@@ -337,18 +333,34 @@ void PMLTIntegrator::runPass(PassContext &ctx) {
         ch.F = xs.e.F;
         ch.I = xs.e.I;
         ch.pRaster = xs.e.pRaster;
-        nMutations_ += count;
-        nWalks_ += mst.walks;
-        nWalkFailures_ += mst.walkFailures;
-        for (int k = 0; k < pmlt::kMutationTypes; ++k) {
-            AtomicCounts &c = typeCounts_[k];
-            c.proposed += prop[k];
-            c.accepted += acc[k];
-            c.notApplicable += na[k];
-            c.zero += zero[k];
-            c.acceptMicro += accMicro[k];
-        }
+        flushCounts(cnt, mst, count);
     });
+}
+
+int PMLTIntegrator::SelectMutation(const pmlt::Mutator &mut, const pmlt::Path &x, const Float *weights, double u,
+                                   double *wsum) {
+    double cdf[pmlt::kMutationTypes], sum = 0;
+    for (int t = 0; t < pmlt::kMutationTypes; ++t)
+        cdf[t] = (sum += mut.applies(MutationType(t), x) ? weights[t] : 0);
+    const double r = u * sum;
+    int type = 0;
+    while (type + 1 < pmlt::kMutationTypes && r >= cdf[type]) ++type;
+    *wsum = sum;
+    return type;
+}
+
+void PMLTIntegrator::flushCounts(const ItemCounts &cnt, const pmlt::MutationStats &mst, int64_t mutations) {
+    nMutations_ += mutations;
+    nWalks_ += mst.walks;
+    nWalkFailures_ += mst.walkFailures;
+    for (int k = 0; k < pmlt::kMutationTypes; ++k) {
+        AtomicCounts &c = typeCounts_[k];
+        c.proposed += cnt.prop[k];
+        c.accepted += cnt.acc[k];
+        c.notApplicable += cnt.na[k];
+        c.zero += cnt.zero[k];
+        c.acceptMicro += cnt.accMicro[k];
+    }
 }
 
 PMLTIntegrator::TypeCounts PMLTIntegrator::counts(MutationType t) const {
@@ -401,7 +413,7 @@ std::string PMLTIntegrator::statistics() const {
 
 // ---------------------------------------------------------------- checkpoints
 namespace {
-constexpr uint32_t kPMLTStateMagic = 0x544c4d50;  // "PMLT"
+constexpr uint32_t kPMLTStateMagic = 0x324c4d50;  // "PML2" (chains with their direction)
 }  // namespace
 
 std::string PMLTIntegrator::saveState() const {
@@ -415,6 +427,7 @@ std::string PMLTIntegrator::saveState() const {
         PutBytes(&s, c.F);
         PutBytes(&s, c.I);
         PutBytes(&s, c.pRaster);
+        PutBytes(&s, c.dir);
         PutBytes(&s, uint32_t(c.x.v.size()));
         for (PathVertex v : c.x.v) {
             // Pointers are stored as the light's index (light vertices) and
@@ -443,7 +456,8 @@ void PMLTIntegrator::loadState(const std::string &s) {
     chains_.assign(size_t(n), Chain());
     for (Chain &c : chains_) {
         uint32_t nv = 0;
-        if (!GetBytes(s, &at, &c.F) || !GetBytes(s, &at, &c.I) || !GetBytes(s, &at, &c.pRaster) || !GetBytes(s, &at, &nv) ||
+        if (!GetBytes(s, &at, &c.F) || !GetBytes(s, &at, &c.I) || !GetBytes(s, &at, &c.pRaster) || !GetBytes(s, &at, &c.dir) || c.dir < 0 || c.dir > 3 ||
+            !GetBytes(s, &at, &nv) ||
             nv > uint32_t(set_.maxDepth) + 2)
             bad();
         c.x.v.resize(nv);

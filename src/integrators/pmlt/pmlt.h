@@ -78,6 +78,9 @@ struct PMLTSettings {
     }
 };
 
+// pmlt's parameter table (gmlt appends it to its own).
+ParamTable<PMLTSettings> PMLTParamTable();
+
 class PMLTIntegrator : public Integrator {
   public:
     explicit PMLTIntegrator(const EntityDesc &desc);
@@ -104,7 +107,9 @@ class PMLTIntegrator : public Integrator {
     int64_t manifoldWalks() const { return nWalks_; }
     const std::string &warning() const { return warning_; }
 
-  private:
+  protected:
+    // gmlt: its own settings (a PMLTSettings part) and hooks below.
+    PMLTIntegrator(const EntityDesc &desc, const PMLTSettings &set);
     struct Candidate {
         int64_t sample;
         int8_t s, t;
@@ -115,10 +120,48 @@ class PMLTIntegrator : public Integrator {
         Spectrum F;
         Float I = 0;
         Point2 pRaster;
+        int8_t dir = 0;  // gmlt: the shift direction of the extended state (CandidateDirection)
     };
+    // Bidirectional sample k of the bootstrap: camera and light subpaths.
+    struct Sample {
+        PathVertex *cv = nullptr, *lv = nullptr;
+        BSDF *cb = nullptr, *lb = nullptr;
+        int nC = 0, nL = 0;
+        Float w = 0;
+    };
+    // Per-item counts of one pass (flushed into the totals by flushCounts).
+    struct ItemCounts {
+        int64_t prop[pmlt::kMutationTypes] = {}, acc[pmlt::kMutationTypes] = {}, na[pmlt::kMutationTypes] = {},
+                zero[pmlt::kMutationTypes] = {}, accMicro[pmlt::kMutationTypes] = {};
+        void record(int type, pmlt::ProposalResult res, Float a) {
+            if (res == pmlt::ProposalResult::NotApplicable) ++na[type];
+            if (res == pmlt::ProposalResult::Zero) ++zero[type];
+            if (res == pmlt::ProposalResult::Proposed) {
+                ++prop[type];
+                accMicro[type] += int64_t(a * 1e6);
+            }
+        }
+    };
+    void flushCounts(const ItemCounts &c, const pmlt::MutationStats &mst, int64_t mutations);
+    // The mutation type of one step: chosen among those that apply to x's
+    // pattern, weights renormalised (*wsum: their sum).
+    static int SelectMutation(const pmlt::Mutator &mut, const pmlt::Path &x, const Float *weights, double u,
+                              double *wsum);
+    // The selection ratio P(t | y) / P(t | x) of a pattern-changing mutation
+    // (Metropolis-Hastings for a mixture of kernels).
+    static double SelectionRatio(const pmlt::Mutator &mut, int type, const pmlt::Path &y, const Float *weights,
+                                 double wsum) {
+        return mut.selectionProbability(pmlt::MutationType(type), y, weights) * wsum / weights[type];
+    }
+    // The weight with which a bootstrap strategy's path (luminance `lum` of its
+    // MIS-weighted contribution) enters b and the chain starts: pmlt's target
+    // is the path's luminance itself; gmlt reweights to its own target.
+    virtual double candidateWeight(const Sample &smp, int64_t k, int s, int t, const ConnectSamples &cu, double lum,
+                                   uint64_t key, Arena &arena) const;
+    // A uniform direction in [0, 4) of candidate (k, s, t) (gmlt's extended state).
+    static int CandidateDirection(uint64_t key, int64_t k, int s, int t);
     void bootstrap(PassContext &ctx);
     // Bidirectional sample k of the bootstrap (camera and light subpaths, in arena).
-    struct Sample;
     bool makeSample(uint64_t key, int64_t k, Arena &arena, Sample *s) const;
 
     PMLTSettings set_;

@@ -71,6 +71,15 @@ inline int64_t ChainShare(int64_t x, int64_t i, int64_t chains) { return x > i ?
 // Ends a Metropolis render: an interrupt can skip chains of the last pass, so
 // the main image's R, G, B are scaled by issued / performed mutations (the
 // factor is returned); writes <prefix>_b, _mutations, _chains and _warning.
+// Writes <prefix>_b, _mutations, _chains and _warning.
+inline void WriteMetropolisMetadata(Metadata *m, const std::string &prefix, double b, int64_t performed,
+                                    int64_t chains, const std::string &warning) {
+    (*m)[prefix + "_b"] = MetaValue::Double(b);
+    (*m)[prefix + "_mutations"] = MetaValue::Int(performed);
+    (*m)[prefix + "_chains"] = MetaValue::Int(chains);
+    if (!warning.empty()) (*m)[prefix + "_warning"] = warning;
+}
+
 inline double FinishMetropolisImage(Image *out, const std::string &prefix, double b, int64_t issued,
                                     int64_t performed, int64_t chains, const std::string &warning) {
     double rescale = 1;
@@ -83,11 +92,7 @@ inline double FinishMetropolisImage(Image *out, const std::string &prefix, doubl
                 for (int x = 0; x < out->width(); ++x) out->at(x, y, ch) = float(out->at(x, y, ch) * rescale);
         }
     }
-    Metadata &m = out->metadata;
-    m[prefix + "_b"] = MetaValue::Double(b);
-    m[prefix + "_mutations"] = MetaValue::Int(performed);
-    m[prefix + "_chains"] = MetaValue::Int(chains);
-    if (!warning.empty()) m[prefix + "_warning"] = warning;
+    WriteMetropolisMetadata(&out->metadata, prefix, b, performed, chains, warning);
     return rescale;
 }
 

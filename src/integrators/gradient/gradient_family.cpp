@@ -71,8 +71,15 @@ double GradientFamily::reconstructionEstimate(ReconstructionNorm norm, Float alp
 }
 
 void GradientFamily::finishGradients(const Film &film, const RenderStats &stats, ReconstructionNorm norm,
-                                     Float alpha, Image *out) {
-    WriteGradientOutput(gfilm_.images(film, stats.spp), norm, alpha, out, &reconReport_);
+                                     Float alpha, Image *out, double scale) {
+    GradientImages g = gfilm_.images(film, stats.spp);
+    if (scale != 1) {
+        for (auto *v : {&g.primal, &g.dx, &g.dy})
+            for (float &x : *v) x = float(x * scale);
+        for (auto *v : {&g.primalVar, &g.dxVar, &g.dyVar})
+            for (float &x : *v) x = float(x * scale * scale);
+    }
+    WriteGradientOutput(g, norm, alpha, out, &reconReport_);
 }
 
 }  // namespace gradus

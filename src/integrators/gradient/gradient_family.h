@@ -27,8 +27,10 @@ class GradientFamily {
                filmBounds_.inside({p.x + kNeighbourOffsets[k].x, p.y + kNeighbourOffsets[k].y});
     }
     // The integrator's finish(): replaces *out by the gradient output (keeping its metadata).
+    // `scale` multiplies the gradient images (variances by its square) before
+    // the reconstruction (an interrupted Metropolis pass).
     void finishGradients(const Film &film, const RenderStats &stats, ReconstructionNorm norm, Float alpha,
-                         Image *out);
+                         Image *out, double scale = 1);
 
     // Seconds finishGradients will take at this film's size: reconstructions
     // of 64x64 and 128x128 problems, timed on first use (only a render with a

@@ -10,7 +10,7 @@ namespace gradus {
 
 // Every field is set by GradientParams (defaults there).
 struct GradientSettings {
-    Float shiftThreshold;  // roughness below which a vertex is not reconnected ("specular")
+    Float shiftThreshold = 0.001;  // roughness below which a vertex is not reconnected ("specular")
     ReconstructionNorm norm;
     Float alpha;           // screened-Poisson primal weight
     bool filmFilter;       // pixelfilter "film" (else "box")
@@ -18,6 +18,7 @@ struct GradientSettings {
 
 struct GradientParamOptions {
     std::string noFilmFilter;  // non-empty: pixelfilter "film" rejected with this reason (default box)
+    bool shiftThreshold = true;  // false: no "shiftthreshold" (an integrator whose shift has no such class)
 };
 
 // shiftthreshold, reconstruction, alpha, pixelfilter.

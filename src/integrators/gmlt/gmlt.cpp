@@ -1,0 +1,240 @@
+#include "integrators/gmlt/gmlt.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "integrators/factories.h"
+#include "samplers/rng_sampler.h"
+
+namespace gradus {
+
+using pmlt::MutationType;
+using ShiftStatus = pmlt::Mutator::ShiftStatus;
+
+namespace {
+
+constexpr uint64_t kMutationTag = 0x676d6c7400000003ULL;
+
+ParamTable<GMLTSettings> Table() {
+    using S = GMLTSettings;
+    ParamTable<S> t("gmlt");
+    t.append(PMLTParamTable());
+    GradientParamOptions o;
+    o.noFilmFilter = "is not supported by gmlt (a chain's splat lands in the pixel of its raster point, as pmlt's)";
+    o.shiftThreshold = false;
+    t.append(GradientParams(o));
+    t.boolean("statelayers", &S::stateLayers, false,
+              "layers \"density\" (chain states per pixel per mutation per pixel) and \"irreversible\" "
+              "(states whose shift has n = 1: the offset blocked or the shift failed)");
+    return t;
+}
+
+// Luminance of the channel-wise absolute value (Eq. 11's norm of a signed spectrum).
+double AbsLuminance(const Spectrum &s) { return Spectrum(std::abs(s.r), std::abs(s.g), std::abs(s.b)).y(); }
+
+const char *ShiftStatusName(int s) {
+    static const char *names[] = {"shifted", "offset blocked or black", "pattern changed", "walk failed or not reversible",
+                                  "no shift for the pattern", "off the film"};
+    return names[s];
+}
+
+}  // namespace
+
+std::unique_ptr<Integrator> CreateGMLTIntegrator(const EntityDesc &d) { return std::make_unique<GMLTIntegrator>(d); }
+std::vector<ParamInfo> GMLTParameters() { return Table().describe(); }
+
+GMLTIntegrator::GMLTIntegrator(const EntityDesc &desc) : GMLTIntegrator(desc, Table().parse(desc)) {}
+
+GMLTIntegrator::GMLTIntegrator(const EntityDesc &desc, const GMLTSettings &s) : PMLTIntegrator(desc, s), gset_(s) {}
+
+void GMLTIntegrator::preprocess(const Scene &scene, Film &film) {
+    PMLTIntegrator::preprocess(scene, film);
+    // The shift walks second chains whatever the manifold perturbation's weight.
+    if (!mscene_) {
+        mscene_ = std::make_unique<EmbreeManifoldScene>(scene);
+        mset_.mscene = mscene_.get();
+    }
+    mut_ = std::make_unique<pmlt::Mutator>(ctx_, film_, mset_);
+    initGradients(film, false, true);
+    if (gset_.stateLayers) {
+        densityLayer_ = film.addLayer("gmlt.density");
+        irreversibleLayer_ = film.addLayer("gmlt.irreversible");
+    }
+}
+
+GMLTIntegrator::Target GMLTIntegrator::evaluate(const pmlt::State &xs, int dir, Arena &arena,
+                                                pmlt::MutationStats *stats) const {
+    Target t;
+    const Point2i off = kNeighbourOffsets[dir];
+    pmlt::State ys;
+    t.status = mut_->shift(xs, Point2(xs.e.pRaster.x + Float(off.x), xs.e.pRaster.y + Float(off.y)), arena, &ys,
+                           &t.jacobian, stats);
+    if (t.status == ShiftStatus::Shifted) {
+        // f_{d}(x) = F(T_d x) |d mu(T_d x) / d mu(x)| (Eq. 7); both paths carry light: n = 1/2 (Eq. 9).
+        t.offset = ys.e.F * Float(t.jacobian);
+        t.n = 0.5;
+    } else {
+        t.jacobian = 0;  // offset blocked or shift failed: n = 1 (Eq. 9, Sec. 4.2.2)
+    }
+    t.diff = (t.offset - xs.e.F) * t.n;
+    // Eq. 11: f(z) = ||f*(z)|| + alpha (1/4) ||f*(x)||.
+    t.f = AbsLuminance(t.diff) + double(gset_.alpha) * 0.25 * double(xs.e.I);
+    return t;
+}
+
+double GMLTIntegrator::candidateWeight(const Sample &smp, int64_t k, int s, int t, const ConnectSamples &cu,
+                                       double lum, uint64_t key, Arena &arena) const {
+    // C f(z) / I(x) re-weights the strategy's contribution C from pmlt's
+    // target I to f (Eq. 11); 4 f(x, d) with one uniform d estimates the sum
+    // of f over the four directions of the extended space (Eq. 8).
+    pmlt::State st;
+    if (!pmlt::StrategyPath(ctx_, SubpathView{smp.lv, smp.lb, s}, SubpathView{smp.cv, smp.cb, t}, s, t, cu, &st.x)) {
+        ++nBootstrapDropped_;
+        return 0;
+    }
+    pmlt::BuildBSDFs(ctx_, st.x, arena, &st.bsdf);
+    if (!pmlt::Evaluate(ctx_, film_, st.x, st.bsdf.data(), &st.e)) {
+        ++nBootstrapDropped_;
+        return 0;
+    }
+    const Target tg = evaluate(st, CandidateDirection(key, k, s, t), arena);
+    const double w = lum * 4 * tg.f / double(st.e.I);
+    return std::isfinite(w) ? w : 0;
+}
+
+void GMLTIntegrator::runPass(PassContext &ctx) {
+    if (direct_ && ctx.pass() == 0) renderDirect(ctx);
+    if (chains_.empty()) return;
+    const int64_t nChains = int64_t(chains_.size());
+    const int64_t M = int64_t(ctx.sampleCount()) * film_.pixels.area();
+    const int64_t first = mutationsIssued_;
+    mutationsIssued_ += M;
+    Float weights[pmlt::kMutationTypes];
+    for (int k = 0; k < pmlt::kMutationTypes; ++k) weights[k] = set_.weight(MutationType(k));
+    const double b = b_;
+    const pmlt::Mutator &mut = *mut_;
+    ctx.forEachItem(nChains, kMutationTag, [&](int64_t i, RNG &rng, SampleRecorder &rec, Worker &wk) {
+        const int64_t count = ChainShare(first + M, i, nChains) - ChainShare(first, i, nChains);
+        Chain &ch = chains_[size_t(i)];
+        if (count == 0 || !(ch.I > 0)) return;
+        thread_local Arena cur;
+        cur.reset();
+        pmlt::State xs, ys;
+        xs.x = ch.x;
+        pmlt::BuildBSDFs(ctx_, xs.x, cur, &xs.bsdf);
+        if (!pmlt::Evaluate(ctx_, film_, xs.x, xs.bsdf.data(), &xs.e)) return;
+        pmlt::MutationStats mst;
+        int64_t shifts[kShiftStatuses] = {};
+        int dx = ch.dir;
+        Target tx = evaluate(xs, dx, cur, &mst);
+        ++shifts[int(tx.status)];
+        if (!(tx.f > 0)) return;  // alpha = 0 and no gradient: outside the target
+        RNGSampler u(rng);
+        ItemCounts cnt;
+        // Splats of state z with weight w (expected values, as pmlt): the
+        // gradient f*(z) into dx / dy by Eq. 10's extended filter (negative
+        // directions land at the neighbour, sign flipped: GradientFilm), the
+        // coarse primal (1/4) F(x) (Sec. 4.3), both times b w / f(z).
+        auto splat = [&](const pmlt::State &s, int dir, const Target &t, double w) {
+            if (!(w > 0)) return;
+            GradientSplat g;
+            g.pixel = Point2i{int(std::floor(s.e.pRaster.x)), int(std::floor(s.e.pRaster.y))};
+            g.value.primal = s.e.F * 0.25;
+            g.value.diff[dir] = t.diff;
+            g.value.active[dir] = true;
+            gfilm_.splatLightTracing(rec, g, Float(b * w / t.f));
+        };
+        for (int64_t k = 0; k < count; ++k) {
+            double wsum = 0;
+            const int type = SelectMutation(mut, xs.x, weights, rng.uniform(), &wsum);
+            double ratio = 0;
+            const pmlt::ProposalResult res = mut.propose(MutationType(type), xs, u, wk.arena, &ys, &ratio, &mst);
+            const int dy = std::min(int(rng.uniform() * 4), 3);  // uniform direction: a symmetric proposal (Sec. 4.2.1)
+            Target ty;
+            Float a = 0;
+            if (res == pmlt::ProposalResult::Proposed && direct_ && ys.x.size() <= 3) {
+                ++cnt.zero[type];  // outside the chains' target (directsamples)
+            } else if (res == pmlt::ProposalResult::Proposed) {
+                ty = evaluate(ys, dy, wk.arena, &mst);
+                ++shifts[int(ty.status)];
+                // Metropolis-Hastings on the extended space: pmlt's ratio is
+                // I(y) T(y -> x) / (I(x) T(x -> y)); the target is f (Eq. 11).
+                const double r =
+                    ratio * (double(xs.e.I) / double(ys.e.I)) * (ty.f / tx.f) * SelectionRatio(mut, type, ys.x, weights, wsum);
+                a = std::isfinite(r) ? Float(std::min(1.0, r)) : 0;
+            }
+            cnt.record(type, res, a);
+            splat(ys, dy, ty, a);
+            splat(xs, dx, tx, 1 - a);
+            if (a > 0 && rng.uniform() < a) {
+                ++cnt.acc[type];
+                std::swap(xs, ys);
+                tx = ty;
+                dx = dy;
+                cur.reset();
+                pmlt::BuildBSDFs(ctx_, xs.x, cur, &xs.bsdf);
+            }
+            if (densityLayer_ >= 0) {
+                rec.splat(xs.e.pRaster, Spectrum(1), densityLayer_);
+                if (tx.n == 1) rec.splat(xs.e.pRaster, Spectrum(1), irreversibleLayer_);
+            }
+            wk.arena.reset();
+        }
+        ch.x = xs.x;
+        ch.F = xs.e.F;
+        ch.I = xs.e.I;
+        ch.pRaster = xs.e.pRaster;
+        ch.dir = int8_t(dx);
+        flushCounts(cnt, mst, count);
+        for (int s = 0; s < kShiftStatuses; ++s) shiftCounts_[s] += shifts[s];
+    });
+}
+
+void GMLTIntegrator::finish(const Film &film, const RenderStats &stats, Image *out) {
+    const bool direct = direct_ != nullptr;
+    Image directImage;
+    if (direct) directImage = out->layerRGB("");  // the path tracer's direct light (the film's main image)
+    const int64_t performed = nMutations_.load();
+    rescale_ = performed > 0 && performed != mutationsIssued_ ? double(mutationsIssued_) / double(performed) : 1;
+    finishGradients(film, stats, gset_.norm, gset_.alpha, out, rescale_);
+    if (direct) {
+        // Direct light is added after the solve (Sec. 7), to the primal and every reconstruction.
+        for (const char *layer : {"", "primal", "reconstructed_l1", "reconstructed_l2", "reconstructed_hybrid",
+                                  "reconstructed_weighted"}) {
+            if (out->channelIndex(std::string(*layer ? std::string(layer) + "." : "") + "R") < 0) continue;
+            Image im = out->layerRGB(layer);
+            for (size_t k = 0; k < im.data().size(); ++k) im.data()[k] += directImage.data()[k];
+            out->setLayerRGB(layer, im);
+        }
+    }
+    if (densityLayer_ >= 0) {
+        for (auto [idx, name] : {std::pair{densityLayer_, "density"}, std::pair{irreversibleLayer_, "irreversible"}}) {
+            Image im = film.layerImage(idx);
+            for (float &v : im.data()) v = float(v * rescale_);
+            out->addChannels(Image::LayerRGBNames(name));
+            out->setLayerRGB(name, im);
+        }
+    }
+    WriteMetropolisMetadata(&out->metadata, "gmlt", b_, performed, int64_t(chains_.size()), warning_);
+}
+
+std::string GMLTIntegrator::statistics() const {
+    std::ostringstream o;
+    o << "Gradient-domain MLT (alpha " << gset_.alpha << "):\n";
+    int64_t total = 0;
+    for (int s = 0; s < kShiftStatuses; ++s) total += shiftCounts_[s].load();
+    o << "  shifts: " << total;
+    if (total > 0) {
+        o << " (reversible, n = 1/2: " << 100.0 * double(shiftCounts_[0].load()) / double(total) << "%)";
+        for (int s = 1; s < kShiftStatuses; ++s)
+            if (shiftCounts_[s].load() > 0) o << "; " << ShiftStatusName(s) << " " << shiftCounts_[s].load();
+    }
+    o << "\n";
+    if (nBootstrapDropped_ > 0)
+        o << "  bootstrap strategies whose path does not evaluate (left out of b): " << nBootstrapDropped_.load()
+          << "\n";
+    return withReconstructionReport(o.str() + PMLTIntegrator::statistics());
+}
+
+}  // namespace gradus

@@ -1,0 +1,95 @@
+// Gradient-domain Metropolis light transport (Lehtinen et al. 2013,
+// gradient-domain-mlt.md): integrator "gmlt", on pmlt's paths, mutations,
+// bootstrap and chains.
+//
+// Extended path space (Eq. 8): a chain's state z = (x, d) is a base path x
+// (pmlt/path.h) and a shift direction d in {+x, -x, +y, -y}; every mutation
+// proposes a new base path by one of pmlt's mutations and a uniform new d.
+// The offset path T_d(x) is pmlt's Mutator::shift (Sec. 5.1: one pixel with
+// x_0 held, the eye chain re-traced, the second chain walked; Jacobian of
+// Sec. 5.2 in the delta-free measure). Per state:
+//   f*(z) = n(z) [F(T_d x) |T_d'| - F(x)]     (Eqs. 7, 9; n = 1/2 when the shift
+//            succeeds with F(T_d x) > 0, 1 otherwise; failures are symmetric)
+//   f(z)  = Y|f*(z)| + alpha (1/4) Y(F(x))    (Eq. 11; Y: luminance of the
+//            channel-wise absolute value; alpha shared with Eq. 16)
+// Splats (expected values, as pmlt): the gradient b f*(z) / f(z) into dx or dy
+// with the extended filter of Eq. 10 (a negative direction lands at the
+// neighbour with the sign flipped: GradientFilm's convention), the coarse
+// primal (1/4) b F(x) / f(z) (Sec. 4.3); b = the bootstrap's estimate of the
+// integral of f over the extended space: each bdpt strategy's contribution
+// C is weighted 4 f(x, d) / Y(F(x)) with one uniform d per strategy (an
+// unbiased estimate of the sum over the four directions), and chains start at
+// candidates drawn in proportion (no start-up bias).
+// The screened-Poisson reconstruction (Eq. 16, reconstruction/) runs in finish.
+// directsamples N > 0 (Sec. 7): direct light by the path tracer, added to the
+// primal and to every reconstruction after the solve (dx, dy hold the chains'
+// part only).
+//
+// Parameters: pmlt's (maxdepth, bootstrapsamples, bootstrapconnections, chains,
+// mutationsperpixel, directsamples, rrdepth, mutation weights; pmlt.h) and
+//   string reconstruction "hybrid"   hybrid | l1 | l2 | weighted (gradient_params.h)
+//   float alpha 0.2                  Eq. 11's and Eq. 16's alpha
+//   string pixelfilter "box"         splats land in the pixel of their raster point
+//   bool statelayers false           layers "density" (chain states per pixel per
+//                                    mutation per pixel, Fig. 8b) and "irreversible"
+//                                    (those whose shift has n = 1, Fig. 8f)
+// Specular for the shift: vertices that scatter through a Dirac lobe (pmlt's
+// VERTEX_DELTA). Near-specular glossy vertices are shifted as non-specular
+// (reconnected): correct, but not Fig. 5a's treatment (no "shiftthreshold").
+#pragma once
+#include <atomic>
+#include <memory>
+#include <string>
+
+#include "integrators/gradient/gradient_family.h"
+#include "integrators/gradient/gradient_params.h"
+#include "integrators/pmlt/pmlt.h"
+
+namespace gradus {
+
+struct GMLTSettings : PMLTSettings, GradientSettings {
+    bool stateLayers;
+};
+
+class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
+  public:
+    explicit GMLTIntegrator(const EntityDesc &desc);
+    std::string name() const override { return "gmlt"; }
+    void preprocess(const Scene &scene, Film &film) override;
+    void runPass(PassContext &ctx) override;
+    void finish(const Film &film, const RenderStats &stats, Image *out) override;
+    double finishEstimate() const override { return reconstructionEstimate(gset_.norm, gset_.alpha); }
+    std::string statistics() const override;
+
+    // One extended state's shift and target (tests).
+    struct Target {
+        pmlt::Mutator::ShiftStatus status = pmlt::Mutator::ShiftStatus::Blocked;
+        double jacobian = 0;
+        Spectrum offset{0};  // F(T_d x) |T_d'| (0 when the shift fails)
+        Spectrum diff{0};    // f*(z) of Eq. 9 before the sign of d: n (offset - F(x))
+        Float n = 1;
+        double f = 0;        // Eq. 11
+    };
+    // After preprocess.
+    Target evaluate(const pmlt::State &x, int dir, Arena &arena, pmlt::MutationStats *stats = nullptr) const;
+    const pmlt::Mutator &mutator() const { return *mut_; }
+    const BidirContext &bidirContext() const { return ctx_; }
+    const pmlt::FilmDomain &filmDomain() const { return film_; }
+    const GMLTSettings &gsettings() const { return gset_; }
+    int64_t shiftCount(pmlt::Mutator::ShiftStatus s) const { return shiftCounts_[int(s)].load(); }
+
+  protected:
+    double candidateWeight(const Sample &smp, int64_t k, int s, int t, const ConnectSamples &cu, double lum,
+                           uint64_t key, Arena &arena) const override;
+
+  private:
+    GMLTIntegrator(const EntityDesc &desc, const GMLTSettings &s);
+    GMLTSettings gset_;
+    std::unique_ptr<pmlt::Mutator> mut_;
+    static constexpr int kShiftStatuses = 6;
+    mutable std::atomic<int64_t> shiftCounts_[kShiftStatuses] = {};
+    mutable std::atomic<int64_t> nBootstrapDropped_{0};
+    int densityLayer_ = -1, irreversibleLayer_ = -1;
+};
+
+}  // namespace gradus

@@ -321,7 +321,14 @@ INSTANTIATE_TEST_SUITE_P(conformance, Conformance, ::testing::ValuesIn(Integrato
 class Agreement : public ::testing::TestWithParam<AgreementParam> {};
 
 TEST_P(Agreement, AgreesWithBdpt) {
-    CheckAgreement(std::get<0>(GetParam()), std::get<1>(GetParam()), {16, 8, 1000, 2000});
+    // gmlt's coarse primal, which alone carries the image mean through the
+    // Poisson solve, takes a quarter of F / f(z) per state (Sec. 4.3): with
+    // alpha = 0.2 a state in a smooth region weighs up to 1 / alpha = 5, so
+    // a run's mean varies ~10x more than pmlt's (whose every state splats b).
+    // At 8 spp a 5% bias is not resolved; 256 spp resolves it.
+    const std::string &x = std::get<0>(GetParam());
+    CheckAgreement(x, std::get<1>(GetParam()), x == "gmlt" ? AgreementConfig{16, 256, 1000, 2000}
+                                                           : AgreementConfig{16, 8, 1000, 2000});
 }
 
 INSTANTIATE_TEST_SUITE_P(conformance, Agreement,

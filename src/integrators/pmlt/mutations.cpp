@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "integrators/gradient/subpath_shift.h"
 #include "lights/light.h"
 
 namespace gradus::pmlt {
@@ -517,15 +518,28 @@ Mutator::ShiftStatus Mutator::shift(const State &xs, Point2 pFilm, Arena &arena,
         return std::isfinite(*jacobian) && *jacobian > 0 ? ShiftStatus::Shifted : ShiftStatus::Blocked;
     }
     // S_e then x_b' joined to the unchanged x_{b+1} (or x_b' the emitter).
-    if (b < n - 1 && x.v[size_t(b + 1)].isInfiniteLight()) return ShiftStatus::Unsupported;  // a direction, not a point
     if (!traceEyeChain(xs, b, ray, arena, ys, nullptr)) return ShiftStatus::Mismatch;
     Path &y = ys->x;
     std::vector<BSDF> &yb = ys->bsdf;
     if (b < n - 1) {
         if (y.v.back().type != VertexType::Surface) return ShiftStatus::Mismatch;
-        if (!Visible(ctx_, y.v.back(), x.v[size_t(b + 1)])) return ShiftStatus::Blocked;
-        y.v.insert(y.v.end(), x.v.begin() + b + 1, x.v.end());
-        yb.insert(yb.end(), xs.bsdf.begin() + b + 1, xs.bsdf.end());
+        const PathVertex &next = x.v[size_t(b + 1)];
+        if (next.isInfiniteLight()) {
+            // An emitter at infinity is a direction: the offset keeps it (the
+            // environment shift of G-BDPT, shift.h) if it escapes; the direction's
+            // measure is unchanged, so |T'| is still D_b(x) / D_b(y).
+            const Vec3 w = Dir(x.v[size_t(b)], next);
+            SurfaceInteraction hit;
+            if (TraceSurface(*ctx_.scene, AsInteraction(y.v.back()).spawnRay(w), &hit)) return ShiftStatus::Blocked;
+            PathVertex e = next;
+            e.p = y.v.back().p + w * (next.p - x.v[size_t(b)].p).length();
+            y.v.push_back(e);
+            yb.push_back(xs.bsdf[size_t(b + 1)]);
+        } else {
+            if (!Visible(ctx_, y.v.back(), next)) return ShiftStatus::Blocked;
+            y.v.insert(y.v.end(), x.v.begin() + b + 1, x.v.end());
+            yb.insert(yb.end(), xs.bsdf.begin() + b + 1, xs.bsdf.end());
+        }
     }
     for (int i = 1; i < n; ++i) y.v[size_t(i)].wo = PackedVec3(Dir(y.v[size_t(i)], y.v[size_t(i - 1)]));
     if (!Evaluate(ctx_, film_, y, yb.data(), &ys->e)) return ShiftStatus::Blocked;

@@ -25,14 +25,27 @@
 // primal and to every reconstruction after the solve (dx, dy hold the chains'
 // part only).
 //
-// Parameters: pmlt's (maxdepth, bootstrapsamples, bootstrapconnections, chains,
-// mutationsperpixel, directsamples, rrdepth, mutation weights; pmlt.h) and
-//   string reconstruction "hybrid"   hybrid | l1 | l2 | weighted (gradient_params.h)
+// Parameters (pmlt's, pmlt.h):
+//   integer maxdepth 5                 maximum path depth (edges - 1)
+//   integer bootstrapsamples 100000    bidirectional samples of the bootstrap (b, chain starts)
+//   integer bootstrapconnections 0     cap on the bootstrap's connections (0: none)
+//   integer chains 1000                Markov chains
+//   integer mutationsperpixel 100      mutations per pixel when --spp is not given
+//   integer directsamples 0            direct light by the path tracer (above); 0: the chains
+//   integer rrdepth 3                  Russian roulette in the bootstrap's subpaths (-1: off)
+//   float bidirectional 1              selection weights of the mutations (the shift walks
+//   float lens 1                         second chains whatever the manifold weight)
+//   float caustic 1
+//   float multichain 1
+//   float manifold 1
+// (gradient family, gradient_params.h):
+//   string reconstruction "hybrid"   hybrid | l1 | l2 | weighted: the image in the unprefixed R,G,B
 //   float alpha 0.2                  Eq. 11's and Eq. 16's alpha
-//   string pixelfilter "box"         splats land in the pixel of their raster point
-//   bool statelayers false           layers "density" (chain states per pixel per
-//                                    mutation per pixel, Fig. 8b) and "irreversible"
-//                                    (those whose shift has n = 1, Fig. 8f)
+//   string pixelfilter "box"         splats land in the pixel of their raster point (as pmlt's)
+// (gmlt):
+//   bool statelayers false           layers "density" (chain states per pixel per mutation
+//                                    per pixel, Fig. 8b) and "irreversible" (those whose
+//                                    shift has n = 1, Fig. 8f)
 // Specular for the shift: vertices that scatter through a Dirac lobe (pmlt's
 // VERTEX_DELTA). Near-specular glossy vertices are shifted as non-specular
 // (reconnected): correct, but not Fig. 5a's treatment (no "shiftthreshold").

@@ -56,8 +56,8 @@ class Generator {
         // mlt's bootstrap traces bootstrapsamples x (maxdepth + 1) paths (pbrt-v3's
         // default 100000 per depth): 900000 take more than the 10 s timeout under
         // ASan. A known cost (stress suite, furnace_d1000/mlt), capped here; so is
-        // pmlt's (100000 bidirectional samples of all strategies).
-        if (*integrator == "mlt" || *integrator == "pmlt")
+        // pmlt's and gmlt's (100000 bidirectional samples of all strategies).
+        if (*integrator == "mlt" || *integrator == "pmlt" || *integrator == "gmlt")
             os_ << " \"integer bootstrapsamples\" [ " << fdp_.ConsumeIntegralInRange(1, 2000) << " ]";
         os_ << "\n";
         os_ << "WorldBegin\n";

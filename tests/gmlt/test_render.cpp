@@ -154,7 +154,7 @@ TEST(GMLTRender, ParametersLayersAndStatistics) {
     for (const char *want : {"Gradient-domain MLT", "shifts: ", "reversible", "Reconstruction:", "bidirectional: "})
         EXPECT_NE(r.statistics.find(want), std::string::npos) << want << " in\n" << r.statistics;
     // Parameters gmlt does not take.
-    for (const char *bad : {"\"float shiftthreshold\" [0.01]", "\"string pixelfilter\" \"film\""})
+    for (const char *bad : {"\"float shiftthreshold\" [0.01]", "\"string pixelfilter\" \"film\"", "\"float alpha\" [0]"})
         EXPECT_THROW(Render(BoxScene(std::string("Integrator \"gmlt\" ") + bad), 1, 1), Error) << bad;
 }
 

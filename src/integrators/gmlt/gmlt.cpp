@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/error.h"
 #include "integrators/factories.h"
 #include "samplers/rng_sampler.h"
 
@@ -15,6 +16,7 @@ using ShiftStatus = pmlt::Mutator::ShiftStatus;
 namespace {
 
 constexpr uint64_t kMutationTag = 0x676d6c7400000003ULL;
+constexpr uint64_t kRouletteTag = 0x676d6c7400000004ULL;
 
 ParamTable<GMLTSettings> Table() {
     using S = GMLTSettings;
@@ -46,7 +48,13 @@ std::vector<ParamInfo> GMLTParameters() { return Table().describe(); }
 
 GMLTIntegrator::GMLTIntegrator(const EntityDesc &desc) : GMLTIntegrator(desc, Table().parse(desc)) {}
 
-GMLTIntegrator::GMLTIntegrator(const EntityDesc &desc, const GMLTSettings &s) : PMLTIntegrator(desc, s), gset_(s) {}
+GMLTIntegrator::GMLTIntegrator(const EntityDesc &desc, const GMLTSettings &s) : PMLTIntegrator(desc, s), gset_(s) {
+    // Eq. 11 with alpha = 0 vanishes on paths whose gradient is 0, which the
+    // chains could then never visit: the coarse primal would miss them.
+    if (!(gset_.alpha > 0))
+        throw Error(desc.loc, "gmlt: \"alpha\" must be positive (the target of Eq. 11 must not vanish where the "
+                              "coarse primal's integrand does not)");
+}
 
 void GMLTIntegrator::preprocess(const Scene &scene, Film &film) {
     PMLTIntegrator::preprocess(scene, film);
@@ -67,7 +75,7 @@ GMLTIntegrator::Target GMLTIntegrator::evaluate(const pmlt::State &xs, int dir, 
                                                 pmlt::MutationStats *stats) const {
     Target t;
     const Point2i off = kNeighbourOffsets[dir];
-    pmlt::State ys;
+    thread_local pmlt::State ys;  // the offset (its vectors reused: one evaluation per proposal)
     t.status = mut_->shift(xs, Point2(xs.e.pRaster.x + Float(off.x), xs.e.pRaster.y + Float(off.y)), arena, &ys,
                            &t.jacobian, stats);
     if (t.status == ShiftStatus::Shifted) {
@@ -83,11 +91,43 @@ GMLTIntegrator::Target GMLTIntegrator::evaluate(const pmlt::State &xs, int dir, 
     return t;
 }
 
+void GMLTIntegrator::prepareBootstrap(PassContext &ctx, uint64_t key) {
+    // The roulette threshold: the mean candidate luminance of a pilot of the
+    // bootstrap's first samples (a fixed range: thread-count independent).
+    const int64_t P = std::min<int64_t>(bootstrapSampleCount(), 4096);
+    std::vector<double> sum(size_t((P + 255) / 256), 0), count(sum.size(), 0);
+    ctx.parallelFor(P, 256, [&](int64_t i0, int64_t i1, Worker &wk) {
+        for (int64_t k = i0; k < i1; ++k) {
+            forEachStrategy(key, k, wk.arena, [&](const Sample &, int, int, const ConnectSamples &, double lum) {
+                sum[size_t(i0 / 256)] += lum;
+                count[size_t(i0 / 256)] += 1;
+            });
+            wk.arena.reset();
+        }
+    });
+    double S = 0, C = 0;
+    for (size_t i = 0; i < sum.size(); ++i) S += sum[i], C += count[i];
+    tau_ = C > 0 ? S / C : 0;
+}
+
 double GMLTIntegrator::candidateWeight(const Sample &smp, int64_t k, int s, int t, const ConnectSamples &cu,
                                        double lum, uint64_t key, Arena &arena) const {
+    // Russian roulette on candidates below the pilot's mean luminance tau:
+    // kept with probability lum / tau and weighted tau / lum (unbiased for b
+    // and for the chain starts); the shift below is the bootstrap's main cost.
+    double scale = 1;
+    if (lum < tau_) {
+        const double u = double(Hash(key ^ kRouletteTag, uint64_t(k), uint64_t(s), uint64_t(t)) >> 11) * 0x1.0p-53;
+        if (u * tau_ >= lum) {
+            ++nRouletteDropped_;
+            return 0;
+        }
+        scale = tau_ / lum;
+    }
     // C f(z) / I(x) re-weights the strategy's contribution C from pmlt's
     // target I to f (Eq. 11); 4 f(x, d) with one uniform d estimates the sum
     // of f over the four directions of the extended space (Eq. 8).
+    ++nBootstrapShifted_;
     pmlt::State st;
     if (!pmlt::StrategyPath(ctx_, SubpathView{smp.lv, smp.lb, s}, SubpathView{smp.cv, smp.cb, t}, s, t, cu, &st.x)) {
         ++nBootstrapDropped_;
@@ -99,7 +139,7 @@ double GMLTIntegrator::candidateWeight(const Sample &smp, int64_t k, int s, int 
         return 0;
     }
     const Target tg = evaluate(st, CandidateDirection(key, k, s, t), arena);
-    const double w = lum * 4 * tg.f / double(st.e.I);
+    const double w = lum * scale * 4 * tg.f / double(st.e.I);
     return std::isfinite(w) ? w : 0;
 }
 
@@ -231,6 +271,8 @@ std::string GMLTIntegrator::statistics() const {
             if (shiftCounts_[s].load() > 0) o << "; " << ShiftStatusName(s) << " " << shiftCounts_[s].load();
     }
     o << "\n";
+    o << "  bootstrap: " << nBootstrapShifted_.load() << " candidates re-weighted to f, " << nRouletteDropped_.load()
+      << " left out by Russian roulette below the pilot's mean luminance " << tau_ << "\n";
     if (nBootstrapDropped_ > 0)
         o << "  bootstrap strategies whose path does not evaluate (left out of b): " << nBootstrapDropped_.load()
           << "\n";

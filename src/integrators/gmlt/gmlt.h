@@ -19,7 +19,10 @@
 // integral of f over the extended space: each bdpt strategy's contribution
 // C is weighted 4 f(x, d) / Y(F(x)) with one uniform d per strategy (an
 // unbiased estimate of the sum over the four directions), and chains start at
-// candidates drawn in proportion (no start-up bias).
+// candidates drawn in proportion (no start-up bias). Candidates below the mean
+// luminance tau of a 4096-sample pilot go through Russian roulette first
+// (kept with probability lum / tau, weight tau / lum): the shift of every
+// candidate tripled pmlt's bootstrap time (glass cube: 1.05 s -> 3.8 s).
 // The screened-Poisson reconstruction (Eq. 16, reconstruction/) runs in finish.
 // directsamples N > 0 (Sec. 7): direct light by the path tracer, added to the
 // primal and to every reconstruction after the solve (dx, dy hold the chains'
@@ -94,6 +97,7 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
   protected:
     double candidateWeight(const Sample &smp, int64_t k, int s, int t, const ConnectSamples &cu, double lum,
                            uint64_t key, Arena &arena) const override;
+    void prepareBootstrap(PassContext &ctx, uint64_t key) override;
 
   private:
     GMLTIntegrator(const EntityDesc &desc, const GMLTSettings &s);
@@ -101,7 +105,8 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
     std::unique_ptr<pmlt::Mutator> mut_;
     static constexpr int kShiftStatuses = 6;
     mutable std::atomic<int64_t> shiftCounts_[kShiftStatuses] = {};
-    mutable std::atomic<int64_t> nBootstrapDropped_{0};
+    mutable std::atomic<int64_t> nBootstrapDropped_{0}, nBootstrapShifted_{0}, nRouletteDropped_{0};
+    double tau_ = 0;  // candidate roulette threshold (prepareBootstrap)
     int densityLayer_ = -1, irreversibleLayer_ = -1;
 };
 

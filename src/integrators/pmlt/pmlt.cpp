@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <sstream>
 
 #include "core/error.h"
@@ -145,9 +146,37 @@ int64_t PMLTIntegrator::bootstrapSampleCount() const {
                              std::max<int64_t>(1000, int64_t(set_.bootstrapConnections) / perSample));
 }
 
+uint64_t PMLTIntegrator::forEachStrategy(uint64_t key, int64_t k, Arena &arena,
+                                         const std::function<void(const Sample &, int, int, const ConnectSamples &,
+                                                                  double)> &fn) const {
+    Sample smp;
+    if (!makeSample(key, k, arena, &smp)) return 0;
+    const uint64_t ckey = key ^ kBootstrapTag ^ kConnectTag;  // the seed's connection key
+    uint64_t nonFinite = 0;
+    for (int t = 1; t <= smp.nC; ++t)
+        for (int s = 0; s <= smp.nL; ++s) {
+            const int depth = s + t - 2;
+            if (depth < 0 || depth > set_.maxDepth || (s == 1 && t == 1)) continue;
+            if (direct_ && s + t <= 3) continue;  // rendered by renderDirect
+            ConnectResult r;
+            const ConnectSamples cu = ConnectNumbers(ckey, k, s, t);
+            if (!ConnectBDPT(ctx_, SubpathView{smp.lv, smp.lb, s}, SubpathView{smp.cv, smp.cb, t}, s, t, cu, &r))
+                continue;
+            if (r.splat && !film_.contains(r.pRaster)) continue;
+            const Spectrum L = r.L * (r.splat ? film_.scale : smp.w);
+            if (!L.isFinite()) {
+                ++nonFinite;
+                continue;
+            }
+            if (L.y() > 0) fn(smp, s, t, cu, L.y());
+        }
+    return nonFinite;
+}
+
 void PMLTIntegrator::bootstrap(PassContext &ctx) {
     const int64_t N = bootstrapSampleCount();
     const uint64_t key = ctx.seed() ^ kBootstrapTag, ckey = ctx.seed() ^ kConnectTag;
+    prepareBootstrap(ctx, key);
     constexpr int64_t kGrain = 256;
     std::vector<std::vector<Candidate>> chunks(size_t((N + kGrain - 1) / kGrain));
     std::atomic<uint64_t> bad{0};
@@ -155,28 +184,11 @@ void PMLTIntegrator::bootstrap(PassContext &ctx) {
         std::vector<Candidate> &out = chunks[size_t(i0 / kGrain)];
         uint64_t nonFinite = 0;
         for (int64_t k = i0; k < i1; ++k) {
-            Sample smp;
-            if (makeSample(key, k, wk.arena, &smp)) {
-                for (int t = 1; t <= smp.nC; ++t)
-                    for (int s = 0; s <= smp.nL; ++s) {
-                        const int depth = s + t - 2;
-                        if (depth < 0 || depth > set_.maxDepth || (s == 1 && t == 1)) continue;
-                        if (direct_ && s + t <= 3) continue;  // rendered by renderDirect
-                        ConnectResult r;
-                        const ConnectSamples cu = ConnectNumbers(ckey, k, s, t);
-                        if (!ConnectBDPT(ctx_, SubpathView{smp.lv, smp.lb, s}, SubpathView{smp.cv, smp.cb, t}, s, t,
-                                         cu, &r))
-                            continue;
-                        if (r.splat && !film_.contains(r.pRaster)) continue;
-                        const Spectrum L = r.L * (r.splat ? film_.scale : smp.w);
-                        if (!L.isFinite()) {
-                            ++nonFinite;
-                            continue;
-                        }
-                        const double y = L.y() > 0 ? candidateWeight(smp, k, s, t, cu, L.y(), key, wk.arena) : 0;
-                        if (y > 0) out.push_back(Candidate{k, int8_t(s), int8_t(t), y});
-                    }
-            }
+            nonFinite += forEachStrategy(key, k, wk.arena,
+                                         [&](const Sample &smp, int s, int t, const ConnectSamples &cu, double lum) {
+                                             const double y = candidateWeight(smp, k, s, t, cu, lum, key, wk.arena);
+                                             if (y > 0) out.push_back(Candidate{k, int8_t(s), int8_t(t), y});
+                                         });
             wk.arena.reset();
         }
         bad += nonFinite;

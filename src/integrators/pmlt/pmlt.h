@@ -46,6 +46,7 @@
 // Splats are unfiltered (the pixel holding the raster point), as mlt's.
 #pragma once
 #include <atomic>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -160,6 +161,13 @@ class PMLTIntegrator : public Integrator {
                                    uint64_t key, Arena &arena) const;
     // A uniform direction in [0, 4) of candidate (k, s, t) (gmlt's extended state).
     static int CandidateDirection(uint64_t key, int64_t k, int s, int t);
+    // Called before the bootstrap's candidates are weighted (key: the bootstrap's).
+    virtual void prepareBootstrap(PassContext &, uint64_t) {}
+    // Calls fn(sample, s, t, connection numbers, luminance) for every strategy
+    // of bootstrap sample k with a finite positive contribution (its subpaths
+    // in arena); returns the number of non-finite contributions left out.
+    uint64_t forEachStrategy(uint64_t key, int64_t k, Arena &arena,
+                             const std::function<void(const Sample &, int, int, const ConnectSamples &, double)> &fn) const;
     void bootstrap(PassContext &ctx);
     // Bidirectional sample k of the bootstrap (camera and light subpaths, in arena).
     bool makeSample(uint64_t key, int64_t k, Arena &arena, Sample *s) const;

@@ -144,32 +144,19 @@ double GMLTIntegrator::candidateWeight(const Sample &smp, int64_t k, int s, int 
 }
 
 void GMLTIntegrator::runPass(PassContext &ctx) {
-    if (direct_ && ctx.pass() == 0) renderDirect(ctx);
-    if (chains_.empty()) return;
-    const int64_t nChains = int64_t(chains_.size());
-    const int64_t M = int64_t(ctx.sampleCount()) * film_.pixels.area();
-    const int64_t first = mutationsIssued_;
-    mutationsIssued_ += M;
     Float weights[pmlt::kMutationTypes];
-    for (int k = 0; k < pmlt::kMutationTypes; ++k) weights[k] = set_.weight(MutationType(k));
+    selectionWeights(weights);
     const double b = b_;
     const pmlt::Mutator &mut = *mut_;
-    ctx.forEachItem(nChains, kMutationTag, [&](int64_t i, RNG &rng, SampleRecorder &rec, Worker &wk) {
-        const int64_t count = ChainShare(first + M, i, nChains) - ChainShare(first, i, nChains);
-        Chain &ch = chains_[size_t(i)];
-        if (count == 0 || !(ch.I > 0)) return;
-        thread_local Arena cur;
-        cur.reset();
-        pmlt::State xs, ys;
-        xs.x = ch.x;
-        pmlt::BuildBSDFs(ctx_, xs.x, cur, &xs.bsdf);
-        if (!pmlt::Evaluate(ctx_, film_, xs.x, xs.bsdf.data(), &xs.e)) return;
+    runChains(ctx, kMutationTag, [&](Chain &ch, int64_t count, pmlt::State &xs, Arena &cur, RNG &rng,
+                                     SampleRecorder &rec, Worker &wk) {
+        pmlt::State ys;
         pmlt::MutationStats mst;
         int64_t shifts[kShiftStatuses] = {};
         int dx = ch.dir;
         Target tx = evaluate(xs, dx, cur, &mst);
         ++shifts[int(tx.status)];
-        if (!(tx.f > 0)) return;  // alpha = 0 and no gradient: outside the target
+        if (!(tx.f > 0)) return;  // not reached: alpha > 0 and I(x) > 0
         RNGSampler u(rng);
         ItemCounts cnt;
         // Splats of state z with weight w (expected values, as pmlt): the
@@ -221,10 +208,6 @@ void GMLTIntegrator::runPass(PassContext &ctx) {
             }
             wk.arena.reset();
         }
-        ch.x = xs.x;
-        ch.F = xs.e.F;
-        ch.I = xs.e.I;
-        ch.pRaster = xs.e.pRaster;
         ch.dir = int8_t(dx);
         flushCounts(cnt, mst, count);
         for (int s = 0; s < kShiftStatuses; ++s) shiftCounts_[s] += shifts[s];

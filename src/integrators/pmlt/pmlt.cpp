@@ -293,27 +293,43 @@ void PMLTIntegrator::renderDirect(PassContext &ctx) {
     });
 }
 
-void PMLTIntegrator::runPass(PassContext &ctx) {
+void PMLTIntegrator::runChains(PassContext &ctx, uint64_t tag, const ChainFn &fn) {
     if (direct_ && ctx.pass() == 0) renderDirect(ctx);
     if (chains_.empty()) return;
     const int64_t nChains = int64_t(chains_.size());
     const int64_t M = int64_t(ctx.sampleCount()) * film_.pixels.area();
     const int64_t first = mutationsIssued_;
     mutationsIssued_ += M;
-    Float weights[pmlt::kMutationTypes];
-    for (int k = 0; k < pmlt::kMutationTypes; ++k) weights[k] = set_.weight(MutationType(k));
-    const double b = b_;
-    const pmlt::Mutator mut(ctx_, film_, mset_);
-    ctx.forEachItem(nChains, kMutationTag, [&](int64_t i, RNG &rng, SampleRecorder &rec, Worker &wk) {
+    ctx.forEachItem(nChains, tag, [&](int64_t i, RNG &rng, SampleRecorder &rec, Worker &wk) {
         const int64_t count = ChainShare(first + M, i, nChains) - ChainShare(first, i, nChains);
         Chain &ch = chains_[size_t(i)];
         if (count == 0 || !(ch.I > 0)) return;
         thread_local Arena cur;
         cur.reset();
-        pmlt::State xs, ys;
+        pmlt::State xs;
         xs.x = ch.x;
         pmlt::BuildBSDFs(ctx_, xs.x, cur, &xs.bsdf);
         if (!pmlt::Evaluate(ctx_, film_, xs.x, xs.bsdf.data(), &xs.e)) return;
+        fn(ch, count, xs, cur, rng, rec, wk);
+        ch.x = xs.x;
+        ch.F = xs.e.F;
+        ch.I = xs.e.I;
+        ch.pRaster = xs.e.pRaster;
+    });
+}
+
+void PMLTIntegrator::selectionWeights(Float *weights) const {
+    for (int k = 0; k < pmlt::kMutationTypes; ++k) weights[k] = set_.weight(MutationType(k));
+}
+
+void PMLTIntegrator::runPass(PassContext &ctx) {
+    Float weights[pmlt::kMutationTypes];
+    selectionWeights(weights);
+    const double b = b_;
+    const pmlt::Mutator mut(ctx_, film_, mset_);
+    runChains(ctx, kMutationTag, [&](Chain &, int64_t count, pmlt::State &xs, Arena &cur, RNG &rng,
+                                     SampleRecorder &rec, Worker &wk) {
+        pmlt::State ys;
         RNGSampler u(rng);
         pmlt::MutationStats mst;
         ItemCounts cnt;
@@ -341,10 +357,6 @@ void PMLTIntegrator::runPass(PassContext &ctx) {
             }
             wk.arena.reset();
         }
-        ch.x = xs.x;
-        ch.F = xs.e.F;
-        ch.I = xs.e.I;
-        ch.pRaster = xs.e.pRaster;
         flushCounts(cnt, mst, count);
     });
 }

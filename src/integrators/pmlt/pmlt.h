@@ -144,6 +144,14 @@ class PMLTIntegrator : public Integrator {
         }
     };
     void flushCounts(const ItemCounts &c, const pmlt::MutationStats &mst, int64_t mutations);
+    // One pass of the chains: direct light in the first pass (directsamples),
+    // each chain's share of the pass's mutations (items keyed by `tag`), its
+    // state x rebuilt (BSDFs in `cur`); fn runs the chain's `count` mutations,
+    // leaving its state in x, which is stored back.
+    using ChainFn = std::function<void(Chain &ch, int64_t count, pmlt::State &x, Arena &cur, RNG &rng,
+                                       SampleRecorder &rec, Worker &wk)>;
+    void runChains(PassContext &ctx, uint64_t tag, const ChainFn &fn);
+    void selectionWeights(Float *weights) const;
     // The mutation type of one step: chosen among those that apply to x's
     // pattern, weights renormalised (*wsum: their sum).
     static int SelectMutation(const pmlt::Mutator &mut, const pmlt::Path &x, const Float *weights, double u,

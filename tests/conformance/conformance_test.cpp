@@ -325,9 +325,10 @@ TEST_P(Agreement, AgreesWithBdpt) {
     // Poisson solve, takes a quarter of F / f(z) per state (Sec. 4.3): with
     // alpha = 0.2 a state in a smooth region weighs up to 1 / alpha = 5, so
     // a run's mean varies ~10x more than pmlt's (whose every state splats b).
-    // At 8 spp a 5% bias is not resolved; 256 spp resolves it.
+    // At 8 spp a 5% bias is not resolved; K = 32 runs of 256 spp resolve it
+    // (K = 16 left the outdoor scene's power margin at 0.99 in one CI run).
     const std::string &x = std::get<0>(GetParam());
-    CheckAgreement(x, std::get<1>(GetParam()), x == "gmlt" ? AgreementConfig{16, 256, 1000, 2000}
+    CheckAgreement(x, std::get<1>(GetParam()), x == "gmlt" ? AgreementConfig{32, 256, 1000, 2000}
                                                            : AgreementConfig{16, 8, 1000, 2000});
 }
 

@@ -64,7 +64,7 @@ void GMLTIntegrator::preprocess(const Scene &scene, Film &film) {
         mset_.mscene = mscene_.get();
     }
     mut_ = std::make_unique<pmlt::Mutator>(ctx_, film_, mset_);
-    initGradients(film, false, true);
+    initGradients(film, false, true, false);  // the chains only splat: no per-sample layers
     if (gset_.stateLayers) {
         densityLayer_ = film.addLayer("gmlt.density");
         irreversibleLayer_ = film.addLayer("gmlt.irreversible");

@@ -27,8 +27,8 @@ double FreshMemorySecondsPerByte() {
 constexpr double kFinishFreshBytesPerPixel = 600;
 }  // namespace
 
-void GradientFamily::initGradients(Film &film, bool useFilmFilter, bool lightTracing) {
-    gfilm_.init(film, useFilmFilter, lightTracing);
+void GradientFamily::initGradients(Film &film, bool useFilmFilter, bool lightTracing, bool samples) {
+    gfilm_.init(film, useFilmFilter, lightTracing, samples);
     filmBounds_ = film.pixelBounds();
 }
 

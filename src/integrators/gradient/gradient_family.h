@@ -19,8 +19,8 @@ namespace gradus {
 class GradientFamily {
   protected:
     // Adds the gradient layers to the film (lightTracing: also the layers of
-    // light-tracing splats) and records its bounds.
-    void initGradients(Film &film, bool useFilmFilter, bool lightTracing = false);
+    // light-tracing splats; samples false: those only) and records its bounds.
+    void initGradients(Film &film, bool useFilmFilter, bool lightTracing = false, bool samples = true);
     // Both pixel p and its neighbour k lie on the film (a gradient between them is kept).
     bool pairInside(Point2i p, int k) const {
         return filmBounds_.inside(p) &&

@@ -14,7 +14,8 @@ namespace gradus {
 
 const Point2i kNeighbourOffsets[kNumNeighbours] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
 
-void GradientFilm::init(Film &film, bool useFilmFilter, bool lightTracing) {
+void GradientFilm::init(Film &film, bool useFilmFilter, bool lightTracing, bool samples) {
+    GRADUS_CHECK(samples || lightTracing);
     bounds_ = film.pixelBounds();
     filter_ = useFilmFilter ? &film.filter() : nullptr;
     filterNorm_ = footprint_ = 1;
@@ -32,7 +33,8 @@ void GradientFilm::init(Film &film, bool useFilmFilter, bool lightTracing) {
     }
     static const char *names[NumLayers] = {"gd.primal", "gd.primal2", "gd.dxf", "gd.dxf2", "gd.dxb",
                                            "gd.dxb2",   "gd.dyf",     "gd.dyf2", "gd.dyb", "gd.dyb2"};
-    for (int i = 0; i < NumLayers; ++i) layer_[i] = film.addLayer(names[i]);
+    samples_ = samples;
+    for (int i = 0; i < NumLayers; ++i) layer_[i] = samples ? film.addLayer(names[i]) : -1;
     lightTracing_ = lightTracing;
     if (lightTracing)
         for (int i = 0; i < NumLayers; ++i) splatLayer_[i] = film.addLayer(std::string("gd.lt.") + (names[i] + 3));
@@ -82,6 +84,7 @@ class Footprint {
 }  // namespace
 
 void GradientFilm::record(SampleRecorder &rec, const GradientSample &s) const {
+    GRADUS_CHECK(samples_);
     if (!s.primal.isFinite()) return;
     // Box: the sample's own pixel. Film filter: the pixels q whose centre lies
     // within the filter radius of the sample, with weight h(q - s).
@@ -146,12 +149,20 @@ float SumF(float a, float b) { return ToFloat(double(a + b)); }
 }  // namespace
 
 GradientImages GradientFilm::images(const Film &film, double spp) const {
+    GradientImages g;
+    g.width = bounds_.width();
+    g.height = bounds_.height();
+    g.channels = 3;
+    if (!samples_) {
+        const size_t n = size_t(g.width) * g.height * 3;
+        for (auto *v : {&g.primal, &g.dx, &g.dy, &g.primalVar, &g.dxVar, &g.dyVar}) v->assign(n, 0.f);
+        addSplats(film, spp, &g);
+        return g;
+    }
     Image L[NumLayers];
     for (int i = 0; i < NumLayers; ++i) L[i] = film.layerImage(layer_[i]);
-    GradientImages g;
     g.width = L[0].width();
     g.height = L[0].height();
-    g.channels = 3;
     size_t n = size_t(g.width) * g.height * 3;
     g.primal.resize(n);
     g.dx.resize(n);

@@ -53,7 +53,8 @@ class GradientFilm {
     // Adds the internal accumulation layers to the film; useFilmFilter selects
     // the film's pixel filter instead of the box; lightTracing adds the layers
     // of splatLightTracing().
-    void init(Film &film, bool useFilmFilter = false, bool lightTracing = false);
+    // samples = false: splats only (no per-sample layers; record() is not allowed).
+    void init(Film &film, bool useFilmFilter = false, bool lightTracing = false, bool samples = true);
     // Records one camera sample's primal value and neighbour differences.
     void record(SampleRecorder &rec, const GradientSample &s) const;
     // Records a light-tracing sample (values times `scale`) at its pixel
@@ -73,6 +74,7 @@ class GradientFilm {
     int layer_[NumLayers] = {};
     int splatLayer_[NumLayers] = {};  // light-tracing splats (same meaning as layer_)
     bool lightTracing_ = false;
+    bool samples_ = true;
     Bounds2i bounds_;
     const Filter *filter_ = nullptr;  // null: box
     Float filterNorm_ = 1;            // 1 / integral of the filter

@@ -129,12 +129,7 @@ double GMLTIntegrator::candidateWeight(const Sample &smp, int64_t k, int s, int 
     // of f over the four directions of the extended space (Eq. 8).
     ++nBootstrapShifted_;
     pmlt::State st;
-    if (!pmlt::StrategyPath(ctx_, SubpathView{smp.lv, smp.lb, s}, SubpathView{smp.cv, smp.cb, t}, s, t, cu, &st.x)) {
-        ++nBootstrapDropped_;
-        return 0;
-    }
-    pmlt::BuildBSDFs(ctx_, st.x, arena, &st.bsdf);
-    if (!pmlt::Evaluate(ctx_, film_, st.x, st.bsdf.data(), &st.e)) {
+    if (!strategyState(smp, s, t, cu, arena, &st)) {
         ++nBootstrapDropped_;
         return 0;
     }
@@ -223,9 +218,10 @@ void GMLTIntegrator::finish(const Film &film, const RenderStats &stats, Image *o
     finishGradients(film, stats, gset_.norm, gset_.alpha, out, rescale_);
     if (direct) {
         // Direct light is added after the solve (Sec. 7), to the primal and every reconstruction.
+        const std::vector<std::string> layers = out->layers();
         for (const char *layer : {"", "primal", "reconstructed_l1", "reconstructed_l2", "reconstructed_hybrid",
                                   "reconstructed_weighted"}) {
-            if (out->channelIndex(std::string(*layer ? std::string(layer) + "." : "") + "R") < 0) continue;
+            if (std::find(layers.begin(), layers.end(), layer) == layers.end()) continue;
             Image im = out->layerRGB(layer);
             for (size_t k = 0; k < im.data().size(); ++k) im.data()[k] += directImage.data()[k];
             out->setLayerRGB(layer, im);

@@ -173,6 +173,14 @@ uint64_t PMLTIntegrator::forEachStrategy(uint64_t key, int64_t k, Arena &arena,
     return nonFinite;
 }
 
+bool PMLTIntegrator::strategyState(const Sample &smp, int s, int t, const ConnectSamples &cu, Arena &arena,
+                                   pmlt::State *st) const {
+    if (!pmlt::StrategyPath(ctx_, SubpathView{smp.lv, smp.lb, s}, SubpathView{smp.cv, smp.cb, t}, s, t, cu, &st->x))
+        return false;
+    pmlt::BuildBSDFs(ctx_, st->x, arena, &st->bsdf);
+    return pmlt::Evaluate(ctx_, film_, st->x, st->bsdf.data(), &st->e);
+}
+
 void PMLTIntegrator::bootstrap(PassContext &ctx) {
     const int64_t N = bootstrapSampleCount();
     const uint64_t key = ctx.seed() ^ kBootstrapTag, ckey = ctx.seed() ^ kConnectTag;
@@ -236,14 +244,8 @@ void PMLTIntegrator::bootstrap(PassContext &ctx) {
                 const Candidate &cd = candidates_[i];
                 Sample smp;
                 pmlt::State st;
-                bool ok = makeSample(key, cd.sample, wk.arena, &smp) &&
-                          pmlt::StrategyPath(ctx_, SubpathView{smp.lv, smp.lb, cd.s}, SubpathView{smp.cv, smp.cb, cd.t},
-                                             cd.s, cd.t, ConnectNumbers(ckey, cd.sample, cd.s, cd.t), &st.x);
-                if (ok) {
-                    pmlt::BuildBSDFs(ctx_, st.x, wk.arena, &st.bsdf);
-                    ok = pmlt::Evaluate(ctx_, film_, st.x, st.bsdf.data(), &st.e);
-                }
-                if (ok) {
+                if (makeSample(key, cd.sample, wk.arena, &smp) &&
+                    strategyState(smp, cd.s, cd.t, ConnectNumbers(ckey, cd.sample, cd.s, cd.t), wk.arena, &st)) {
                     ch.x = st.x;
                     ch.F = st.e.F;
                     ch.I = st.e.I;

@@ -169,6 +169,10 @@ class PMLTIntegrator : public Integrator {
                                    uint64_t key, Arena &arena) const;
     // A uniform direction in [0, 4) of candidate (k, s, t) (gmlt's extended state).
     static int CandidateDirection(uint64_t key, int64_t k, int s, int t);
+    // The evaluated path of strategy (s, t) of a bootstrap sample (BSDFs in
+    // arena); false when it cannot be rebuilt or does not evaluate.
+    bool strategyState(const Sample &smp, int s, int t, const ConnectSamples &cu, Arena &arena,
+                       pmlt::State *st) const;
     // Called before the bootstrap's candidates are weighted (key: the bootstrap's).
     virtual void prepareBootstrap(PassContext &, uint64_t) {}
     // Calls fn(sample, s, t, connection numbers, luminance) for every strategy

@@ -486,7 +486,7 @@ Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathVi
         }
         // ri is the ratio of the connection with camera endpoint C[i]: merging at C[i]
         // (not at the light origin x_0, which C[t-1] is when s = 0).
-        if (eta > 0 && !(s == 0 && i == t - 1) && IsMergeable(Cv(i), Cb(i))) sumRi += mis(eta * remap(camRev(i)) * ri);
+        if (eta > 0 && !(s == 0 && i == t - 1) && MergeableIn(set, Cv(i), Cb(i))) sumRi += mis(eta * remap(camRev(i)) * ri);
         ri *= remap(camRev(i)) / remap(Cv(i).pdfFwd);
         int sp = s + t - i;
         if (sp == 1 && i == 1) continue;  // (1,1) is not evaluated
@@ -503,7 +503,7 @@ Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathVi
     ri = 1;
     for (int i = s - 1; i >= 0; --i) {
         // ri is the ratio of the connection with light endpoint L[i]: merging at L[i] (i >= 1).
-        if (eta > 0 && i >= 1 && IsMergeable(Lv(i), Lb(i))) sumRi += mis(eta * remap(lightRev(i)) * ri);
+        if (eta > 0 && i >= 1 && MergeableIn(set, Lv(i), Lb(i))) sumRi += mis(eta * remap(lightRev(i)) * ri);
         ri *= remap(lightRev(i)) / remap(Lv(i).pdfFwd);
         int tp = s + t - i;
         if (i == 1 && tp == 1) continue;

@@ -62,6 +62,10 @@ struct StrategySet {
     // subpath, one connected). The sums then need the subpaths' BSDFs.
     bool merging = false;
     Float mergeFactor = 0;
+    // G-VCM (Sec. 4): merges only at connectable vertices, those the shift's
+    // classification left unmarked (subpath_shift.h PrepareSubpath marks
+    // near-specular ones VERTEX_DELTA).
+    bool mergeRoughOnly = false;
 };
 
 // Everything the connection code needs besides the subpaths (read-only, shared by threads).
@@ -122,6 +126,10 @@ bool IsConnectible(const PathVertex &v, const BSDF *bsdf);
 // A vertex at which a camera and a light subpath can be merged (VCM): a surface
 // with a non-specular BSDF component (bsdf must be given).
 bool IsMergeable(const PathVertex &v, const BSDF *bsdf);
+// IsMergeable among the strategies of `set` (StrategySet::mergeRoughOnly).
+inline bool MergeableIn(const StrategySet &set, const PathVertex &v, const BSDF *bsdf) {
+    return IsMergeable(v, bsdf) && !(set.mergeRoughOnly && v.delta());
+}
 // A surface vertex of an intersection and its BSDF (what the random walks
 // store; throughput and pdfs left zero).
 void MakeSurfaceVertex(const BidirContext &ctx, const SurfaceInteraction &isect, const BSDF &bsdf, PathVertex *v);

@@ -41,8 +41,7 @@ GBDPTIntegrator::ThreadState &GBDPTIntegrator::local() const {
     return store_->threads.local();
 }
 
-namespace {
-ParamTable<GBDPTSettings> Table() {
+ParamTable<GBDPTSettings> GBDPTParamTable() {
     using S = GBDPTSettings;
     ParamTable<S> t("gbdpt");
     BidirParamOptions b;
@@ -61,12 +60,13 @@ ParamTable<GBDPTSettings> Table() {
                           "gradient MIS: combined (Eq. 8) or simple (Eq. 9)");
     return t;
 }
-}  // namespace
 
-std::vector<ParamInfo> GBDPTParameters() { return Table().describe(); }
+std::vector<ParamInfo> GBDPTParameters() { return GBDPTParamTable().describe(); }
 
-GBDPTIntegrator::GBDPTIntegrator(const EntityDesc &desc)
-    : set_(Table().parse(desc)), loc_(desc.loc), store_(new Store) {}
+GBDPTIntegrator::GBDPTIntegrator(const EntityDesc &desc) : GBDPTIntegrator(desc, GBDPTParamTable().parse(desc)) {}
+
+GBDPTIntegrator::GBDPTIntegrator(const EntityDesc &desc, const GBDPTSettings &set)
+    : set_(set), loc_(desc.loc), store_(new Store) {}
 
 void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     scene_ = &scene;
@@ -128,7 +128,7 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
     cam.deltaSample = static_cast<uint8_t *>(arena.alloc(maxCam));
     light.deltaSample = static_cast<uint8_t *>(arena.alloc(maxLight));
     cam.n = GenerateCameraSubpath(bctx_, ray, sampler, arena, maxCam, cam.v, cam.b);
-    light.n = scene.lights.empty() ? 0 : GenerateLightSubpath(bctx_, sampler, arena, maxLight, light.v, light.b);
+    light.n = scene.lights.empty() || !connections_ ? 0 : GenerateLightSubpath(bctx_, sampler, arena, maxLight, light.v, light.b);
     PrepareSubpath(sctx_, &cam);
     PrepareSubpath(sctx_, &light);
     SubpathView camView = cam.view(), lightView = light.view();
@@ -159,7 +159,8 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
     int rShared = -1;
     for (int k = 0; k < kNumNeighbours; ++k)
         if (inside[k] && shifts[k].r >= 0) rShared = shifts[k].r;
-    const int misSplit = rShared >= 0 ? rShared + 1 : -1;
+    // (Not with merging terms in the sums: MISSplit leaves them out.)
+    const int misSplit = rShared >= 0 && !bctx_.strategies.merging ? rShared + 1 : -1;
     Float prefixY[kNumNeighbours];
     bool havePrefix[kNumNeighbours] = {};
 
@@ -168,7 +169,7 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
     lens.pdfFwd = 1;
     Spectrum primal(0);
     auto diffuseAt = [&](const ShiftSubpath &p, int i) { return IsDiffuseVertex(sctx_, p.v[i], &p.b[i]); };
-    for (int t = 1; t <= cam.n; ++t) {
+    for (int t = 1; t <= (connections_ ? cam.n : 0); ++t) {
         for (int s = 0; s <= light.n; ++s) {
             int depth = s + t - 2;
             if ((s == 1 && t == 1) || depth < 0 || depth > set_.maxDepth) continue;
@@ -306,6 +307,7 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
         }
     }
     out.primal = primal;
+    addStrategies(CameraState{&cam, shifts, inside, w, &arena, &sampler}, &out);
     return out;
 }
 

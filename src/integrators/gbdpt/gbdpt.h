@@ -66,6 +66,9 @@
 
 namespace gradus {
 
+template <class S>
+class ParamTable;
+
 // Every field is set by the parameter table (gbdpt.cpp).
 struct GBDPTSettings : BidirSettings, GradientSettings {
     enum class MIS { Combined, Simple };
@@ -74,6 +77,9 @@ struct GBDPTSettings : BidirSettings, GradientSettings {
     bool lightTracing;
     MIS mis;
 };
+
+// gbdpt's parameter table (gvcm appends it to its own).
+ParamTable<GBDPTSettings> GBDPTParamTable();
 
 class GBDPTIntegrator : public PixelSampleIntegrator, public GradientFamily {
   public:
@@ -96,7 +102,25 @@ class GBDPTIntegrator : public PixelSampleIntegrator, public GradientFamily {
     Float splatScale() const { return splatScale_; }
     int maxDepth() const { return set_.maxDepth; }
 
-  private:
+  protected:
+    // For G-VCM (integrators/gvcm/): its own parameter table around gbdpt's.
+    GBDPTIntegrator(const EntityDesc &desc, const GBDPTSettings &set);
+    // What a camera sample hands to addStrategies after G-BDPT's connections:
+    // the prepared base camera subpath and its shifts (index k valid where inside[k]).
+    struct CameraState {
+        const ShiftSubpath *cam;
+        const CameraShift *shifts;
+        const bool *inside;
+        Float w;  // camera ray weight
+        Arena *arena;
+        Sampler *sampler;
+    };
+    // More strategies of the same camera sample (G-VCM's merges): add their
+    // primal and differences to *out.
+    virtual void addStrategies(const CameraState &, GradientSample *) const {}
+    // false: no light subpath per camera sample and no connections (G-PM).
+    bool connections_ = true;
+
     GBDPTSettings set_;
     FileLoc loc_;
     LightSampler lightSampler_;
@@ -104,6 +128,8 @@ class GBDPTIntegrator : public PixelSampleIntegrator, public GradientFamily {
     std::unique_ptr<EmbreeManifoldScene> mscene_;
     SubpathShiftContext sctx_;
     Float splatScale_ = 1;
+
+  private:
     // Per-thread statistics (summed by statistics()).
     struct ThreadState;
     struct Store;

@@ -11,6 +11,8 @@ Float ChainCos0(const ManifoldChain &c) {
     return AbsDot(Normalize(d), Vec3(c.v[0].sp.n));
 }
 
+}  // namespace
+
 // Re-traces the offset interior from `off`'s start through the walked
 // positions and evaluates each vertex with the base's event: the Dirac lobe of
 // an ideal specular vertex, f and the solid-angle density of a glossy one.
@@ -55,7 +57,6 @@ bool EvaluateWalked(const Scene &scene, const ManifoldChain &off, const Point3 &
     return true;
 }
 
-}  // namespace
 
 void SubpathShiftStats::recordWalk(const ManifoldWalkResult &r) {
     ++walks;

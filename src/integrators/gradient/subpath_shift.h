@@ -160,6 +160,10 @@ struct WalkedInterior {
     Spectrum factor{1};  // prod of the ideal specular vertices' fcos
     Float prob = 1;      // prod of their discrete lobe probabilities
 };
+// Re-traces a chain's interior from its start through its positions (ending
+// at `end`) and evaluates each vertex with the event of transmit[] (subpath_shift.cpp).
+bool EvaluateWalked(const Scene &scene, const ManifoldChain &off, const Point3 &end, const bool *transmit,
+                    const int *geomIds, Arena &arena, TransportMode mode, WalkedInterior *w);
 // Second chain of an offset: the manifold walk from `start` to the base
 // chain's end, kept only if it is reversible (JM12 Sec. 5: the walk may
 // converge to another solution of the chain; only reversible walks keep the

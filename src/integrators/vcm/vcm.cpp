@@ -72,8 +72,8 @@ int VCMLightVertices(const BidirContext &ctx, const PathVertex *v, const BSDF *b
         // Here B = B_i. c_{i-1}: light endpoint y_{i-1}, camera endpoint y_i.
         const bool prevDelta = i - 1 >= 1 && v[i - 1].delta();
         const bool edgeOK = EdgeConnectible(ctx, v[i - 1], v[i]);
-        const bool prevMerge = w.merging && i - 1 >= 1 && IsMergeable(v[i - 1], &b[i - 1]);
-        if (IsMergeable(v[i], &b[i])) {
+        const bool prevMerge = w.merging && i - 1 >= 1 && w.mergeable(v[i - 1], &b[i - 1]);
+        if (w.mergeable(v[i], &b[i])) {
             LightVertex lv;
             lv.p = v[i].p;
             lv.ng = v[i].ng;
@@ -131,7 +131,7 @@ void VCMCameraB(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, in
         // (z_1's pdfFwd 0, GenerateCameraSubpath).
         const bool cm = (m == 0 ? w.connecting && z[1].pdfFwd != 0 : !z[m].delta()) && !z[m + 1].delta() &&
                         EdgeConnectible(ctx, z[m], z[m + 1]);
-        const bool gm = w.merging && m >= 1 && IsMergeable(z[m], &zb[m]);
+        const bool gm = w.merging && m >= 1 && w.mergeable(z[m], &zb[m]);
         B[u] = (cm ? 1 : 0) + (gm ? Mis(w.eta * Remap(z[m].pdfRev), w.power) : 0) +
                Mis(Remap(z[m].pdfRev) / Remap(z[m].pdfFwd), w.power) * B[u - 1];
     }
@@ -146,7 +146,7 @@ VCMCameraTerms VCMCameraAt(const BidirContext &ctx, const PathVertex *z, const B
     const bool edge = EdgeConnectible(ctx, zp, zu);
     c.cPrev = (u - 1 == 0 ? w.connecting && zu.pdfFwd != 0 : !zp.delta()) && edge;
     c.cPrevEmitter = u - 1 != 0 && c.cPrev;
-    c.gPrev = w.merging && u - 1 >= 1 && IsMergeable(zp, &zb[u - 1]);
+    c.gPrev = w.merging && u - 1 >= 1 && w.mergeable(zp, &zb[u - 1]);
     c.ownU = Remap(zu.pdfFwd);
     c.ownPrev = Remap(zp.pdfFwd);
     c.B = Bu;
@@ -169,10 +169,41 @@ VCMIntegrator::VCMIntegrator(const EntityDesc &desc) : BidirFamily("vcm", 1), se
                     "strategy layers are not supported by vcm");
 }
 
-Float VCMIntegrator::radiusAt(int iteration) const {
-    // r_i^2 = r_1^2 i^(alpha - 1) (vcm.h).
-    return radius1_ * std::pow(Float(std::max(iteration, 1)), Float(0.5) * (set_.radiusAlpha - 1));
+Float VCMFootprintRadius(const Scene &scene, const Bounds2i &bounds, Float scale) {
+    // Median pixel footprint at the primary hits of a 16 x 16 grid of pixels.
+    std::vector<Float> fp;
+    const int dx = bounds.width(), dy = bounds.height();
+    for (int j = 0; j < 16; ++j)
+        for (int i = 0; i < 16; ++i) {
+            CameraSample cs;
+            cs.pFilm = Point2(bounds.pMin.x + (i + 0.5) * dx / 16, bounds.pMin.y + (j + 0.5) * dy / 16);
+            cs.pLens = Point2(0.5, 0.5);
+            Ray r0, r1;
+            if (scene.camera->generateRay(cs, &r0) == 0) continue;
+            cs.pFilm.x += 1;
+            if (scene.camera->generateRay(cs, &r1) == 0) continue;
+            SurfaceInteraction si;
+            if (!scene.intersect(r0, &si)) continue;
+            Float t = (si.p - r0.o).length() / r0.d.length();
+            Float w = ((si.p) - (r1.o + r1.d * t)).length();
+            if (std::isfinite(w) && w > 0) fp.push_back(w);
+        }
+    if (!fp.empty()) {
+        std::nth_element(fp.begin(), fp.begin() + fp.size() / 2, fp.end());
+        return fp[fp.size() / 2] * scale;
+    }
+    Point3 c;
+    Float rad = 1;
+    scene.bounds.boundingSphere(&c, &rad);
+    return std::isfinite(rad) && rad > 0 ? 1e-3 * rad : 1e-3;
 }
+
+Float VCMRadius(Float r1, Float alpha, int iteration) {
+    // r_i^2 = r_1^2 i^(alpha - 1) (vcm.h).
+    return r1 * std::pow(Float(std::max(iteration, 1)), Float(0.5) * (alpha - 1));
+}
+
+Float VCMIntegrator::radiusAt(int iteration) const { return VCMRadius(radius1_, set_.radiusAlpha, iteration); }
 
 void VCMIntegrator::preprocess(const Scene &scene, Film &film) {
     preprocessBidir(scene, film, set_, loc_);
@@ -184,36 +215,7 @@ void VCMIntegrator::preprocess(const Scene &scene, Film &film) {
         merging_ = false;
         skipped_ = "no specular or near-specular surface: merging left out (no grid)";
     }
-    radius1_ = set_.radius;
-    if (radius1_ == 0) {
-        // Median pixel footprint at the primary hits of a 16 x 16 grid of pixels.
-        std::vector<Float> fp;
-        const int dx = bounds_.width(), dy = bounds_.height();
-        for (int j = 0; j < 16; ++j)
-            for (int i = 0; i < 16; ++i) {
-                CameraSample cs;
-                cs.pFilm = Point2(bounds_.pMin.x + (i + 0.5) * dx / 16, bounds_.pMin.y + (j + 0.5) * dy / 16);
-                cs.pLens = Point2(0.5, 0.5);
-                Ray r0, r1;
-                if (scene.camera->generateRay(cs, &r0) == 0) continue;
-                cs.pFilm.x += 1;
-                if (scene.camera->generateRay(cs, &r1) == 0) continue;
-                SurfaceInteraction si;
-                if (!scene.intersect(r0, &si)) continue;
-                Float t = (si.p - r0.o).length() / r0.d.length();
-                Float w = ((si.p) - (r1.o + r1.d * t)).length();
-                if (std::isfinite(w) && w > 0) fp.push_back(w);
-            }
-        if (!fp.empty()) {
-            std::nth_element(fp.begin(), fp.begin() + fp.size() / 2, fp.end());
-            radius1_ = fp[fp.size() / 2] * set_.radiusScale;
-        } else {
-            Point3 c;
-            Float rad = 1;
-            scene.bounds.boundingSphere(&c, &rad);
-            radius1_ = std::isfinite(rad) && rad > 0 ? 1e-3 * rad : 1e-3;
-        }
-    }
+    radius1_ = set_.radius > 0 ? set_.radius : VCMFootprintRadius(scene, bounds_, set_.radiusScale);
     GRADUS_CHECK(radius1_ > 0);
 }
 

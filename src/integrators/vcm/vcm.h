@@ -108,6 +108,8 @@ struct VCMWeights {
     bool merging;     // merges are strategies
     bool connecting;  // connections (and light tracing) are strategies
     bool power;       // power heuristic (exponent 2)
+    bool roughOnly = false;  // merges only at vertices not marked VERTEX_DELTA (G-VCM, StrategySet::mergeRoughOnly)
+    bool mergeable(const PathVertex &v, const BSDF *b) const { return IsMergeable(v, b) && !(roughOnly && v.delta()); }
 };
 // Appends the stored vertices y_i (i >= 1, non-specular BSDF) of a light subpath
 // with their B_i to *out; returns how many.
@@ -134,6 +136,12 @@ VCMCameraTerms VCMCameraAt(const BidirContext &ctx, const PathVertex *z, const B
 // S_C(u) given o_u (density of z_u from the light side) and o_{u-1}; gu: merging
 // at z_u is a strategy; emitter: z_u is the light origin (s = 0).
 Float VCMCameraSum(const VCMCameraTerms &c, Float oz, Float oPrev, bool gu, bool emitter, const VCMWeights &w);
+
+// r_1 from the pixel footprint: `scale` times the median distance between the
+// primary hits of neighbouring pixels (16 x 16 probes; G-VCM Sec. 6, "about one pixel").
+Float VCMFootprintRadius(const Scene &scene, const Bounds2i &bounds, Float scale);
+// Radius of 1-based iteration i: r_i^2 = r_1^2 i^(alpha - 1).
+Float VCMRadius(Float r1, Float alpha, int iteration);
 
 class VCMIntegrator : public PixelSampleIntegrator, public BidirFamily {
   public:

@@ -1,0 +1,433 @@
+// G-VCM / G-PM estimator (derivation and notation in gvcm.h; equations of
+// gradient-domain-vcm.md).
+#include "integrators/gvcm/gvcm.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "core/error.h"
+#include "integrators/factories.h"
+#include "integrators/params.h"
+#include "samplers/rng.h"
+#include "samplers/rng_sampler.h"
+
+namespace gradus {
+
+std::unique_ptr<Integrator> CreateGVCMIntegrator(const EntityDesc &d) { return std::make_unique<GVCMIntegrator>(d); }
+
+namespace {
+
+constexpr uint64_t kLightTag = 0x6776636d00000001ULL;
+
+ParamTable<GVCMSettings> Table() {
+    using S = GVCMSettings;
+    ParamTable<S> t("gvcm");
+    t.append(GBDPTParamTable());
+    t.enumeration<bool>("mode", &S::mergeOnly, "vcm", {{"vcm", false}, {"mergeonly", true}},
+                        "vcm (G-VCM) | mergeonly (G-PM: merges at the first connectable camera vertex only)");
+    t.real("radius", &S::radius, 0, "initial merging radius in scene units (0: from the pixel footprint)", AtLeast(0));
+    t.real("radiusscale", &S::radiusScale, 1, "the footprint radius in pixels (radius 0)", Range{1e-3, 1e3});
+    t.real("radiusalpha", &S::radiusAlpha, 0.75, "radius reduction r_i^2 = r_1^2 i^(alpha - 1)", Range{1e-3, 1});
+    return t;
+}
+
+Float Remap(Float f) { return f != 0 ? f : Float(1); }
+
+// A point at unit distance from p in direction d (for densities towards a direction).
+PathVertex DirectionPoint(const Point3 &p, const Vec3 &d) {
+    PathVertex v;
+    v.type = VertexType::Surface;
+    v.p = p + d;
+    v.ng = Normal3(-d.x, -d.y, -d.z);
+    v.ns = v.ng;
+    return v;
+}
+
+}  // namespace
+
+std::vector<ParamInfo> GVCMParameters() { return Table().describe(); }
+
+GVCMIntegrator::GVCMIntegrator(const EntityDesc &desc) : GBDPTIntegrator(desc, Table().parse(desc)), gset_(Table().parse(desc)) {
+    connections_ = !gset_.mergeOnly;
+}
+
+void GVCMIntegrator::preprocess(const Scene &scene, Film &film) {
+    GBDPTIntegrator::preprocess(scene, film);
+    bounds_ = film.sampleBounds();
+    const SceneFeatures &f = scene.features;
+    merging_ = f.specularSurfaces || f.nearSpecularSurfaces || gset_.mergeOnly;
+    skipped_ = merging_ ? "" : "no specular or near-specular surface: merging left out (no grid; gvcm = gbdpt)";
+    radius1_ = gset_.radius > 0 ? gset_.radius : VCMFootprintRadius(scene, bounds_, gset_.radiusScale);
+    GRADUS_CHECK(radius1_ > 0);
+    // Merges only at connectable vertices (Sec. 4), in the estimate and in every MIS sum.
+    bctx_.strategies.merging = merging_ && connections_;
+    bctx_.strategies.mergeRoughOnly = true;
+    bctx_.strategies.mergeFactor = 0;
+}
+
+void GVCMIntegrator::runPass(PassContext &ctx) {
+    scene_ = &ctx.scene();
+    radius_ = radiusAt(ctx.firstSample() + 1);
+    // eta_VCM = pi r^2 N_light (Eq. 12: N p_VM with N light subpaths merged).
+    eta_ = merging_ ? Pi * radius_ * radius_ * Float(bounds_.area()) : 0;
+    if (bctx_.strategies.merging) bctx_.strategies.mergeFactor = eta_;
+    if (merging_) {
+        lightPass(ctx);
+        if (ctx.interrupted()) return;
+        grid_.build(vertices_.size(), [&](size_t i) { return vertices_[i].p; }, radius_,
+                    [&](int64_t n, int64_t grain, const std::function<void(int64_t, int64_t)> &fn) {
+            ctx.parallelFor(n, grain, [&](int64_t b, int64_t e, Worker &) { fn(b, e); });
+        });
+        if (ctx.interrupted()) return;
+    }
+    ctx.forEachPixelSample(*this);
+    ++passes_;
+}
+
+void GVCMIntegrator::regenerate(uint32_t j, Arena &arena, ShiftSubpath *L) const {
+    // The light pass's RNG of item j (PassContext::forEachItem).
+    RNG rng(Hash(lightKey_, uint64_t(lightPassIndex_), uint64_t(j)));
+    RNGSampler smp(rng);
+    const int maxLight = set_.maxDepth + 1;
+    AllocSubpath(arena, maxLight, &L->v, &L->b);
+    L->deltaSample = static_cast<uint8_t *>(arena.alloc(maxLight));
+    L->n = scene_->lights.empty() ? 0 : GenerateLightSubpath(bctx_, smp, arena, maxLight, L->v, L->b);
+    PrepareSubpath(sctx_, L);
+}
+
+void GVCMIntegrator::lightPass(PassContext &ctx) {
+    const int64_t N = bounds_.area();
+    lightKey_ = ctx.seed() ^ kLightTag;
+    lightPassIndex_ = ctx.pass();
+    const VCMWeights weights{eta_, true, connections_, false, true};
+    const int64_t chunks = (N + PassContext::kItemChunk - 1) / PassContext::kItemChunk;
+    std::vector<std::vector<LightVertex>> out(static_cast<size_t>(chunks));
+    std::vector<uint32_t> count(static_cast<size_t>(N), 0);
+    ctx.forEachItem(N, kLightTag, [&](int64_t item, RNG &, SampleRecorder &, Worker &wk) {
+        ShiftSubpath L;
+        regenerate(uint32_t(item), wk.arena, &L);  // the same RNG as forEachItem's (seed ^ tag, pass, item)
+        count[size_t(item)] =
+            uint32_t(VCMLightVertices(bctx_, L.v, L.b, L.n, weights, &out[size_t(item / PassContext::kItemChunk)]));
+    });
+    pathStart_.assign(size_t(N) + 1, 0);
+    for (int64_t j = 0; j < N; ++j) pathStart_[j + 1] = pathStart_[j] + count[j];
+    vertices_.resize(pathStart_[N]);
+    std::vector<size_t> chunkStart(static_cast<size_t>(chunks) + 1, 0);
+    for (int64_t c = 0; c < chunks; ++c) chunkStart[c + 1] = chunkStart[c] + out[c].size();
+    ctx.parallelFor(chunks, 1, [&](int64_t c0, int64_t c1, Worker &) {
+        for (int64_t c = c0; c < c1; ++c) std::copy(out[c].begin(), out[c].end(), vertices_.begin() + chunkStart[c]);
+    });
+    nLightVertices_ += vertices_.size();
+}
+
+// An offset merge: value f(y)|T'|/p(x) (times the camera weight), its VCM
+// weight and rho = |T'| p_y / p_x (Eq. 23 through CombinedWeight).
+struct GVCMIntegrator::Offset {
+    Spectrum f;
+    Float w = 1, rho = 1;
+};
+
+bool GVCMIntegrator::case2(const ShiftSubpath &L, int m, const CameraShift &sh, int u, const LightVertex &lv,
+                           Arena &arena, Offset *o) const {
+    const Scene &scene = *scene_;
+    const PathVertex &zo = sh.y.v[u], &zoPrev = sh.y.v[u - 1];
+    const BSDF &bo = sh.y.b[u];
+    // y_d: the last connectable vertex before the photon (the light origin at the latest).
+    int d = m - 1;
+    while (d > 0 && L.v[d].delta()) --d;
+    const PathVertex &yd = L.v[d];
+    if (d == 0 && yd.isInfiniteLight()) {
+        count(FallbackInfinite);
+        return false;
+    }
+    const int k = m - 1 - d;  // chain interior y_{m-1} .. y_{d+1} (ideal specular)
+    for (int i = d + 1; i < m; ++i)
+        if (!L.deltaSample[i]) {
+            count(FallbackGlossy);
+            return false;
+        }
+    if (k + 2 > kMaxManifoldVertices) {
+        count(FallbackLong);
+        return false;
+    }
+    // Directions at y_d (base, offset), the photon-side cosines and G~ (solid
+    // angle at y_d per area at the photon end), the chain's Dirac factors.
+    Vec3 dirX, dirY, wiY;  // wiY: at z'_b towards the chain (or y_d)
+    Float gX, gY;
+    Spectrum fcosX(1), fcosY(1);
+    Float probX = 1, probY = 1, oPhotonY;  // oPhotonY: own density of z'_b (the offset photon)
+    Float prevGeomY;                       // |cos| / d^2 at y'_{m-1} seen from z'_b
+    if (k == 0) {
+        count(Case2Empty);
+        // Eq. 18: y_s = y_d connectable, reconnected to z'_b.
+        Vec3 dx = L.v[m].p - yd.p, dy = zo.p - yd.p;
+        const Float d2x = dx.lengthSquared(), d2y = dy.lengthSquared();
+        if (!(d2x > 0) || !(d2y > 0) || !EdgeConnectible(bctx_, yd, zo)) {
+            count(FallbackBlocked);
+            return false;
+        }
+        dirX = dx / std::sqrt(d2x);
+        dirY = dy / std::sqrt(d2y);
+        wiY = -dirY;
+        gX = AbsDot(Vec3(L.v[m].ng), dirX) / d2x;
+        gY = AbsDot(Vec3(zo.ng), dirY) / d2y;
+        if (!(gY > 0) || !scene.unoccluded(AsInteraction(yd), AsInteraction(zo))) {
+            count(FallbackBlocked);
+            return false;
+        }
+        // Own density of z'_b sampled from y_d: p_omega(y_d) G~ (below, after p_omega).
+        oPhotonY = -1;
+        prevGeomY = ConvertDensity(1, zo, yd);  // as the base's LightVertex::prevGeom
+    } else {
+        count(Case2Chain);
+        // Eqs. 19-20: the chain photon -> y_{m-1} .. y_{d+1} -> y_d, walked so that
+        // its start moves to z'_b with y_d and the half-vectors fixed (JM12).
+        ChainInterior in;
+        for (int j = 0; j < k; ++j) {
+            const int i = m - 1 - j;
+            const PathVertex &xv = L.v[i];
+            if (!VertexInteraction(scene, xv, L.v[i + 1].p, &in.si[j])) {
+                count(FallbackWalk);
+                return false;
+            }
+            in.bsdf[j] = &L.b[i];
+            in.wo[j] = Normalize(L.v[i + 1].p - xv.p);  // towards the photon side (the chain's start)
+            in.wi[j] = Normalize(L.v[i - 1].p - xv.p);  // towards y_d
+            in.transmit[j] = Transmits(in.wo[j], in.wi[j], Vec3(L.b[i].ns()));
+            in.specular[j] = true;
+            in.geomId[j] = xv.geomId;
+        }
+        Vec3 ngD = Vec3(yd.ng);
+        if (yd.ng.isZero()) ngD = Normalize(L.v[d + 1].p - yd.p);  // point light: any fixed normal (cancels below)
+        ManifoldChain base, off;
+        const PathVertex &ym = L.v[m];
+        if (!BuildChain(sctx_, EndpointSP(ym.p, Vec3(ym.ng), ym.geomId), in, k,
+                        EndpointSP(yd.p, ngD, yd.geomId), &base)) {
+            count(FallbackWalk);
+            return false;
+        }
+        SubpathShiftStats ss;
+        WalkedInterior walked, baseEval;
+        Float J;
+        if (!WalkSecondChain(sctx_, base, EndpointSP(zo.p, Vec3(zo.ng), zo.geomId), in, arena, &ss, &off, &walked,
+                             &J) ||
+            !EvaluateWalked(scene, base, yd.p, in.transmit, in.geomId, arena, TransportMode::Radiance, &baseEval)) {
+            count(FallbackWalk);
+            return false;
+        }
+        const int last = base.size - 2;  // interior index next to y_d
+        dirX = Normalize(base.v[last].sp.p - yd.p);
+        dirY = Normalize(off.v[last].sp.p - yd.p);
+        wiY = Normalize(off.v[1].sp.p - zo.p);
+        // G~ = Phi cos_start / cos_end (Phi = G / cos_start, ChainSolidAnglePerArea).
+        auto gTilde = [&](const ManifoldChain &c, const Vec3 &dirD) {
+            const Float cosStart = AbsDot(Normalize(c.v[1].sp.p - c.v[0].sp.p), Vec3(c.v[0].sp.n));
+            const Float cosEnd = AbsDot(dirD, ngD);
+            return cosEnd > 0 ? ChainSolidAnglePerArea(c) * cosStart / cosEnd : Float(0);
+        };
+        gX = gTilde(base, dirX);
+        gY = gTilde(off, dirY);
+        fcosX = baseEval.factor;
+        probX = baseEval.prob;
+        fcosY = walked.factor;
+        probY = walked.prob;
+        // Own density of the offset photon after a Dirac vertex: remapped to 1, as the base's.
+        oPhotonY = Remap(lv.pdfFwd);
+        const Vec3 toS = off.v[1].sp.p - zo.p;
+        prevGeomY = AbsDot(Vec3(walked.si[0].n), Normalize(toS)) / toS.lengthSquared();
+    }
+    if (!(gX > 0) || !(gY > 0)) {
+        count(FallbackWalk);
+        return false;
+    }
+    // E(y_d -> dir): emission (times the emitter's cosine; a point light's
+    // intensity) or the BSDF times the shading cosine, and y_d's directional density.
+    auto emit = [&](const Vec3 &dir, Float *pdf) {
+        const PathVertex towards = DirectionPoint(yd.p, dir);
+        if (d == 0) {
+            const Light *light = EmitterOf(bctx_, yd);
+            Float pdfPos = 0, pdfDir = 0;
+            if (light) light->pdfLe(Ray(yd.p, dir), yd.ng, &pdfPos, &pdfDir);
+            *pdf = pdfDir;
+            return EmittedRadiance(bctx_, yd, towards) * (yd.isDeltaLight() ? Float(1) : AbsDot(Vec3(yd.ng), dir));
+        }
+        *pdf = L.b[d].pdf(Vec3(yd.wo), dir, TransportMode::Importance);
+        return EvalBSDF(yd, L.b[d], towards, TransportMode::Importance) * AbsDot(Vec3(yd.ns), dir);
+    };
+    Float pX, pY;
+    const Spectrum eX = emit(dirX, &pX), eY = emit(dirY, &pY);
+    const Spectrum tX = eX * fcosX * gX, tY = eY * fcosY * gY;
+    const Spectrum fz = bo.f(Vec3(zo.wo), wiY, TransportMode::Radiance);
+    // f(x')/p'(x*) = beta_L(y_m) T(x')/T(x) f(z'_b) beta'_C / eta (gvcm.h; Eqs. 18-19).
+    o->f = lv.throughput() * SafeDiv(tY, tX) * fz * zo.throughput() / eta_;
+    if (o->f.isBlack() || !(pX > 0) || !(pY > 0)) {
+        count(FallbackBlocked);
+        return false;
+    }
+    // rho: the camera shift's, times the photon's area density ratio p_omega G~ prod prob.
+    o->rho = sh.rho[u] * (pY * gY * probY) / (pX * gX * probX);
+    if (oPhotonY < 0) oPhotonY = pY * gY;  // empty chain: z'_b sampled from y_d
+    o->w = 1;
+    if (connections_) {
+        // Eq. 13 for the offset path (merge at z'_b of a photon from y'_{m-1}),
+        // with the base's light-side B_m (gvcm.h).
+        const VCMWeights W{eta_, true, true, false, true};
+        const Float om1 = bo.pdf(Vec3(zo.wo), wiY, TransportMode::Radiance) * prevGeomY;
+        LightVertex lvY = lv;
+        const Float SL = VCMLightPrevSum(lvY, om1, W);
+        const Float cRef = VCMPrevConnectible(lv) ? 1 : 0;
+        const Float oPrev = ConvertDensity(bo.pdf(wiY, Vec3(zo.wo), TransportMode::Importance), zo, zoPrev);
+        Float *B = static_cast<Float *>(arena.alloc(sizeof(Float) * (u + 1), alignof(Float)));
+        VCMCameraB(bctx_, sh.y.v, sh.y.b, u + 1, W, B);
+        const VCMCameraTerms terms = VCMCameraAt(bctx_, sh.y.v, sh.y.b, u, B[u], W);
+        o->w = eta_ * oPhotonY / (cRef + SL + VCMCameraSum(terms, oPhotonY, oPrev, true, false, W));
+    }
+    return true;
+}
+
+void GVCMIntegrator::addStrategies(const CameraState &st, GradientSample *out) const {
+    if (!merging_ || eta_ <= 0) return;
+    const ShiftSubpath &cam = *st.cam;
+    Arena &arena = *st.arena;
+    const Float w = st.w;
+    const VCMWeights W{eta_, true, connections_, false, true};
+    Float *Bx = static_cast<Float *>(arena.alloc(sizeof(Float) * std::max(cam.n, 1), alignof(Float)));
+    if (connections_) VCMCameraB(bctx_, cam.v, cam.b, cam.n, W, Bx);
+    // Offsets' B_u (case 1 weights), computed when first needed.
+    Float *By[kNumNeighbours] = {};
+    auto offsetB = [&](int k) {
+        if (!By[k]) {
+            const CameraShift &sh = st.shifts[k];
+            const int n = std::min(sh.y.n, sh.validUpTo + 1);
+            By[k] = static_cast<Float *>(arena.alloc(sizeof(Float) * std::max(n, 1), alignof(Float)));
+            VCMCameraB(bctx_, sh.y.v, sh.y.b, n, W, By[k]);
+        }
+        return By[k];
+    };
+    uint64_t merges = 0;
+    bool specularChain = true;  // z_1 .. z_{u-1} all specular
+    for (int u = 1; u < cam.n; ++u) {
+        const PathVertex &zu = cam.v[u], &zp = cam.v[u - 1];
+        const BSDF &bu = cam.b[u];
+        if (!connections_ && specularChain) {
+            // G-PM: emission through a specular chain (s = 0, the only strategy of its path).
+            const Spectrum Le = EmittedRadiance(bctx_, zu, zp);
+            if (!Le.isBlack()) {
+                const Spectrum fx = zu.throughput() * Le * w;
+                out->primal += fx;
+                for (int k = 0; k < kNumNeighbours; ++k) {
+                    if (!st.inside[k]) continue;
+                    const CameraShift &sh = st.shifts[k];
+                    Spectrum fy(0);
+                    if (u <= sh.validUpTo) fy = sh.y.v[u].throughput() * EmittedRadiance(bctx_, sh.y.v[u], sh.y.v[u - 1]) * w;
+                    if (!fy.isBlack())
+                        out->diff[k] += (fy - fx) * CombinedWeight(1, 1, sh.rho[u]);
+                    else
+                        out->diff[k] += fx * -1;
+                }
+            }
+        }
+        if (zu.type != VertexType::Surface || !bu) break;
+        if (!W.mergeable(zu, &bu)) {
+            specularChain = specularChain && zu.delta();
+            continue;
+        }
+        // Merges at z_u with every light vertex within r (Eq. 11, Algorithm 1 lines 19-24).
+        const VCMCameraTerms terms = connections_ ? VCMCameraAt(bctx_, cam.v, cam.b, u, Bx[u], W) : VCMCameraTerms();
+        grid_.query(zu.p, [&](uint32_t idx, Float) {
+            const LightVertex &lv = vertices_[idx];
+            if (int(lv.depth) + u - 1 > set_.maxDepth) return;
+            const Vec3 wi = lv.wo;  // towards y_{m-1}
+            const Spectrum f = bu.f(Vec3(zu.wo), wi, TransportMode::Radiance);
+            if (f.isBlack()) return;
+            ++merges;
+            const Float oz = Remap(lv.pdfFwd);
+            const Float cRef = VCMPrevConnectible(lv) ? 1 : 0;  // the connection of y_{m-1} and z_u
+            Float wx = 1;
+            if (connections_) {
+                // Eq. 13: w_VM = eta o(z_u) / (c + S_L(m-1) + S_C(u)) (vcm.h).
+                const Float om1 = bu.pdf(Vec3(zu.wo), wi, TransportMode::Radiance) * lv.prevGeom;
+                const Float oPrev = ConvertDensity(bu.pdf(wi, Vec3(zu.wo), TransportMode::Importance), zu, zp);
+                wx = eta_ * oz / (cRef + VCMLightPrevSum(lv, om1, W) + VCMCameraSum(terms, oz, oPrev, true, false, W));
+            }
+            // Eq. 5 with the uniform kernel: beta_L f beta_C / (pi r^2 N), N folded into w_VM.
+            const Spectrum fx = zu.throughput() * f * lv.throughput() * (w / eta_);
+            out->primal += fx * wx;
+            ShiftSubpath L;
+            bool haveL = false, badL = false;
+            for (int k = 0; k < kNumNeighbours; ++k) {
+                if (!st.inside[k]) continue;
+                const CameraShift &sh = st.shifts[k];
+                Offset o;
+                bool ok = false;
+                if (u > sh.validUpTo) {
+                    count(FallbackShift);
+                } else if (sh.r >= 0 && u >= sh.r) {
+                    // Case 1 (Eqs. 16-17): the same z_u, kernel and light vertex; only the
+                    // camera prefix (and at u = r the direction towards z'_{u-1}) differs.
+                    count(Case1);
+                    const PathVertex &yu = sh.y.v[u], &yp = sh.y.v[u - 1];
+                    const Spectrum fo = u == sh.r ? bu.f(Vec3(yu.wo), wi, TransportMode::Radiance) : f;
+                    o.f = yu.throughput() * fo * lv.throughput() * (w / eta_);
+                    o.rho = sh.rho[u];
+                    if (connections_) {
+                        const VCMCameraTerms ty = VCMCameraAt(bctx_, sh.y.v, sh.y.b, u, offsetB(k)[u], W);
+                        const Float om1 = bu.pdf(Vec3(yu.wo), wi, TransportMode::Radiance) * lv.prevGeom;
+                        const Float oPrev = ConvertDensity(bu.pdf(wi, Vec3(yu.wo), TransportMode::Importance), yu, yp);
+                        o.w = eta_ * oz / (cRef + VCMLightPrevSum(lv, om1, W) + VCMCameraSum(ty, oz, oPrev, true, false, W));
+                    }
+                    ok = !o.f.isBlack() && o.w > 0;
+                    if (ok) count(Case1Shifted);
+                    else count(FallbackBlocked);
+                } else {
+                    // Case 2: the offset is a physical path through z'_b (Eqs. 18-20).
+                    count(Case2);
+                    if (!haveL) {
+                        haveL = true;
+                        const uint32_t j = uint32_t(std::upper_bound(pathStart_.begin(), pathStart_.end(), idx) -
+                                                    pathStart_.begin() - 1);
+                        regenerate(j, arena, &L);
+                        count(Regenerated);
+                        badL = int(lv.depth) >= L.n || Distance(L.v[lv.depth].p, lv.p) > 1e-5 * (1 + Vec3(lv.p).length());
+                        if (badL) count(FallbackMismatch);
+                    }
+                    if (!badL) {
+                        ok = case2(L, lv.depth, sh, u, lv, arena, &o) && o.w > 0;
+                        if (ok) {
+                            o.f *= w;
+                            count(Case2Shifted);
+                        }
+                    }
+                }
+                if (ok)
+                    out->diff[k] += (o.f - fx) * CombinedWeight(wx, o.w, o.rho);  // Eq. 23
+                else
+                    out->diff[k] += fx * -wx;  // zero offset, the base's weight
+            }
+        });
+        if (!connections_) break;  // G-PM: the first connectable vertex only
+    }
+    count(Merges, merges);
+}
+
+std::string GVCMIntegrator::statistics() const {
+    auto c = [&](Counter k) { return (unsigned long long)counters_[k].load(); };
+    char buf[1536];
+    std::snprintf(buf, sizeof buf,
+                  "gvcm: mode %s, initial radius %.4g (last %.4g), %d iterations, %.3g light vertices per iteration "
+                  "(%zu bytes each, grid %.1f MB), %llu merges%s%s\n"
+                  "  merge offsets: case 1 (shared kernel) %llu, shifted %llu; case 2 (through z'_b) %llu: "
+                  "empty chain %llu, specular chain %llu, shifted %llu; light subpaths regenerated %llu\n"
+                  "  merge fallbacks (zero offset, base weight): camera shift failed %llu, infinite light %llu, "
+                  "glossy chain %llu, long chain %llu, walk failed %llu, occluded or black %llu, regeneration mismatch %llu\n",
+                  gset_.mergeOnly ? "mergeonly (G-PM)" : "vcm", radius1_, radius_, passes_,
+                  passes_ ? double(nLightVertices_) / passes_ : 0.0, sizeof(LightVertex), grid_.bytes() / 1e6,
+                  c(Merges), skipped_.empty() ? "" : "; ", skipped_.c_str(), c(Case1), c(Case1Shifted), c(Case2),
+                  c(Case2Empty), c(Case2Chain), c(Case2Shifted), c(Regenerated), c(FallbackShift),
+                  c(FallbackInfinite), c(FallbackGlossy), c(FallbackLong), c(FallbackWalk), c(FallbackBlocked),
+                  c(FallbackMismatch));
+    return std::string(buf) + GBDPTIntegrator::statistics();
+}
+
+}  // namespace gradus

@@ -1,0 +1,115 @@
+// Gradient-domain vertex connection and merging (Sun et al. 2017,
+// gradient-domain-vcm.md), Algorithm 1 on G-BDPT (integrators/gbdpt/) and
+// VCM's light-vertex store, hash grid and recursive MIS (integrators/vcm/).
+//
+// One iteration = one pass = one sample per pixel:
+//   1. light pass (lines 1-8): one light subpath per sampled pixel (RNG keyed
+//      by (seed, pass, subpath), so any subpath can be regenerated exactly),
+//      classified like G-BDPT's (near-specular vertices marked specular),
+//      its connectable vertices stored as VCM's 128-byte LightVertex records
+//      and a hash grid built over them;
+//   2. camera pass (lines 9-25): G-BDPT's sample (base camera subpath, its
+//      four shifts, connections with their light-tracing shifts) with VCM's
+//      MIS sums (merging terms at connectable vertices, eta = pi r^2 N), then
+//      merges at every connectable camera vertex z_u with each light vertex
+//      y_m within r (Eq. 5; the base weight is VCM's, Eq. 13) and their
+//      offsets per neighbour:
+//        case 1 (Sec. 4, u >= c, the shift's reconnection vertex): the offset
+//          shares z_u, the kernel and the light vertex; Eqs. 16-17 with the
+//          offset camera throughput (which carries |T'| in the base's measure);
+//        case 2 (u = b): the offset is the physical path y_0 .. y_d, y'_{d+1}
+//          .. y'_s, z'_b .. z'_0 with y_d the last connectable vertex before
+//          the photon: an empty chain (y_s connectable, Eq. 18) reconnects
+//          y_s to z'_b; a chain of ideal specular vertices is walked (JM12)
+//          from y_d to z'_b keeping its half-vectors, reversibility checked
+//          (Eqs. 19-20, J_y = 1: Dirac chains have no interior variables in
+//          the generalised-geometry measure). The offset estimate is
+//          f(x')/p'(x*) = beta_L(y_m) T(x')/T(x) f(z'_b) beta'_C / eta, with
+//          T = E(y_d -> chain) G~ prod f|cos| the chain's contribution from
+//          y_d to the photon's position (G~: solid angle at y_d per area at
+//          the photon end, ChainSolidAnglePerArea).
+//      Gradient weights: Eq. 23 as CombinedWeight(w_x, w_y, rho) with w_x, w_y
+//      the base's and the offset's VCM weights (Eqs. 21-22) and rho = |T'|
+//      p_y / p_x (the camera shift's rho, times the photon density ratio in
+//      case 2); a failed offset falls back to a zero offset with the base's
+//      weight (as G-BDPT).
+// G-PM (mode "mergeonly", Sec. 7): no light subpath per camera sample and no
+// connections; merges at the first connectable camera vertex z_b only and
+// emission through specular chains, every weight 1 (the unused strategies'
+// densities are 0), gradients with CombinedWeight(1, 1, rho).
+//
+// Radius: r_1 = `radius` or `radiusscale` times the median pixel footprint
+// (vcm.h), r_i^2 = r_1^2 i^(alpha - 1) for the global iteration i.
+// Without specular or near-specular surfaces no merging is done (gvcm is then
+// gbdpt; the statistics say so).
+//
+// Limitations (see statistics): the per-vertex adaptive radius of Sec. 6 is
+// not used (one radius per iteration, as vcm); case 2 falls back (zero
+// offset, base weight) for photons whose chain ends at an infinite light or
+// contains a glossy (near-specular, non-Dirac) vertex; the offset's MIS sums
+// reuse the base's light-side partial sum B_m (exact for Lambertian y_{m-1}).
+//
+// Parameters: gbdpt's (gbdpt.h) and
+//   string mode "vcm"           vcm (G-VCM) | mergeonly (G-PM)
+//   float radius 0              initial merging radius in scene units (0: from the pixel footprint)
+//   float radiusscale 1         the footprint radius in pixels (radius 0)
+//   float radiusalpha 0.75      radius reduction r_i^2 = r_1^2 i^(alpha - 1)
+#pragma once
+#include <atomic>
+#include <string>
+#include <vector>
+
+#include "integrators/common/photon_grid.h"
+#include "integrators/gbdpt/gbdpt.h"
+#include "integrators/vcm/vcm.h"
+
+namespace gradus {
+
+struct GVCMSettings : GBDPTSettings {
+    bool mergeOnly;
+    Float radius, radiusScale, radiusAlpha;
+};
+
+class GVCMIntegrator : public GBDPTIntegrator {
+  public:
+    explicit GVCMIntegrator(const EntityDesc &desc);
+    std::string name() const override { return "gvcm"; }
+    void preprocess(const Scene &scene, Film &film) override;
+    int samplesPerPass(const RenderOptions &) const override { return 1; }  // one iteration = 1 spp
+    void runPass(PassContext &ctx) override;
+    std::string statistics() const override;
+    Float radiusAt(int iteration) const { return VCMRadius(radius1_, gset_.radiusAlpha, iteration); }
+
+  protected:
+    void addStrategies(const CameraState &st, GradientSample *out) const override;
+
+  private:
+    struct Offset;
+    void lightPass(PassContext &ctx);
+    // Light subpath j of the current pass, regenerated and classified.
+    void regenerate(uint32_t j, Arena &arena, ShiftSubpath *L) const;
+    // Case 2 offset of a merge (header comment); false: fall back.
+    bool case2(const ShiftSubpath &L, int m, const CameraShift &sh, int u, const LightVertex &lv, Arena &arena,
+               Offset *o) const;
+
+    GVCMSettings gset_;
+    bool merging_ = false;
+    Float radius1_ = 0, radius_ = 0, eta_ = 0;
+    Bounds2i bounds_;
+    std::vector<LightVertex> vertices_;
+    std::vector<uint32_t> pathStart_;
+    PhotonGrid grid_;
+    uint64_t lightKey_ = 0;
+    int lightPassIndex_ = 0, passes_ = 0;
+    uint64_t nLightVertices_ = 0;
+    std::string skipped_;
+    // Counters (relaxed atomics; order-independent sums).
+    enum Counter {
+        Merges, Case1, Case1Shifted, Case2, Case2Empty, Case2Chain, Case2Shifted, FallbackShift, FallbackInfinite,
+        FallbackGlossy, FallbackLong, FallbackWalk, FallbackBlocked, FallbackMismatch, Regenerated, NumCounters
+    };
+    mutable std::atomic<uint64_t> counters_[NumCounters] = {};
+    void count(Counter c, uint64_t n = 1) const { counters_[c].fetch_add(n, std::memory_order_relaxed); }
+};
+
+}  // namespace gradus

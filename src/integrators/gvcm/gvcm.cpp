@@ -100,7 +100,7 @@ void GVCMIntegrator::lightPass(PassContext &ctx) {
     const int64_t N = bounds_.area();
     lightKey_ = ctx.seed() ^ kLightTag;
     lightPassIndex_ = ctx.pass();
-    const VCMWeights weights{eta_, true, connections_, false, true};
+    const VCMWeights weights{eta_, true, connections_ && set_.lightTracing, false, true};
     const int64_t chunks = (N + PassContext::kItemChunk - 1) / PassContext::kItemChunk;
     std::vector<std::vector<LightVertex>> out(static_cast<size_t>(chunks));
     std::vector<uint32_t> count(static_cast<size_t>(N), 0);
@@ -272,7 +272,7 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, int m, const CameraShift &sh, 
     if (connections_) {
         // Eq. 13 for the offset path (merge at z'_b of a photon from y'_{m-1}),
         // with the base's light-side B_m (gvcm.h).
-        const VCMWeights W{eta_, true, true, false, true};
+        const VCMWeights W{eta_, true, set_.lightTracing, false, true};  // connecting: the t = 1 terms
         const Float om1 = bo.pdf(Vec3(zo.wo), wiY, TransportMode::Radiance) * prevGeomY;
         LightVertex lvY = lv;
         const Float SL = VCMLightPrevSum(lvY, om1, W);
@@ -291,7 +291,8 @@ void GVCMIntegrator::addStrategies(const CameraState &st, GradientSample *out) c
     const ShiftSubpath &cam = *st.cam;
     Arena &arena = *st.arena;
     const Float w = st.w;
-    const VCMWeights W{eta_, true, connections_, false, true};
+    // `connecting` gates only the light-tracing (t = 1) terms of the camera-side sums.
+    const VCMWeights W{eta_, true, connections_ && set_.lightTracing, false, true};
     Float *Bx = static_cast<Float *>(arena.alloc(sizeof(Float) * std::max(cam.n, 1), alignof(Float)));
     if (connections_) VCMCameraB(bctx_, cam.v, cam.b, cam.n, W, Bx);
     // Offsets' B_u (case 1 weights), computed when first needed.

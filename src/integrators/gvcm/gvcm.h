@@ -49,11 +49,26 @@
 // contains a glossy (near-specular, non-Dirac) vertex; the offset's MIS sums
 // reuse the base's light-side partial sum B_m (exact for Lambertian y_{m-1}).
 //
-// Parameters: gbdpt's (gbdpt.h) and
-//   string mode "vcm"           vcm (G-VCM) | mergeonly (G-PM)
-//   float radius 0              initial merging radius in scene units (0: from the pixel footprint)
-//   float radiusscale 1         the footprint radius in pixels (radius 0)
-//   float radiusalpha 0.75      radius reduction r_i^2 = r_1^2 i^(alpha - 1)
+// Parameters (bidirectional family, bidir_family.h; MIS the balance heuristic):
+//   integer maxdepth 5               maximum path depth (edges - 1)
+//   string lightsamplestrategy "power"  uniform | power | spatial (= power)
+//   integer rrdepth 3                Russian roulette after this many bounces (-1: off)
+//   integer pixelbounds []           accepted (use --cropwindow)
+// (gradient family, gradient_params.h):
+//   float shiftthreshold 0.001       roughness below which a vertex is not connectable (Sec. 2.4)
+//   string reconstruction "hybrid"   hybrid | l1 | l2 | weighted: the image in the unprefixed R,G,B
+//   float alpha 0.2                  screened-Poisson primal weight
+//   string pixelfilter "film"        film: the scene's PixelFilter; box: own pixel only
+// (gbdpt, gbdpt.h; they apply to the connections):
+//   string shift "manifold"          manifold | halfvector
+//   string manifoldsolver "ceres"    ceres | newton
+//   bool lighttracing true           false: no light-tracing paths (in no MIS sum either)
+//   string mis "combined"            combined (Eq. 8) | simple (Eq. 9); merges always use Eq. 23
+// (gvcm):
+//   string mode "vcm"                vcm (G-VCM) | mergeonly (G-PM)
+//   float radius 0                   initial merging radius in scene units (0: from the pixel footprint)
+//   float radiusscale 1              the footprint radius in pixels (radius 0)
+//   float radiusalpha 0.75           radius reduction r_i^2 = r_1^2 i^(alpha - 1)
 #pragma once
 #include <atomic>
 #include <string>

@@ -198,20 +198,37 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, int m, const CameraShift &sh, 
             in.specular[j] = true;
             in.geomId[j] = xv.geomId;
         }
-        Vec3 ngD = Vec3(yd.ng);
-        if (yd.ng.isZero()) ngD = Normalize(L.v[d + 1].p - yd.p);  // point light: any fixed normal (cancels below)
+        // The walk re-traces the chain up to its end, which must be a surface
+        // (a light origin: the emitter's shape, found by a ray from y_{d+1}).
+        int endGeom = yd.geomId;
+        if (d == 0) {
+            const Vec3 back = yd.p - L.v[1].p;
+            const Float len = back.length();
+            SurfaceInteraction si;
+            if (yd.ng.isZero() || !(len > 0) ||
+                !scene.intersect(Ray(L.v[1].p + back * Float(1e-5), back / len), &si) ||
+                Distance(si.p, yd.p) > 1e-4 * len) {
+                count(FallbackInfinite);  // a light without a surface (point, spot)
+                return false;
+            }
+            endGeom = si.geomId;
+        }
+        const Vec3 ngD = Vec3(yd.ng);
         ManifoldChain base, off;
         const PathVertex &ym = L.v[m];
-        if (!BuildChain(sctx_, EndpointSP(ym.p, Vec3(ym.ng), ym.geomId), in, k,
-                        EndpointSP(yd.p, ngD, yd.geomId), &base)) {
+        if (!BuildChain(sctx_, EndpointSP(ym.p, Vec3(ym.ng), ym.geomId), in, k, EndpointSP(yd.p, ngD, endGeom),
+                        &base)) {
             count(FallbackWalk);
             return false;
         }
         SubpathShiftStats ss;
         WalkedInterior walked, baseEval;
         Float J;
-        if (!WalkSecondChain(sctx_, base, EndpointSP(zo.p, Vec3(zo.ng), zo.geomId), in, arena, &ss, &off, &walked,
-                             &J) ||
+        const bool walkedOK =
+            WalkSecondChain(sctx_, base, EndpointSP(zo.p, Vec3(zo.ng), zo.geomId), in, arena, &ss, &off, &walked, &J);
+        for (size_t i = 0; i < size_t(ManifoldStatus::Count); ++i)
+            if (ss.walkStatus[i]) walkStatus_[i].fetch_add(ss.walkStatus[i], std::memory_order_relaxed);
+        if (!walkedOK ||
             !EvaluateWalked(scene, base, yd.p, in.transmit, in.geomId, arena, TransportMode::Radiance, &baseEval)) {
             count(FallbackWalk);
             return false;
@@ -220,14 +237,9 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, int m, const CameraShift &sh, 
         dirX = Normalize(base.v[last].sp.p - yd.p);
         dirY = Normalize(off.v[last].sp.p - yd.p);
         wiY = Normalize(off.v[1].sp.p - zo.p);
-        // G~ = Phi cos_start / cos_end (Phi = G / cos_start, ChainSolidAnglePerArea).
-        auto gTilde = [&](const ManifoldChain &c, const Vec3 &dirD) {
-            const Float cosStart = AbsDot(Normalize(c.v[1].sp.p - c.v[0].sp.p), Vec3(c.v[0].sp.n));
-            const Float cosEnd = AbsDot(dirD, ngD);
-            return cosEnd > 0 ? ChainSolidAnglePerArea(c) * cosStart / cosEnd : Float(0);
-        };
-        gX = gTilde(base, dirX);
-        gY = gTilde(off, dirY);
+        // G~: solid angle at y_d per area at the photon end (manifold.h).
+        gX = EndSolidAnglePerStartArea(base);
+        gY = EndSolidAnglePerStartArea(off);
         fcosX = baseEval.factor;
         probX = baseEval.prob;
         fcosY = walked.factor;
@@ -420,7 +432,7 @@ std::string GVCMIntegrator::statistics() const {
                   "(%zu bytes each, grid %.1f MB), %llu merges%s%s\n"
                   "  merge offsets: case 1 (shared kernel) %llu, shifted %llu; case 2 (through z'_b) %llu: "
                   "empty chain %llu, specular chain %llu, shifted %llu; light subpaths regenerated %llu\n"
-                  "  merge fallbacks (zero offset, base weight): camera shift failed %llu, infinite light %llu, "
+                  "  merge fallbacks (zero offset, base weight): camera shift failed %llu, light at infinity or without a surface %llu, "
                   "glossy chain %llu, long chain %llu, walk failed %llu, occluded or black %llu, regeneration mismatch %llu\n",
                   gset_.mergeOnly ? "mergeonly (G-PM)" : "vcm", radius1_, radius_, passes_,
                   passes_ ? double(nLightVertices_) / passes_ : 0.0, sizeof(LightVertex), grid_.bytes() / 1e6,
@@ -428,7 +440,11 @@ std::string GVCMIntegrator::statistics() const {
                   c(Case2Empty), c(Case2Chain), c(Case2Shifted), c(Regenerated), c(FallbackShift),
                   c(FallbackInfinite), c(FallbackGlossy), c(FallbackLong), c(FallbackWalk), c(FallbackBlocked),
                   c(FallbackMismatch));
-    return std::string(buf) + GBDPTIntegrator::statistics();
+    std::string walks = "  case-2 chain walks by status:";
+    for (size_t i = 0; i < size_t(ManifoldStatus::Count); ++i)
+        if (walkStatus_[i].load())
+            walks += std::string(" ") + ToString(ManifoldStatus(i)) + " " + std::to_string(walkStatus_[i].load()) + ";";
+    return std::string(buf) + walks + "\n" + GBDPTIntegrator::statistics();
 }
 
 }  // namespace gradus

@@ -45,7 +45,8 @@
 //
 // Limitations (see statistics): the per-vertex adaptive radius of Sec. 6 is
 // not used (one radius per iteration, as vcm); case 2 falls back (zero
-// offset, base weight) for photons whose chain ends at an infinite light or
+// offset, base weight) for photons whose chain ends at an infinite light, a
+// light without a surface (point, spot: the walk re-traces up to a surface), or
 // contains a glossy (near-specular, non-Dirac) vertex; the offset's MIS sums
 // reuse the base's light-side partial sum B_m (exact for Lambertian y_{m-1}).
 //
@@ -124,6 +125,7 @@ class GVCMIntegrator : public GBDPTIntegrator {
         FallbackGlossy, FallbackLong, FallbackWalk, FallbackBlocked, FallbackMismatch, Regenerated, NumCounters
     };
     mutable std::atomic<uint64_t> counters_[NumCounters] = {};
+    mutable std::atomic<uint64_t> walkStatus_[size_t(ManifoldStatus::Count)] = {};
     void count(Counter c, uint64_t n = 1) const { counters_[c].fetch_add(n, std::memory_order_relaxed); }
 };
 

@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <regex>
 
 #include "gbdpt_test_util.h"
 
@@ -45,6 +46,12 @@ void Check(const std::string &line, const test::MeanOfRuns &ref, int spp) {
     std::string stats;
     Image g = Render(BoxScene(line + kRadius), spp, 91, "", &stats);
     ASSERT_NE(stats.find("gvcm: mode"), std::string::npos);
+    // The glass sphere's caustic: case-2 offsets through walked light chains are exercised.
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(stats, m, std::regex(R"(specular chain (\d+))"))) << stats;
+    EXPECT_GT(std::stoll(m[1]), 100) << stats;
+    ASSERT_TRUE(std::regex_search(stats, m, std::regex(R"(chain walks by status: success (\d+))"))) << stats;
+    EXPECT_GT(std::stoll(m[1]), 50) << stats;
     test::GradientZ gz = test::GradientZStats(g, ref);
     ASSERT_GT(gz.n, 150);
     EXPECT_LT(gz.meanZ2, 1.8) << line << ": mean z^2 over " << gz.n << " gradient terms";

@@ -181,73 +181,66 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, int m, const CameraShift &sh, 
         prevGeomY = ConvertDensity(1, zo, yd);  // as the base's LightVertex::prevGeom
     } else {
         count(Case2Chain);
-        // Eqs. 19-20: the chain photon -> y_{m-1} .. y_{d+1} -> y_d, walked so that
-        // its start moves to z'_b with y_d and the half-vectors fixed (JM12).
+        // Eqs. 19-20: the chain y_d -> y_{d+1} .. y_{m-1} -> photon, walked so that
+        // its end moves to z'_b with y_d and the half-vectors fixed (JM12; the
+        // walk's rays start at y_d and end on z'_b's surface).
         ChainInterior in;
         for (int j = 0; j < k; ++j) {
-            const int i = m - 1 - j;
+            const int i = d + 1 + j;
             const PathVertex &xv = L.v[i];
-            if (!VertexInteraction(scene, xv, L.v[i + 1].p, &in.si[j])) {
+            if (!VertexInteraction(scene, xv, L.v[i - 1].p, &in.si[j])) {
                 count(FallbackWalk);
                 return false;
             }
             in.bsdf[j] = &L.b[i];
-            in.wo[j] = Normalize(L.v[i + 1].p - xv.p);  // towards the photon side (the chain's start)
-            in.wi[j] = Normalize(L.v[i - 1].p - xv.p);  // towards y_d
+            in.wo[j] = Normalize(L.v[i - 1].p - xv.p);  // towards y_d (the chain's start)
+            in.wi[j] = Normalize(L.v[i + 1].p - xv.p);  // towards the photon
             in.transmit[j] = Transmits(in.wo[j], in.wi[j], Vec3(L.b[i].ns()));
             in.specular[j] = true;
             in.geomId[j] = xv.geomId;
         }
-        // The walk re-traces the chain up to its end, which must be a surface
-        // (a light origin: the emitter's shape, found by a ray from y_{d+1}).
-        int endGeom = yd.geomId;
-        if (d == 0) {
-            const Vec3 back = yd.p - L.v[1].p;
-            const Float len = back.length();
-            SurfaceInteraction si;
-            if (yd.ng.isZero() || !(len > 0) ||
-                !scene.intersect(Ray(L.v[1].p + back * Float(1e-5), back / len), &si) ||
-                Distance(si.p, yd.p) > 1e-4 * len) {
-                count(FallbackInfinite);  // a light without a surface (point, spot)
-                return false;
-            }
-            endGeom = si.geomId;
-        }
-        const Vec3 ngD = Vec3(yd.ng);
-        ManifoldChain base, off;
+        // A point or spot light has no surface: any fixed normal (it cancels in G / cos_0).
+        const Vec3 ngD = yd.ng.isZero() ? Normalize(L.v[d + 1].p - yd.p) : Vec3(yd.ng);
         const PathVertex &ym = L.v[m];
-        if (!BuildChain(sctx_, EndpointSP(ym.p, Vec3(ym.ng), ym.geomId), in, k, EndpointSP(yd.p, ngD, endGeom),
+        ManifoldChain base;
+        if (!BuildChain(sctx_, EndpointSP(yd.p, ngD, yd.geomId), in, k, EndpointSP(ym.p, Vec3(ym.ng), ym.geomId),
                         &base)) {
             count(FallbackWalk);
             return false;
         }
-        SubpathShiftStats ss;
+        ManifoldWalkResult res =
+            ManifoldWalk(*sctx_.mscene, base, base.front().sp, EndpointSP(zo.p, Vec3(zo.ng), zo.geomId), sctx_.walk);
+        // The reversibility test of Sec. 4 (the walk may find another solution).
+        if (res.ok()) res.status = CheckReversible(*sctx_.mscene, base, res.chain, sctx_.walk, 1e-4);
+        walkStatus_[size_t(res.status)].fetch_add(1, std::memory_order_relaxed);
         WalkedInterior walked, baseEval;
-        Float J;
-        const bool walkedOK =
-            WalkSecondChain(sctx_, base, EndpointSP(zo.p, Vec3(zo.ng), zo.geomId), in, arena, &ss, &off, &walked, &J);
-        for (size_t i = 0; i < size_t(ManifoldStatus::Count); ++i)
-            if (ss.walkStatus[i]) walkStatus_[i].fetch_add(ss.walkStatus[i], std::memory_order_relaxed);
-        if (!walkedOK ||
-            !EvaluateWalked(scene, base, yd.p, in.transmit, in.geomId, arena, TransportMode::Radiance, &baseEval)) {
+        if (!res.ok() ||
+            !EvaluateWalked(scene, res.chain, zo.p, in.transmit, in.geomId, arena, TransportMode::Importance, &walked) ||
+            !EvaluateWalked(scene, base, ym.p, in.transmit, in.geomId, arena, TransportMode::Importance, &baseEval)) {
             count(FallbackWalk);
             return false;
         }
-        const int last = base.size - 2;  // interior index next to y_d
-        dirX = Normalize(base.v[last].sp.p - yd.p);
-        dirY = Normalize(off.v[last].sp.p - yd.p);
-        wiY = Normalize(off.v[1].sp.p - zo.p);
-        // G~: solid angle at y_d per area at the photon end (manifold.h).
-        gX = EndSolidAnglePerStartArea(base);
-        gY = EndSolidAnglePerStartArea(off);
+        // The offset's interior must keep the base's classes (else no bijection).
+        for (int j = 0; j < k; ++j)
+            if (ClassifyBSDF(&walked.bsdf[j], sctx_.threshold) == ShiftVertexClass::Rough) {
+                count(FallbackWalk);
+                return false;
+            }
+        const ManifoldChain &off = res.chain;
+        dirX = Normalize(base.v[1].sp.p - yd.p);
+        dirY = Normalize(off.v[1].sp.p - yd.p);
+        wiY = Normalize(off.v[k].sp.p - zo.p);
+        // G~: solid angle at y_d per area at the photon end (JM12's G / cos_0).
+        gX = ChainSolidAnglePerArea(base);
+        gY = ChainSolidAnglePerArea(off);
         fcosX = baseEval.factor;
         probX = baseEval.prob;
         fcosY = walked.factor;
         probY = walked.prob;
         // Own density of the offset photon after a Dirac vertex: remapped to 1, as the base's.
         oPhotonY = Remap(lv.pdfFwd);
-        const Vec3 toS = off.v[1].sp.p - zo.p;
-        prevGeomY = AbsDot(Vec3(walked.si[0].n), Normalize(toS)) / toS.lengthSquared();
+        const Vec3 toS = off.v[k].sp.p - zo.p;
+        prevGeomY = AbsDot(Vec3(walked.si[k - 1].n), Normalize(toS)) / toS.lengthSquared();
     }
     if (!(gX > 0) || !(gY > 0)) {
         count(FallbackWalk);

@@ -275,14 +275,6 @@ Float GeneralizedGeometryTerm(const ManifoldChain &c) {
     return g * std::abs(P.det());
 }
 
-Float EndSolidAnglePerStartArea(const ManifoldChain &c) {
-    if (c.size < 2) return 0;
-    const Vec3 d = c.v[c.size - 2].sp.p - c.back().sp.p;
-    const Float cosEnd = AbsDot(c.back().sp.n, Normalize(d));
-    const Float G = GeneralizedGeometryTerm(c);
-    return cosEnd > 0 && std::isfinite(G) ? G / cosEnd : 0;
-}
-
 Float ShiftJacobianFactor(const ManifoldChain &eyeChain, const ManifoldChain *secondChain) {
     Float G = GeneralizedGeometryTerm(eyeChain);
     if (!(G > 0)) return 0;

@@ -145,11 +145,6 @@ Float HalfVectorJacobian(const ManifoldChain &c);
 // |cos th_0| |cos th_1| / |x_1 - x_0|^2 * |det dx_1/dx_{k+1}|. For a camera
 // endpoint, x_0's normal is the camera axis.
 Float GeneralizedGeometryTerm(const ManifoldChain &c);
-// The solid angle at the chain's end x_{k+1} per unit area at its start x_0
-// (half-vectors held): G / |cos th_{k+1}|, G being symmetric (reciprocity).
-// G-VCM's case-2 photon densities (gvcm.h) walk light chains from the photon
-// (start) with the light-side vertex y_d as the fixed end.
-Float EndSolidAnglePerStartArea(const ManifoldChain &c);
 
 // G-MLT Eqs. 14-15 (G-BDPT Eq. 5): per-path factor
 //   F = |dx_b/ds| |dx/dO| = cos^4(th_0) / G(x_0 <-> ... <-> x_b) * |dx/dO|_eye * |dx/dO|_second

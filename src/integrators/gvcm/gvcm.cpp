@@ -110,14 +110,7 @@ void GVCMIntegrator::lightPass(PassContext &ctx) {
         count[size_t(item)] =
             uint32_t(VCMLightVertices(bctx_, L.v, L.b, L.n, weights, &out[size_t(item / PassContext::kItemChunk)]));
     });
-    pathStart_.assign(size_t(N) + 1, 0);
-    for (int64_t j = 0; j < N; ++j) pathStart_[j + 1] = pathStart_[j] + count[j];
-    vertices_.resize(pathStart_[N]);
-    std::vector<size_t> chunkStart(static_cast<size_t>(chunks) + 1, 0);
-    for (int64_t c = 0; c < chunks; ++c) chunkStart[c + 1] = chunkStart[c] + out[c].size();
-    ctx.parallelFor(chunks, 1, [&](int64_t c0, int64_t c1, Worker &) {
-        for (int64_t c = c0; c < c1; ++c) std::copy(out[c].begin(), out[c].end(), vertices_.begin() + chunkStart[c]);
-    });
+    ConcatLightVertices(ctx, out, count, &vertices_, &pathStart_);
     nLightVertices_ += vertices_.size();
 }
 

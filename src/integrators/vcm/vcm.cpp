@@ -198,6 +198,22 @@ Float VCMFootprintRadius(const Scene &scene, const Bounds2i &bounds, Float scale
     return std::isfinite(rad) && rad > 0 ? 1e-3 * rad : 1e-3;
 }
 
+void ConcatLightVertices(PassContext &ctx, const std::vector<std::vector<LightVertex>> &chunks,
+                         const std::vector<uint32_t> &count, std::vector<LightVertex> *vertices,
+                         std::vector<uint32_t> *pathStart) {
+    // Chunks hold their items' vertices in item order: concatenate in chunk order.
+    const size_t N = count.size();
+    pathStart->assign(N + 1, 0);
+    for (size_t j = 0; j < N; ++j) (*pathStart)[j + 1] = (*pathStart)[j] + count[j];
+    vertices->resize((*pathStart)[N]);
+    std::vector<size_t> chunkStart(chunks.size() + 1, 0);
+    for (size_t c = 0; c < chunks.size(); ++c) chunkStart[c + 1] = chunkStart[c] + chunks[c].size();
+    ctx.parallelFor(int64_t(chunks.size()), 1, [&](int64_t c0, int64_t c1, Worker &) {
+        for (int64_t c = c0; c < c1; ++c)
+            std::copy(chunks[c].begin(), chunks[c].end(), vertices->begin() + chunkStart[c]);
+    });
+}
+
 Float VCMRadius(Float r1, Float alpha, int iteration) {
     // r_i^2 = r_1^2 i^(alpha - 1) (vcm.h).
     return r1 * std::pow(Float(std::max(iteration, 1)), Float(0.5) * (alpha - 1));
@@ -275,15 +291,7 @@ void VCMIntegrator::lightPass(PassContext &ctx) {
             rec.splat(cws.pRaster, L * (splatScale_ / (1 + VCMLightSum(lv, oi, oim1, weights))));
         }
     });
-    // Concatenate in item order (chunks hold their items in order).
-    pathStart_.assign(size_t(N) + 1, 0);
-    for (int64_t j = 0; j < N; ++j) pathStart_[j + 1] = pathStart_[j] + count[j];
-    vertices_.resize(pathStart_[N]);
-    std::vector<size_t> chunkStart(static_cast<size_t>(chunks) + 1, 0);
-    for (int64_t c = 0; c < chunks; ++c) chunkStart[c + 1] = chunkStart[c] + out[c].size();
-    ctx.parallelFor(chunks, 1, [&](int64_t c0, int64_t c1, Worker &) {
-        for (int64_t c = c0; c < c1; ++c) std::copy(out[c].begin(), out[c].end(), vertices_.begin() + chunkStart[c]);
-    });
+    ConcatLightVertices(ctx, out, count, &vertices_, &pathStart_);
     nLightVertices_ += vertices_.size();
 }
 

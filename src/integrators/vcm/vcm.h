@@ -140,6 +140,12 @@ Float VCMCameraSum(const VCMCameraTerms &c, Float oz, Float oPrev, bool gu, bool
 // r_1 from the pixel footprint: `scale` times the median distance between the
 // primary hits of neighbouring pixels (16 x 16 probes; G-VCM Sec. 6, "about one pixel").
 Float VCMFootprintRadius(const Scene &scene, const Bounds2i &bounds, Float scale);
+// A light pass's vertices, produced per chunk of PassContext::kItemChunk
+// subpaths (count[j]: vertices of subpath j), concatenated in subpath order:
+// subpath j owns (*vertices)[(*pathStart)[j], (*pathStart)[j + 1]).
+void ConcatLightVertices(PassContext &ctx, const std::vector<std::vector<LightVertex>> &chunks,
+                         const std::vector<uint32_t> &count, std::vector<LightVertex> *vertices,
+                         std::vector<uint32_t> *pathStart);
 // Radius of 1-based iteration i: r_i^2 = r_1^2 i^(alpha - 1).
 Float VCMRadius(Float r1, Float alpha, int iteration);
 

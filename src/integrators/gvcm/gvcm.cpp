@@ -26,9 +26,7 @@ ParamTable<GVCMSettings> Table() {
     t.append(GBDPTParamTable());
     t.enumeration<bool>("mode", &S::mergeOnly, "vcm", {{"vcm", false}, {"mergeonly", true}},
                         "vcm (G-VCM) | mergeonly (G-PM: merges at the first connectable camera vertex only)");
-    t.real("radius", &S::radius, 0, "initial merging radius in scene units (0: from the pixel footprint)", AtLeast(0));
-    t.real("radiusscale", &S::radiusScale, 1, "the footprint radius in pixels (radius 0)", Range{1e-3, 1e3});
-    t.real("radiusalpha", &S::radiusAlpha, 0.75, "radius reduction r_i^2 = r_1^2 i^(alpha - 1)", Range{1e-3, 1});
+    t.append(MergeRadiusParams());
     return t;
 }
 
@@ -75,10 +73,7 @@ void GVCMIntegrator::runPass(PassContext &ctx) {
     if (merging_) {
         lightPass(ctx);
         if (ctx.interrupted()) return;
-        grid_.build(vertices_.size(), [&](size_t i) { return vertices_[i].p; }, radius_,
-                    [&](int64_t n, int64_t grain, const std::function<void(int64_t, int64_t)> &fn) {
-            ctx.parallelFor(n, grain, [&](int64_t b, int64_t e, Worker &) { fn(b, e); });
-        });
+        BuildLightVertexGrid(ctx, vertices_, radius_, &grid_);
         if (ctx.interrupted()) return;
     }
     ctx.forEachPixelSample(*this);

@@ -81,9 +81,8 @@
 
 namespace gradus {
 
-struct GVCMSettings : GBDPTSettings {
+struct GVCMSettings : GBDPTSettings, MergeRadiusSettings {
     bool mergeOnly;
-    Float radius, radiusScale, radiusAlpha;
 };
 
 class GVCMIntegrator : public GBDPTIntegrator {

@@ -19,15 +19,26 @@ namespace {
 
 constexpr uint64_t kLightTag = 0x76636d0000000001ULL;
 
+}  // namespace
+
+ParamTable<MergeRadiusSettings> MergeRadiusParams() {
+    using S = MergeRadiusSettings;
+    ParamTable<S> t("merging radius");
+    t.real("radius", &S::radius, 0, "initial merging radius in scene units (0: from the pixel footprint)", AtLeast(0));
+    t.real("radiusscale", &S::radiusScale, 1, "the footprint radius in pixels (radius 0)", Range{1e-3, 1e3});
+    t.real("radiusalpha", &S::radiusAlpha, 0.75, "radius reduction r_i^2 = r_1^2 i^(alpha - 1)", Range{1e-3, 1});
+    return t;
+}
+
+namespace {
+
 ParamTable<VCMSettings> Table() {
     using S = VCMSettings;
     ParamTable<S> t("vcm");
     t.append(BidirParams());  // rrdepth 3
     t.enumeration<VCMMode>("mode", &S::mode, "vcm", {{"vcm", VCMMode::VCM}, {"vc", VCMMode::VC}, {"vm", VCMMode::VM}},
                            "vcm | vc (connections only: BDPT) | vm (merging only: progressive photon mapping)");
-    t.real("radius", &S::radius, 0, "initial merging radius in scene units (0: from the pixel footprint)", AtLeast(0));
-    t.real("radiusscale", &S::radiusScale, 1, "the footprint radius in pixels (radius 0)", Range{1e-3, 1e3});
-    t.real("radiusalpha", &S::radiusAlpha, 0.75, "radius reduction r_i^2 = r_1^2 i^(alpha - 1)", Range{1e-3, 1});
+    t.append(MergeRadiusParams());
     t.integer("numiterations", &S::iterations, 0,
               "iterations (samples per pixel) unless --spp is given; 0: the sampler's (pbrt-v3 sppm)", AtLeast(0));
     t.integer("photonsperiteration", &S::photonsPerIteration, -1,
@@ -214,6 +225,13 @@ void ConcatLightVertices(PassContext &ctx, const std::vector<std::vector<LightVe
     });
 }
 
+void BuildLightVertexGrid(PassContext &ctx, const std::vector<LightVertex> &vertices, Float radius, PhotonGrid *grid) {
+    grid->build(vertices.size(), [&](size_t i) { return vertices[i].p; }, radius,
+                [&](int64_t n, int64_t grain, const std::function<void(int64_t, int64_t)> &fn) {
+        ctx.parallelFor(n, grain, [&](int64_t b, int64_t e, Worker &) { fn(b, e); });
+    });
+}
+
 Float VCMRadius(Float r1, Float alpha, int iteration) {
     // r_i^2 = r_1^2 i^(alpha - 1) (vcm.h).
     return r1 * std::pow(Float(std::max(iteration, 1)), Float(0.5) * (alpha - 1));
@@ -245,10 +263,7 @@ void VCMIntegrator::runPass(PassContext &ctx) {
     lightPass(ctx);
     if (ctx.interrupted()) return;
     if (merging_) {
-        grid_.build(vertices_.size(), [&](size_t i) { return vertices_[i].p; }, radius_,
-                    [&](int64_t n, int64_t grain, const std::function<void(int64_t, int64_t)> &fn) {
-            ctx.parallelFor(n, grain, [&](int64_t b, int64_t e, Worker &) { fn(b, e); });
-        });
+        BuildLightVertexGrid(ctx, vertices_, radius_, &grid_);
     }
     if (ctx.interrupted()) return;
     ctx.forEachPixelSample(*this);

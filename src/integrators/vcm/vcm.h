@@ -78,9 +78,14 @@ namespace gradus {
 
 enum class VCMMode { VCM, VC, VM };
 
-struct VCMSettings : BidirSettings {
-    VCMMode mode;
+// The merging radius of vcm and gvcm (set by MergeRadiusParams).
+struct MergeRadiusSettings {
     Float radius, radiusScale, radiusAlpha;
+};
+ParamTable<MergeRadiusSettings> MergeRadiusParams();
+
+struct VCMSettings : BidirSettings, MergeRadiusSettings {
+    VCMMode mode;
     int iterations, photonsPerIteration, imageWriteFrequency;
 };
 
@@ -146,6 +151,8 @@ Float VCMFootprintRadius(const Scene &scene, const Bounds2i &bounds, Float scale
 void ConcatLightVertices(PassContext &ctx, const std::vector<std::vector<LightVertex>> &chunks,
                          const std::vector<uint32_t> &count, std::vector<LightVertex> *vertices,
                          std::vector<uint32_t> *pathStart);
+// The photon hash grid over a pass's light vertices (cell 2r), built in parallel.
+void BuildLightVertexGrid(PassContext &ctx, const std::vector<LightVertex> &vertices, Float radius, PhotonGrid *grid);
 // Radius of 1-based iteration i: r_i^2 = r_1^2 i^(alpha - 1).
 Float VCMRadius(Float r1, Float alpha, int iteration);
 

@@ -91,7 +91,7 @@ void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     // Camera samples go through the scene's pixel filter (pixelfilter "film",
     // as bdpt); light-tracing splats land in the pixel of their raster point,
     // exactly like bdpt's (the film does not filter splats).
-    initGradients(film, set_.filmFilter, true);
+    initGradients(film, set_.filmFilter, connections_ && set_.lightTracing);  // no splat layers without light tracing
     splatScale_ = LightTracingSplatScale(film);
     store_->threads.clear();
 }

@@ -413,7 +413,7 @@ std::string GVCMIntegrator::statistics() const {
                   "(%zu bytes each, grid %.1f MB), %llu merges%s%s\n"
                   "  merge offsets: case 1 (shared kernel) %llu, shifted %llu; case 2 (through z'_b) %llu: "
                   "empty chain %llu, specular chain %llu, shifted %llu; light subpaths regenerated %llu\n"
-                  "  merge fallbacks (zero offset, base weight): camera shift failed %llu, light at infinity or without a surface %llu, "
+                  "  merge fallbacks (zero offset, base weight): camera shift failed %llu, light at infinity %llu, "
                   "glossy chain %llu, long chain %llu, walk failed %llu, occluded or black %llu, regeneration mismatch %llu\n",
                   gset_.mergeOnly ? "mergeonly (G-PM)" : "vcm", radius1_, radius_, passes_,
                   passes_ ? double(nLightVertices_) / passes_ : 0.0, sizeof(LightVertex), grid_.bytes() / 1e6,

@@ -45,10 +45,11 @@
 //
 // Limitations (see statistics): the per-vertex adaptive radius of Sec. 6 is
 // not used (one radius per iteration, as vcm); case 2 falls back (zero
-// offset, base weight) for photons whose chain ends at an infinite light, a
-// light without a surface (point, spot: the walk re-traces up to a surface), or
-// contains a glossy (near-specular, non-Dirac) vertex; the offset's MIS sums
-// reuse the base's light-side partial sum B_m (exact for Lambertian y_{m-1}).
+// offset, base weight) for photons whose chain starts at an infinite light,
+// contains a glossy (near-specular, non-Dirac) vertex, or whose offset target
+// z'_b lies on another surface than the photon (the walk keeps its end on one
+// surface), and when the walk fails; the offset's MIS sums reuse the base's
+// light-side partial sum B_m (exact for Lambertian y_{m-1}).
 //
 // Parameters (bidirectional family, bidir_family.h; MIS the balance heuristic):
 //   integer maxdepth 5               maximum path depth (edges - 1)

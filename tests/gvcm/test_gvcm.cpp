@@ -2,7 +2,7 @@
 // independently (vcm mode vcm, and mode vm for G-PM) with the same radius
 // schedule, on the G-BDPT test box (glass sphere: caustics on the floor and
 // specular-diffuse-specular paths seen through the glass; a mirror sphere).
-// The radius is fixed in scene units (0.02, a fifth of a pixel's footprint)
+// The radius is fixed in scene units (0.02, about a sixth of a pixel's footprint)
 // so that the kernel's blur, which case-2 offsets do not share, stays below
 // the noise. Gradients: z = (dx(p) - (P(p+1) - P(p))) / sqrt(var) on disjoint
 // pixel pairs (gbdpt_test_util.h); S = mean z^2 < 1.8 and |Z| < 4.5 (Gaussian

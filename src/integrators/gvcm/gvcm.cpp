@@ -46,7 +46,10 @@ PathVertex DirectionPoint(const Point3 &p, const Vec3 &d) {
 
 std::vector<ParamInfo> GVCMParameters() { return Table().describe(); }
 
-GVCMIntegrator::GVCMIntegrator(const EntityDesc &desc) : GBDPTIntegrator(desc, Table().parse(desc)), gset_(Table().parse(desc)) {
+GVCMIntegrator::GVCMIntegrator(const EntityDesc &desc) : GVCMIntegrator(desc, Table().parse(desc)) {}
+
+GVCMIntegrator::GVCMIntegrator(const EntityDesc &desc, const GVCMSettings &set)
+    : GBDPTIntegrator(desc, set), gset_(set) {
     connections_ = !gset_.mergeOnly;
 }
 
@@ -117,7 +120,7 @@ struct GVCMIntegrator::Offset {
 };
 
 bool GVCMIntegrator::case2(const ShiftSubpath &L, int m, const CameraShift &sh, int u, const LightVertex &lv,
-                           Arena &arena, Offset *o) const {
+                           const VCMCameraTerms *terms, Arena &arena, Offset *o) const {
     const Scene &scene = *scene_;
     const PathVertex &zo = sh.y.v[u], &zoPrev = sh.y.v[u - 1];
     const BSDF &bo = sh.y.b[u];
@@ -262,19 +265,15 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, int m, const CameraShift &sh, 
     o->rho = sh.rho[u] * (pY * gY * probY) / (pX * gX * probX);
     if (oPhotonY < 0) oPhotonY = pY * gY;  // empty chain: z'_b sampled from y_d
     o->w = 1;
-    if (connections_) {
+    if (terms) {
         // Eq. 13 for the offset path (merge at z'_b of a photon from y'_{m-1}),
         // with the base's light-side B_m (gvcm.h).
         const VCMWeights W{eta_, true, set_.lightTracing, false, true};  // connecting: the t = 1 terms
         const Float om1 = bo.pdf(Vec3(zo.wo), wiY, TransportMode::Radiance) * prevGeomY;
-        LightVertex lvY = lv;
-        const Float SL = VCMLightPrevSum(lvY, om1, W);
+        const Float SL = VCMLightPrevSum(lv, om1, W);
         const Float cRef = VCMPrevConnectible(lv) ? 1 : 0;
         const Float oPrev = ConvertDensity(bo.pdf(wiY, Vec3(zo.wo), TransportMode::Importance), zo, zoPrev);
-        Float *B = static_cast<Float *>(arena.alloc(sizeof(Float) * (u + 1), alignof(Float)));
-        VCMCameraB(bctx_, sh.y.v, sh.y.b, u + 1, W, B);
-        const VCMCameraTerms terms = VCMCameraAt(bctx_, sh.y.v, sh.y.b, u, B[u], W);
-        o->w = eta_ * oPhotonY / (cRef + SL + VCMCameraSum(terms, oPhotonY, oPrev, true, false, W));
+        o->w = eta_ * oPhotonY / (cRef + SL + VCMCameraSum(*terms, oPhotonY, oPrev, true, false, W));
     }
     return true;
 }
@@ -329,6 +328,16 @@ void GVCMIntegrator::addStrategies(const CameraState &st, GradientSample *out) c
         }
         // Merges at z_u with every light vertex within r (Eq. 11, Algorithm 1 lines 19-24).
         const VCMCameraTerms terms = connections_ ? VCMCameraAt(bctx_, cam.v, cam.b, u, Bx[u], W) : VCMCameraTerms();
+        // The offsets' camera terms at z'_u: once per vertex when a merge first needs them.
+        VCMCameraTerms ty[kNumNeighbours];
+        bool tyDone[kNumNeighbours] = {};
+        auto offsetTerms = [&](int k) {
+            if (!tyDone[k]) {
+                ty[k] = VCMCameraAt(bctx_, st.shifts[k].y.v, st.shifts[k].y.b, u, offsetB(k)[u], W);
+                tyDone[k] = true;
+            }
+            return &ty[k];
+        };
         grid_.query(zu.p, [&](uint32_t idx, Float) {
             const LightVertex &lv = vertices_[idx];
             if (int(lv.depth) + u - 1 > set_.maxDepth) return;
@@ -366,10 +375,9 @@ void GVCMIntegrator::addStrategies(const CameraState &st, GradientSample *out) c
                     o.f = yu.throughput() * fo * lv.throughput() * (w / eta_);
                     o.rho = sh.rho[u];
                     if (connections_) {
-                        const VCMCameraTerms ty = VCMCameraAt(bctx_, sh.y.v, sh.y.b, u, offsetB(k)[u], W);
                         const Float om1 = bu.pdf(Vec3(yu.wo), wi, TransportMode::Radiance) * lv.prevGeom;
                         const Float oPrev = ConvertDensity(bu.pdf(wi, Vec3(yu.wo), TransportMode::Importance), yu, yp);
-                        o.w = eta_ * oz / (cRef + VCMLightPrevSum(lv, om1, W) + VCMCameraSum(ty, oz, oPrev, true, false, W));
+                        o.w = eta_ * oz / (cRef + VCMLightPrevSum(lv, om1, W) + VCMCameraSum(*offsetTerms(k), oz, oPrev, true, false, W));
                     }
                     ok = !o.f.isBlack() && o.w > 0;
                     if (ok) count(Case1Shifted);
@@ -387,7 +395,7 @@ void GVCMIntegrator::addStrategies(const CameraState &st, GradientSample *out) c
                         if (badL) count(FallbackMismatch);
                     }
                     if (!badL) {
-                        ok = case2(L, lv.depth, sh, u, lv, arena, &o) && o.w > 0;
+                        ok = case2(L, lv.depth, sh, u, lv, connections_ ? offsetTerms(k) : nullptr, arena, &o) && o.w > 0;
                         if (ok) {
                             o.f *= w;
                             count(Case2Shifted);

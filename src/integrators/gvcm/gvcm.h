@@ -100,13 +100,15 @@ class GVCMIntegrator : public GBDPTIntegrator {
     void addStrategies(const CameraState &st, GradientSample *out) const override;
 
   private:
+    GVCMIntegrator(const EntityDesc &desc, const GVCMSettings &set);
     struct Offset;
     void lightPass(PassContext &ctx);
     // Light subpath j of the current pass, regenerated and classified.
     void regenerate(uint32_t j, Arena &arena, ShiftSubpath *L) const;
     // Case 2 offset of a merge (header comment); false: fall back.
-    bool case2(const ShiftSubpath &L, int m, const CameraShift &sh, int u, const LightVertex &lv, Arena &arena,
-               Offset *o) const;
+    // terms: the offset's camera terms at z'_u (nullptr: no connections, weight 1).
+    bool case2(const ShiftSubpath &L, int m, const CameraShift &sh, int u, const LightVertex &lv,
+               const VCMCameraTerms *terms, Arena &arena, Offset *o) const;
 
     GVCMSettings gset_;
     bool merging_ = false;

@@ -4,7 +4,9 @@
 // specular-diffuse-specular paths seen through the glass; a mirror sphere).
 // The radius is fixed in scene units (0.02, about a sixth of a pixel's footprint)
 // so that the kernel's blur, which case-2 offsets do not share, stays below
-// the noise. Gradients: z = (dx(p) - (P(p+1) - P(p))) / sqrt(var) on disjoint
+// the noise; a third test takes the adaptive kernel's own per-path footprint
+// radius (radiusscale 1/6; G-VCM Sec. 6), where offsets weigh with their own
+// radii (both runs use the default adaptive kernel's shrink). Gradients: z = (dx(p) - (P(p+1) - P(p))) / sqrt(var) on disjoint
 // pixel pairs (gbdpt_test_util.h); S = mean z^2 < 1.8 and |Z| < 4.5 (Gaussian
 // false-positive rates < 1e-9 and 7e-6; fixed seeds). L2 and primal means vs
 // the reference: |z| < 4.5. Power: the same statistics reject gvcm's
@@ -24,9 +26,11 @@ namespace {
 
 const char *const kRadius = " \"float radius\" [0.02]";
 
-test::MeanOfRuns Reference(const std::string &mode, int runs, int spp) {
+const char *const kFootprint = " \"float radiusscale\" [0.1667]";
+
+test::MeanOfRuns Reference(const std::string &mode, int runs, int spp, const char *radius = kRadius) {
     return test::AverageRuns(runs, [&](int k) {
-        return Render(BoxScene(std::string("Integrator \"vcm\" \"string mode\" \"") + mode + "\"" + kRadius), spp,
+        return Render(BoxScene(std::string("Integrator \"vcm\" \"string mode\" \"") + mode + "\"" + radius), spp,
                       3000 + k, "vcm")
             .layerRGB("");
     });
@@ -42,9 +46,9 @@ Image Scaled(const Image &g, double s) {
     return out;
 }
 
-void Check(const std::string &line, const test::MeanOfRuns &ref, int spp) {
+void Check(const std::string &line, const test::MeanOfRuns &ref, int spp, const char *radius = kRadius) {
     std::string stats;
-    Image g = Render(BoxScene(line + kRadius), spp, 91, "", &stats);
+    Image g = Render(BoxScene(line + radius), spp, 91, "", &stats);
     ASSERT_NE(stats.find("gvcm: mode"), std::string::npos);
     // The glass sphere's caustic: case-2 offsets through walked light chains are exercised.
     std::smatch m;
@@ -86,4 +90,8 @@ TEST(GVCMUnbiased, GradientsAndL2MeanMatchVCM) {
 
 TEST(GVCMUnbiased, MergeOnlyMatchesPhotonMapping) {
     Check("Integrator \"gvcm\" \"string mode\" \"mergeonly\"", Reference("vm", 16, 512), 512);
+}
+
+TEST(GVCMUnbiased, FootprintKernelGradientsMatchVCM) {
+    Check("Integrator \"gvcm\"", Reference("vcm", 16, 128, kFootprint), 128, kFootprint);
 }

@@ -58,10 +58,20 @@ TEST(PhotonGrid, QueriesEqualBruteForce) {
     }
 }
 
-// The recursive weights of vcm (VCMLightVertices / VCMCameraB and the sums)
-// equal MISWeight with the same merging terms for connections (s >= 2, t >= 2)
-// and emitter hits (s = 0) of random subpaths in a box with a mirror and a
-// glossy sphere; eta from 0 (mode vc) to dominant, both heuristics.
+// The recursive weights of vcm (VCMLightVertices / VCMCameraEta / VCMCameraB
+// and the sums) equal the O(n) reference MISWeight with the same merging terms
+// for connections (s >= 2, t >= 2), light tracing (t = 1) and emitter hits
+// (s = 0) of random subpaths in a box with a mirror and a glossy sphere. Kernels:
+// one eta for every vertex (from 0, mode vc, to dominant; the reference takes
+// StrategySet::mergeFactor, the recursion a MergeKernel) and the adaptive
+// kernel of G-VCM Sec. 6 (the reference computes each path's radii from the
+// whole path, merge_kernel.h; the recursion from its two subpaths), with
+// shrink exponents that leave the light side's split B visible; both heuristics.
+struct KernelCase {
+    const char *name;
+    double eta;    // fixed: eta at every vertex
+    double shrink; // adaptive (eta < 0): G-VCM Sec. 6 with this exponent
+};
 void CheckRecursiveWeights(MISHeuristic h) {
     using namespace bdpt_test;
     std::string objects = Sphere("Material \"mirror\"", 0.5, 0.35, 0.3, 0.35) +
@@ -76,12 +86,28 @@ void CheckRecursiveWeights(MISHeuristic h) {
     ctx.init(*job.scene, ls, h);
     auto sampler = job.sampler->clone();
     const int maxDepth = 6;
-    for (double eta : {0.0, 1e-2, 1.0, 100.0}) {
+    const Camera &camera = *job.scene->camera;
+    for (KernelCase kc : {KernelCase{"fixed 0", 0, 0}, KernelCase{"fixed 1e-2", 1e-2, 0}, KernelCase{"fixed 1", 1, 0},
+                          KernelCase{"fixed 100", 100, 0}, KernelCase{"adaptive s=10", -1, 10},
+                          KernelCase{"adaptive s=1", -1, 1}, KernelCase{"footprint s=0", -1, 0}}) {
+        const bool adaptive = kc.eta < 0;
+        MergeKernel k;
+        k.piN = 1;
+        k.r2 = adaptive ? 1e-3 : kc.eta;
+        if (adaptive) {
+            // eta at the first mergeable vertex about 1 .. 100 (footprint^2 ~ 1e-4 .. 1e-2 in this box).
+            k.footprint2 = 3e3;
+            k.r2Max = 1e9;
+            k.shrink = kc.shrink;
+            k.pixels = Float(camera.fullResolution.x) * camera.fullResolution.y;
+            k.camera = &camera;
+        }
         StrategySet set;
-        set.merging = eta > 0;
-        set.mergeFactor = eta;
-        const VCMWeights w{eta, eta > 0, true, h == MISHeuristic::Power};
-        int checked = 0, withSpecular = 0;
+        set.merging = adaptive || kc.eta > 0;
+        set.mergeFactor = adaptive ? 0 : kc.eta;
+        set.kernel = adaptive ? &k : nullptr;
+        const VCMWeights w{set.merging ? &k : nullptr, set.merging, true, h == MISHeuristic::Power};
+        int checked = 0, withSpecular = 0, lightTraced = 0, shrunk = 0;
         Arena arena;
         for (int i = 0; i < 1500; ++i) {
             arena.reset();
@@ -93,27 +119,49 @@ void CheckRecursiveWeights(MISHeuristic h) {
             cs.pFilm = Point2(i % 16 + u.x, (i / 16) % 16 + u.y);
             cs.pLens = sampler->get2D();
             Ray ray;
-            job.scene->camera->generateRay(cs, &ray);
+            camera.generateRay(cs, &ray);
             const int nC = GenerateCameraSubpath(ctx, ray, *sampler, arena, maxDepth + 2, cv.data(), cb.data());
             const int nL = GenerateLightSubpath(ctx, *sampler, arena, maxDepth + 1, lv.data(), lb.data());
             std::vector<LightVertex> recs;
             VCMLightVertices(ctx, lv.data(), lb.data(), nL, w, &recs);
-            std::vector<Float> B(nC);
-            VCMCameraB(ctx, cv.data(), cb.data(), nC, w, B.data());
+            std::vector<Float> B(nC), eta(nC);
+            VCMCameraEta(w, cv.data(), cb.data(), nC, eta.data());
+            VCMCameraB(ctx, cv.data(), cb.data(), nC, w, eta.data(), B.data());
+            for (int j = 2; j < nC; ++j) shrunk += eta[j - 1] > 0 && eta[j] > 0 && eta[j] < 0.99 * eta[j - 1];
             SubpathView cam{cv.data(), cb.data(), nC}, light{lv.data(), lb.data(), nL};
+            // t = 1: light tracing from every stored vertex, eta at y_i from its footprint.
+            for (const LightVertex &y : recs) {
+                const int s = y.depth + 1;
+                const PathVertex &yv = lv[s - 1];
+                PathVertex lens;
+                CameraWiSample cws;
+                if (!SampleLensVertex(ctx, yv, sampler->get2D(), &lens, &cws) || !EdgeConnectible(ctx, yv, lens)) continue;
+                const Float ref = MISWeight(ctx, set, light, cam, s, 1, &lens);
+                const Float oi = PdfArea(ctx, lens, nullptr, nullptr, yv, TransportMode::Radiance);
+                const Float oim1 = PdfArea(ctx, yv, &lb[s - 1], &lens, lv[s - 2], TransportMode::Radiance);
+                Float hy = 0;
+                if (set.merging) {
+                    const Vec3 d = yv.p - lens.p;
+                    hy = k.firstEta(lens.p, Normalize(d), d.length(), AbsDot(Vec3(yv.ng), Normalize(d)));
+                }
+                const Float rec = 1 / (1 + VCMLightSum(y, oi, oim1, hy, w.sigma(&lb[s - 1]), w));
+                EXPECT_NEAR(rec, ref, 1e-6 * (1 + ref)) << "s=" << s << " t=1 " << kc.name;
+                ++lightTraced;
+            }
             for (int t = 2; t <= nC; ++t) {
                 const int uu = t - 1;
                 const PathVertex &z = cv[uu];
                 // s = 0: z is an emitter.
                 if (!EmittedRadiance(ctx, z, cv[uu - 1]).isBlack()) {
                     const Float ref = MISWeight(ctx, set, light, cam, 0, t, nullptr);
-                    const Float rec = 1 / (1 + VCMCameraSum(VCMCameraAt(ctx, cv.data(), cb.data(), uu, B[uu], w),
+                    const Float rec = 1 / (1 + VCMCameraSum(VCMCameraAt(ctx, cv.data(), cb.data(), uu, B[uu], eta.data(), w),
                                                             PdfLightOrigin(ctx, z, cv[uu - 1]),
                                                             PdfLightDirection(ctx, z, cv[uu - 1]), false, true, w));
-                    EXPECT_NEAR(rec, ref, 1e-9 * (1 + ref)) << "s=0 t=" << t << " eta " << eta;
+                    EXPECT_NEAR(rec, ref, 1e-9 * (1 + ref)) << "s=0 t=" << t << " " << kc.name;
                     ++checked;
                 }
                 if (z.type != VertexType::Surface || !IsConnectible(z, &cb[uu])) continue;
+                const VCMCameraTerms terms = VCMCameraAt(ctx, cv.data(), cb.data(), uu, B[uu], eta.data(), w);
                 for (const LightVertex &y : recs) {
                     const int s = y.depth + 1;
                     ConnectResult r;
@@ -124,24 +172,74 @@ void CheckRecursiveWeights(MISHeuristic h) {
                     const Float oim1 = PdfArea(ctx, yv, &lb[s - 1], &z, lv[s - 2], TransportMode::Radiance);
                     const Float oz = PdfArea(ctx, yv, &lb[s - 1], &lv[s - 2], z, TransportMode::Importance);
                     const Float op = PdfArea(ctx, z, &cb[uu], &yv, cv[uu - 1], TransportMode::Importance);
-                    const Float rec = 1 / (1 + VCMLightSum(y, oi, oim1, w) +
-                                           VCMCameraSum(VCMCameraAt(ctx, cv.data(), cb.data(), uu, B[uu], w), oz, op,
-                                                        w.merging, false, w));
-                    EXPECT_NEAR(rec, ref, 1e-6 * (1 + ref)) << "s=" << s << " t=" << t << " eta " << eta;
+                    const Float rec = 1 / (1 + VCMLightSum(y, oi, oim1, terms.H, w.sigma(&lb[s - 1]), w) +
+                                           VCMCameraSum(terms, oz, op, w.merging, false, w));
+                    EXPECT_NEAR(rec, ref, 1e-6 * (1 + ref)) << "s=" << s << " t=" << t << " " << kc.name;
                     bool spec = false;
-                    for (int k = 1; k < s - 1; ++k) spec |= lv[k].delta();
-                    for (int k = 1; k < uu; ++k) spec |= cv[k].delta();
+                    for (int q = 1; q < s - 1; ++q) spec |= lv[q].delta();
+                    for (int q = 1; q < uu; ++q) spec |= cv[q].delta();
                     withSpecular += spec;
                     ++checked;
                 }
             }
         }
-        EXPECT_GE(checked, 1000) << "eta " << eta;
-        EXPECT_GE(withSpecular, 30) << "connections with a specular interior vertex, eta " << eta;
+        EXPECT_GE(checked, 1000) << kc.name;
+        EXPECT_GE(lightTraced, 300) << kc.name;
+        EXPECT_GE(withSpecular, 30) << "connections with a specular interior vertex, " << kc.name;
+        if (adaptive && kc.shrink > 0) EXPECT_GE(shrunk, 300) << "camera vertices with a shrunk radius, " << kc.name;
     }
 }
 TEST(VCMWeights, RecursiveEqualsReferenceBalance) { CheckRecursiveWeights(MISHeuristic::Balance); }
 TEST(VCMWeights, RecursiveEqualsReferencePower) { CheckRecursiveWeights(MISHeuristic::Power); }
+
+// The footprint radius of G-VCM Sec. 6 by hand: the centre pixel of a pinhole
+// camera (fov 40 degrees, 16 x 16 pixels) seen on the wall 4.5 units ahead,
+// head-on, covers (4.5 * 2 tan(20 deg) / 16)^2; behind a first vertex the
+// radius shrinks by 0.5^(s tau) per vertex (tau = 1 on the matte wall).
+TEST(MergeKernel, FootprintAndShrinkByHand) {
+    using namespace bdpt_test;
+    RenderJob job = [] {
+        BuildOptions bo;
+        bo.quiet = true;
+        return BuildRenderJob(ParseString(BoxScene("bdpt", CeilingLight(0.3, 10), "")), bo);
+    }();
+    LightSampler ls(job.scene->lights, "power", FileLoc());
+    BidirContext ctx;
+    ctx.init(*job.scene, ls, MISHeuristic::Balance);
+    const Camera &camera = *job.scene->camera;
+    MergeKernel k;
+    k.piN = 2;
+    k.r2 = 1e-9;
+    k.footprint2 = 0.25;  // radiusscale 0.5
+    k.r2Max = 1e9;
+    k.shrink = 3;
+    k.pixels = 256;
+    k.camera = &camera;
+    auto sampler = job.sampler->clone();
+    sampler->startPixelSample({8, 8}, 0);
+    CameraSample cs;
+    cs.pFilm = Point2(8, 8);
+    cs.pLens = Point2(0.5, 0.5);
+    Ray ray;
+    camera.generateRay(cs, &ray);
+    Arena arena;
+    std::vector<PathVertex> cv(4);
+    std::vector<BSDF> cb(4);
+    const int n = GenerateCameraSubpath(ctx, ray, *sampler, arena, 4, cv.data(), cb.data());
+    ASSERT_GE(n, 3);
+    ASSERT_NEAR(cv[1].p.z, -1, 1e-9);
+    const VCMWeights w{&k, true, true, false};
+    std::vector<Float> eta(n);
+    VCMCameraEta(w, cv.data(), cb.data(), n, eta.data());
+    const Float side = 4.5 * 2 * std::tan(20 * Pi / 180) / 16;
+    EXPECT_NEAR(eta[1], 2 * 0.25 * side * side, 1e-9 * eta[1]);
+    EXPECT_NEAR(eta[2], eta[1] * std::pow(0.25, 3.0), 1e-12 * eta[1]);
+    // Clamped to r2Max, and the fixed radius through the filter margin (no camera density).
+    k.r2Max = 1e-4;
+    VCMCameraEta(w, cv.data(), cb.data(), n, eta.data());
+    EXPECT_DOUBLE_EQ(eta[1], 2 * 1e-4);
+    EXPECT_DOUBLE_EQ(k.firstEta(ray.o, Normalize(Vec3(0, -1, -1e-3)), 1, 1), 2 * 1e-9);
+}
 
 // Modes vc (= BDPT) and vm (progressive photon mapping) and the power
 // heuristic agree with bdpt in expectation on the conformance table's scene

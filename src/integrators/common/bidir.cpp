@@ -428,7 +428,7 @@ namespace {
 // connectible and its delta flag counts.
 Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s,
                       int t, const PathVertex *sampled, bool mergeMode, Float *ptRevOut, int split = -1,
-                      MISSplit *parts = nullptr) {
+                      MISSplit *parts = nullptr, Float *etaOwnOut = nullptr) {
     auto Lv = [&](int i) -> const PathVertex & { return (s == 1 && i == 0 && sampled) ? *sampled : light.v[i]; };
     auto Cv = [&](int i) -> const PathVertex & { return (t == 1 && i == 0 && sampled) ? *sampled : camera.v[i]; };
     auto Lb = [&](int i) -> const BSDF * { return light.bsdf ? &light.bsdf[i] : nullptr; };
@@ -472,7 +472,28 @@ Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathVi
     // density of x_j from the other side (Georgiev et al. 2012, Sec. 4.2); a
     // delta density (x_j after a specular vertex: a caustic) counts as 1, as in
     // every ratio here.
-    const Float eta = set.merging ? set.mergeFactor * relOther : 0;
+    const Float eta = set.merging ? (set.kernel ? Float(1) : set.mergeFactor) * relOther : 0;
+    // With a varying kernel (merge_kernel.h), eta_j of each vertex of the path
+    // in camera order (Cv(0) .. Cv(t-1), Lv(s-1) .. Lv(0)); the light origin is no merge.
+    const int nPath = s + t;
+    Float etaBuf[128];
+    std::vector<Float> etaVec;
+    Float *etaPath = etaBuf;
+    if (set.merging && set.kernel) {
+        if (nPath > 128) {
+            etaVec.resize(size_t(nPath));
+            etaPath = etaVec.data();
+        }
+        auto pv = [&](int k) -> const PathVertex & { return k < t ? Cv(k) : Lv(s - 1 - (k - t)); };
+        auto pb = [&](int k) -> const BSDF * { return k < t ? Cb(k) : Lb(s - 1 - (k - t)); };
+        PathMergeEta(*set.kernel, nPath, pv, pb,
+                     [&](int k) { return k + 1 < nPath && pb(k) && MergeableIn(set, pv(k), pb(k)); }, etaPath);
+        if (etaOwnOut) *etaOwnOut = etaPath[t - 1];
+    } else if (etaOwnOut) {
+        *etaOwnOut = set.mergeFactor;
+    }
+    auto etaCam = [&](int i) { return set.kernel ? eta * etaPath[i] : eta; };
+    auto etaLight = [&](int i) { return set.kernel ? eta * etaPath[t + (s - 1 - i)] : eta; };
 
     // w = 1 / sum_k (n_k p_k / n_s p_s)^beta with p_k / p_{k+1} = pdfRev / pdfFwd
     // of the vertex that changes sides (Veach 1997 Eq. 10.9).
@@ -486,7 +507,7 @@ Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathVi
         }
         // ri is the ratio of the connection with camera endpoint C[i]: merging at C[i]
         // (not at the light origin x_0, which C[t-1] is when s = 0).
-        if (eta > 0 && !(s == 0 && i == t - 1) && MergeableIn(set, Cv(i), Cb(i))) sumRi += mis(eta * remap(camRev(i)) * ri);
+        if (eta > 0 && !(s == 0 && i == t - 1) && MergeableIn(set, Cv(i), Cb(i))) sumRi += mis(etaCam(i) * remap(camRev(i)) * ri);
         ri *= remap(camRev(i)) / remap(Cv(i).pdfFwd);
         int sp = s + t - i;
         if (sp == 1 && i == 1) continue;  // (1,1) is not evaluated
@@ -503,7 +524,7 @@ Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathVi
     ri = 1;
     for (int i = s - 1; i >= 0; --i) {
         // ri is the ratio of the connection with light endpoint L[i]: merging at L[i] (i >= 1).
-        if (eta > 0 && i >= 1 && MergeableIn(set, Lv(i), Lb(i))) sumRi += mis(eta * remap(lightRev(i)) * ri);
+        if (eta > 0 && i >= 1 && MergeableIn(set, Lv(i), Lb(i))) sumRi += mis(etaLight(i) * remap(lightRev(i)) * ri);
         ri *= remap(lightRev(i)) / remap(Lv(i).pdfFwd);
         int tp = s + t - i;
         if (i == 1 && tp == 1) continue;
@@ -557,12 +578,12 @@ Float CameraPrefixSum(const BidirContext &ctx, const StrategySet &set, SubpathVi
 Float MergeWeight(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s,
                   int t) {
     GRADUS_CHECK(set.merging && s >= 1 && t >= 2);
-    Float ptRev;
-    const Float others = OtherStrategies(ctx, set, light, camera, s, t, nullptr, true, &ptRev);
+    Float ptRev, etaOwn;
+    const Float others = OtherStrategies(ctx, set, light, camera, s, t, nullptr, true, &ptRev, -1, nullptr, &etaOwn);
     // The connection (s, t) itself is a strategy of this path unless light[s-1]
     // is specular or the edge is degenerate.
     const bool vc = (s == 1 || !light.v[s - 1].delta()) && EdgeConnectible(ctx, light.v[s - 1], camera.v[t - 1]);
-    const Float own = set.mergeFactor * (ptRev != 0 ? ptRev : Float(1));  // delta: 1, as in the sums
+    const Float own = etaOwn * (ptRev != 0 ? ptRev : Float(1));  // delta: 1, as in the sums
     const Float misOwn = ctx.heuristic == MISHeuristic::Power ? own * own : own;
     return misOwn / ((vc ? 1 : 0) + others);
 }

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "core/arena.h"
+#include "integrators/common/merge_kernel.h"
 #include "integrators/common/path_vertex.h"
 #include "lights/light_sampler.h"
 #include "render/scene.h"
@@ -66,6 +67,9 @@ struct StrategySet {
     // classification left unmarked (subpath_shift.h PrepareSubpath marks
     // near-specular ones VERTEX_DELTA).
     bool mergeRoughOnly = false;
+    // A kernel whose radius varies along the path (merge_kernel.h): when set,
+    // eta_VCM at each vertex comes from it and mergeFactor is not used.
+    const MergeKernel *kernel = nullptr;
 };
 
 // Everything the connection code needs besides the subpaths (read-only, shared by threads).

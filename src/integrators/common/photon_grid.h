@@ -3,10 +3,13 @@
 // floor(p / 2r), hashed into a table of the next power of two >= the number of
 // points; the grid is unbounded (no bounding box to grow), so points anywhere
 // are found. A query visits the (at most) 8 buckets of the cells that the
-// ball of radius r around the query point overlaps, each bucket once.
+// ball of radius r around the query point overlaps, each bucket once
+// (27 for the larger radii of a varying kernel).
 // Built by a counting sort; each bucket lists its points by increasing index,
 // so queries visit them in an order that does not depend on the thread count.
 #pragma once
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <vector>
@@ -23,7 +26,13 @@ class PhotonGrid {
     void build(size_t n, const std::function<Point3(size_t)> &position, Float radius, const ParallelFor &pf);
     // Calls fn(index, squared distance) for every point closer than the radius to p.
     template <typename Fn>
-    void query(const Point3 &p, Fn &&fn) const;
+    void query(const Point3 &p, Fn &&fn) const {
+        query(p, radius_, fn);
+    }
+    // The same for a radius r <= 2 radius() (a kernel that varies per query,
+    // merge_kernel.h): up to 27 cells when r > radius().
+    template <typename Fn>
+    void query(const Point3 &p, Float r, Fn &&fn) const;
 
     Float radius() const { return radius_; }
     size_t size() const { return points_.size(); }
@@ -45,27 +54,32 @@ class PhotonGrid {
 };
 
 template <typename Fn>
-void PhotonGrid::query(const Point3 &p, Fn &&fn) const {
-    if (points_.empty()) return;
-    const Float cx = p.x * invCell_, cy = p.y * invCell_, cz = p.z * invCell_;
-    const Float fx = std::floor(cx), fy = std::floor(cy), fz = std::floor(cz);
-    if (!(std::abs(fx) < 4e18 && std::abs(fy) < 4e18 && std::abs(fz) < 4e18)) return;
-    const int64_t ix = int64_t(fx), iy = int64_t(fy), iz = int64_t(fz);
-    // The ball (radius r = half a cell) reaches into the neighbour on the nearer side only.
-    const int64_t dx = cx - fx < 0.5 ? -1 : 1, dy = cy - fy < 0.5 ? -1 : 1, dz = cz - fz < 0.5 ? -1 : 1;
-    uint32_t seen[8];
+void PhotonGrid::query(const Point3 &p, Float r, Fn &&fn) const {
+    if (points_.empty() || !(r > 0)) return;
+    r = std::min(r, 2 * radius_);
+    const Float r2 = r * r;
+    // Cells overlapped by the ball's bounding box: at most 2 per axis for
+    // r <= radius (half a cell), 3 for r <= 2 radius.
+    const Float inv = invCell_;
+    const Float lo[3] = {std::floor((p.x - r) * inv), std::floor((p.y - r) * inv), std::floor((p.z - r) * inv)};
+    const Float hi[3] = {std::floor((p.x + r) * inv), std::floor((p.y + r) * inv), std::floor((p.z + r) * inv)};
+    for (int a = 0; a < 3; ++a)
+        if (!(std::abs(lo[a]) < 4e18 && std::abs(hi[a]) < 4e18)) return;
+    uint32_t seen[27];
     int nSeen = 0;
-    for (int c = 0; c < 8; ++c) {
-        const uint32_t b = bucket(ix + (c & 1 ? dx : 0), iy + (c & 2 ? dy : 0), iz + (c & 4 ? dz : 0));
-        bool dup = false;
-        for (int k = 0; k < nSeen; ++k) dup |= seen[k] == b;
-        if (dup) continue;
-        seen[nSeen++] = b;
-        for (uint32_t k = start_[b]; k < start_[b + 1]; ++k) {
-            const Float d2 = (points_[k] - p).lengthSquared();
-            if (d2 < r2_) fn(index_[k], d2);
-        }
-    }
+    for (int64_t z = int64_t(lo[2]); z <= int64_t(hi[2]); ++z)
+        for (int64_t y = int64_t(lo[1]); y <= int64_t(hi[1]); ++y)
+            for (int64_t x = int64_t(lo[0]); x <= int64_t(hi[0]); ++x) {
+                const uint32_t b = bucket(x, y, z);
+                bool dup = false;
+                for (int k = 0; k < nSeen; ++k) dup |= seen[k] == b;
+                if (dup) continue;
+                seen[nSeen++] = b;
+                for (uint32_t k = start_[b]; k < start_[b + 1]; ++k) {
+                    const Float d2 = (points_[k] - p).lengthSquared();
+                    if (d2 < r2) fn(index_[k], d2);
+                }
+            }
 }
 
 }  // namespace gradus

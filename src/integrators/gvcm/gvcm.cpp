@@ -61,18 +61,19 @@ void GVCMIntegrator::preprocess(const Scene &scene, Film &film) {
     skipped_ = merging_ ? "" : "no specular or near-specular surface: merging left out (no grid; gvcm = gbdpt)";
     radius1_ = gset_.radius > 0 ? gset_.radius : VCMFootprintRadius(scene, bounds_, gset_.radiusScale);
     GRADUS_CHECK(radius1_ > 0);
-    // Merges only at connectable vertices (Sec. 4), in the estimate and in every MIS sum.
+    if (merging_ && set_.maxDepth > 255) throw Error(loc_, "gvcm: maxdepth above 255 is not supported with merging");
+    // Merges only at connectable vertices (Sec. 4), in the estimate and in every MIS sum,
+    // with the kernel's eta per vertex (Sec. 6, merge_kernel.h).
     bctx_.strategies.merging = merging_ && connections_;
     bctx_.strategies.mergeRoughOnly = true;
     bctx_.strategies.mergeFactor = 0;
+    bctx_.strategies.kernel = &kernel_;
 }
 
 void GVCMIntegrator::runPass(PassContext &ctx) {
     scene_ = &ctx.scene();
     radius_ = radiusAt(ctx.firstSample() + 1);
-    // eta_VCM = pi r^2 N_light (Eq. 12: N p_VM with N light subpaths merged).
-    eta_ = merging_ ? Pi * radius_ * radius_ * Float(bounds_.area()) : 0;
-    if (bctx_.strategies.merging) bctx_.strategies.mergeFactor = eta_;
+    kernel_ = VCMKernel(gset_, radius1_, ctx.firstSample() + 1, bounds_.area(), *scene_->camera, merging_);
     if (merging_) {
         lightPass(ctx);
         if (ctx.interrupted()) return;
@@ -98,7 +99,7 @@ void GVCMIntegrator::lightPass(PassContext &ctx) {
     const int64_t N = bounds_.area();
     lightKey_ = ctx.seed() ^ kLightTag;
     lightPassIndex_ = ctx.pass();
-    const VCMWeights weights{eta_, true, connections_ && set_.lightTracing, false, true};
+    const VCMWeights weights{&kernel_, true, connections_ && set_.lightTracing, false, true};
     const int64_t chunks = (N + PassContext::kItemChunk - 1) / PassContext::kItemChunk;
     std::vector<std::vector<LightVertex>> out(static_cast<size_t>(chunks));
     std::vector<uint32_t> count(static_cast<size_t>(N), 0);
@@ -120,7 +121,7 @@ struct GVCMIntegrator::Offset {
 };
 
 bool GVCMIntegrator::case2(const ShiftSubpath &L, int m, const CameraShift &sh, int u, const LightVertex &lv,
-                           const VCMCameraTerms *terms, Arena &arena, Offset *o) const {
+                           const VCMCameraTerms *terms, Float etaX, Arena &arena, Offset *o) const {
     const Scene &scene = *scene_;
     const PathVertex &zo = sh.y.v[u], &zoPrev = sh.y.v[u - 1];
     const BSDF &bo = sh.y.b[u];
@@ -255,8 +256,9 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, int m, const CameraShift &sh, 
     const Spectrum eX = emit(dirX, &pX), eY = emit(dirY, &pY);
     const Spectrum tX = eX * fcosX * gX, tY = eY * fcosY * gY;
     const Spectrum fz = bo.f(Vec3(zo.wo), wiY, TransportMode::Radiance);
-    // f(x')/p'(x*) = beta_L(y_m) T(x')/T(x) f(z'_b) beta'_C / eta (gvcm.h; Eqs. 18-19).
-    o->f = lv.throughput() * SafeDiv(tY, tX) * fz * zo.throughput() / eta_;
+    // f(x')/p'(x*) = beta_L(y_m) T(x')/T(x) f(z'_b) beta'_C / eta (gvcm.h; Eqs. 18-19), eta
+    // the base's kernel at z_b.
+    o->f = lv.throughput() * SafeDiv(tY, tX) * fz * zo.throughput() / etaX;
     if (o->f.isBlack() || !(pX > 0) || !(pY > 0)) {
         count(FallbackBlocked);
         return false;
@@ -267,34 +269,39 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, int m, const CameraShift &sh, 
     o->w = 1;
     if (terms) {
         // Eq. 13 for the offset path (merge at z'_b of a photon from y'_{m-1}),
-        // with the base's light-side B_m (gvcm.h).
-        const VCMWeights W{eta_, true, set_.lightTracing, false, true};  // connecting: the t = 1 terms
+        // with the base's light-side B_m (gvcm.h) and the offset's own kernel (its eta at z'_b).
+        const VCMWeights W{&kernel_, true, set_.lightTracing, false, true};  // connecting: the t = 1 terms
         const Float om1 = bo.pdf(Vec3(zo.wo), wiY, TransportMode::Radiance) * prevGeomY;
-        const Float SL = VCMLightPrevSum(lv, om1, W);
+        const Float SL = VCMLightPrevSum(lv, om1, terms->H, W);
         const Float cRef = VCMPrevConnectible(lv) ? 1 : 0;
         const Float oPrev = ConvertDensity(bo.pdf(wiY, Vec3(zo.wo), TransportMode::Importance), zo, zoPrev);
-        o->w = eta_ * oPhotonY / (cRef + SL + VCMCameraSum(*terms, oPhotonY, oPrev, true, false, W));
+        o->w = terms->etaU * oPhotonY / (cRef + SL + VCMCameraSum(*terms, oPhotonY, oPrev, true, false, W));
     }
     return true;
 }
 
 void GVCMIntegrator::addStrategies(const CameraState &st, GradientSample *out) const {
-    if (!merging_ || eta_ <= 0) return;
+    if (!merging_ || kernel_.piN <= 0) return;
     const ShiftSubpath &cam = *st.cam;
     Arena &arena = *st.arena;
     const Float w = st.w;
     // `connecting` gates only the light-tracing (t = 1) terms of the camera-side sums.
-    const VCMWeights W{eta_, true, connections_ && set_.lightTracing, false, true};
-    Float *Bx = static_cast<Float *>(arena.alloc(sizeof(Float) * std::max(cam.n, 1), alignof(Float)));
-    if (connections_) VCMCameraB(bctx_, cam.v, cam.b, cam.n, W, Bx);
-    // Offsets' B_u (case 1 weights), computed when first needed.
-    Float *By[kNumNeighbours] = {};
+    const VCMWeights W{&kernel_, true, connections_ && set_.lightTracing, false, true};
+    auto alloc = [&](int n) { return static_cast<Float *>(arena.alloc(sizeof(Float) * std::max(n, 1), alignof(Float))); };
+    // The base's eta_u (Sec. 6: its own footprint and shrink) and B_u.
+    Float *etaX = alloc(cam.n), *Bx = alloc(cam.n);
+    VCMCameraEta(W, cam.v, cam.b, cam.n, etaX);
+    if (connections_) VCMCameraB(bctx_, cam.v, cam.b, cam.n, W, etaX, Bx);
+    // Offsets' eta and B_u (their own kernels, for their weights), computed when first needed.
+    Float *By[kNumNeighbours] = {}, *etaY[kNumNeighbours] = {};
     auto offsetB = [&](int k) {
         if (!By[k]) {
             const CameraShift &sh = st.shifts[k];
             const int n = std::min(sh.y.n, sh.validUpTo + 1);
-            By[k] = static_cast<Float *>(arena.alloc(sizeof(Float) * std::max(n, 1), alignof(Float)));
-            VCMCameraB(bctx_, sh.y.v, sh.y.b, n, W, By[k]);
+            By[k] = alloc(n);
+            etaY[k] = alloc(n);
+            VCMCameraEta(W, sh.y.v, sh.y.b, n, etaY[k]);
+            VCMCameraB(bctx_, sh.y.v, sh.y.b, n, W, etaY[k], By[k]);
         }
         return By[k];
     };
@@ -327,18 +334,21 @@ void GVCMIntegrator::addStrategies(const CameraState &st, GradientSample *out) c
             continue;
         }
         // Merges at z_u with every light vertex within r (Eq. 11, Algorithm 1 lines 19-24).
-        const VCMCameraTerms terms = connections_ ? VCMCameraAt(bctx_, cam.v, cam.b, u, Bx[u], W) : VCMCameraTerms();
+        const Float etaU = etaX[u];
+        if (!(etaU > 0)) continue;
+        const VCMCameraTerms terms = connections_ ? VCMCameraAt(bctx_, cam.v, cam.b, u, Bx[u], etaX, W) : VCMCameraTerms();
         // The offsets' camera terms at z'_u: once per vertex when a merge first needs them.
         VCMCameraTerms ty[kNumNeighbours];
         bool tyDone[kNumNeighbours] = {};
         auto offsetTerms = [&](int k) {
             if (!tyDone[k]) {
-                ty[k] = VCMCameraAt(bctx_, st.shifts[k].y.v, st.shifts[k].y.b, u, offsetB(k)[u], W);
+                const Float *B = offsetB(k);
+                ty[k] = VCMCameraAt(bctx_, st.shifts[k].y.v, st.shifts[k].y.b, u, B[u], etaY[k], W);
                 tyDone[k] = true;
             }
             return &ty[k];
         };
-        grid_.query(zu.p, [&](uint32_t idx, Float) {
+        grid_.query(zu.p, std::sqrt(etaU / kernel_.piN), [&](uint32_t idx, Float) {
             const LightVertex &lv = vertices_[idx];
             if (int(lv.depth) + u - 1 > set_.maxDepth) return;
             const Vec3 wi = lv.wo;  // towards y_{m-1}
@@ -349,13 +359,13 @@ void GVCMIntegrator::addStrategies(const CameraState &st, GradientSample *out) c
             const Float cRef = VCMPrevConnectible(lv) ? 1 : 0;  // the connection of y_{m-1} and z_u
             Float wx = 1;
             if (connections_) {
-                // Eq. 13: w_VM = eta o(z_u) / (c + S_L(m-1) + S_C(u)) (vcm.h).
+                // Eq. 13: w_VM = eta_u o(z_u) / (c + S_L(m-1) + S_C(u)) (vcm.h; S_L's junction eta_u sigma(z_u)).
                 const Float om1 = bu.pdf(Vec3(zu.wo), wi, TransportMode::Radiance) * lv.prevGeom;
                 const Float oPrev = ConvertDensity(bu.pdf(wi, Vec3(zu.wo), TransportMode::Importance), zu, zp);
-                wx = eta_ * oz / (cRef + VCMLightPrevSum(lv, om1, W) + VCMCameraSum(terms, oz, oPrev, true, false, W));
+                wx = etaU * oz / (cRef + VCMLightPrevSum(lv, om1, terms.H, W) + VCMCameraSum(terms, oz, oPrev, true, false, W));
             }
-            // Eq. 5 with the uniform kernel: beta_L f beta_C / (pi r^2 N), N folded into w_VM.
-            const Spectrum fx = zu.throughput() * f * lv.throughput() * (w / eta_);
+            // Eq. 5 with the uniform kernel: beta_L f beta_C / (pi r_u^2 N), N folded into w_VM.
+            const Spectrum fx = zu.throughput() * f * lv.throughput() * (w / etaU);
             out->primal += fx * wx;
             ShiftSubpath L;
             bool haveL = false, badL = false;
@@ -372,12 +382,14 @@ void GVCMIntegrator::addStrategies(const CameraState &st, GradientSample *out) c
                     count(Case1);
                     const PathVertex &yu = sh.y.v[u], &yp = sh.y.v[u - 1];
                     const Spectrum fo = u == sh.r ? bu.f(Vec3(yu.wo), wi, TransportMode::Radiance) : f;
-                    o.f = yu.throughput() * fo * lv.throughput() * (w / eta_);
+                    // The estimate keeps the base's kernel; the weight takes the offset's own eta (Eq. 23).
+                    o.f = yu.throughput() * fo * lv.throughput() * (w / etaU);
                     o.rho = sh.rho[u];
                     if (connections_) {
                         const Float om1 = bu.pdf(Vec3(yu.wo), wi, TransportMode::Radiance) * lv.prevGeom;
                         const Float oPrev = ConvertDensity(bu.pdf(wi, Vec3(yu.wo), TransportMode::Importance), yu, yp);
-                        o.w = eta_ * oz / (cRef + VCMLightPrevSum(lv, om1, W) + VCMCameraSum(*offsetTerms(k), oz, oPrev, true, false, W));
+                        const VCMCameraTerms &tk = *offsetTerms(k);
+                        o.w = tk.etaU * oz / (cRef + VCMLightPrevSum(lv, om1, tk.H, W) + VCMCameraSum(tk, oz, oPrev, true, false, W));
                     }
                     ok = !o.f.isBlack() && o.w > 0;
                     if (ok) count(Case1Shifted);
@@ -395,7 +407,8 @@ void GVCMIntegrator::addStrategies(const CameraState &st, GradientSample *out) c
                         if (badL) count(FallbackMismatch);
                     }
                     if (!badL) {
-                        ok = case2(L, lv.depth, sh, u, lv, connections_ ? offsetTerms(k) : nullptr, arena, &o) && o.w > 0;
+                        ok = case2(L, lv.depth, sh, u, lv, connections_ ? offsetTerms(k) : nullptr, etaU, arena, &o) &&
+                             o.w > 0;
                         if (ok) {
                             o.f *= w;
                             count(Case2Shifted);
@@ -417,13 +430,13 @@ std::string GVCMIntegrator::statistics() const {
     auto c = [&](Counter k) { return (unsigned long long)counters_[k].load(); };
     char buf[1536];
     std::snprintf(buf, sizeof buf,
-                  "gvcm: mode %s, initial radius %.4g (last %.4g), %d iterations, %.3g light vertices per iteration "
+                  "gvcm: mode %s, kernel %s, initial radius %.4g (last %.4g), %d iterations, %.3g light vertices per iteration "
                   "(%zu bytes each, grid %.1f MB), %llu merges%s%s\n"
                   "  merge offsets: case 1 (shared kernel) %llu, shifted %llu; case 2 (through z'_b) %llu: "
                   "empty chain %llu, specular chain %llu, shifted %llu; light subpaths regenerated %llu\n"
                   "  merge fallbacks (zero offset, base weight): camera shift failed %llu, light at infinity %llu, "
                   "glossy chain %llu, long chain %llu, walk failed %llu, occluded or black %llu, regeneration mismatch %llu\n",
-                  gset_.mergeOnly ? "mergeonly (G-PM)" : "vcm", radius1_, radius_, passes_,
+                  gset_.mergeOnly ? "mergeonly (G-PM)" : "vcm", KernelName(gset_).c_str(), radius1_, radius_, passes_,
                   passes_ ? double(nLightVertices_) / passes_ : 0.0, sizeof(LightVertex), grid_.bytes() / 1e6,
                   c(Merges), skipped_.empty() ? "" : "; ", skipped_.c_str(), c(Case1), c(Case1Shifted), c(Case2),
                   c(Case2Empty), c(Case2Chain), c(Case2Shifted), c(Regenerated), c(FallbackShift),

@@ -107,12 +107,14 @@ class GVCMIntegrator : public GBDPTIntegrator {
     void regenerate(uint32_t j, Arena &arena, ShiftSubpath *L) const;
     // Case 2 offset of a merge (header comment); false: fall back.
     // terms: the offset's camera terms at z'_u (nullptr: no connections, weight 1).
+    // etaX: the base's eta at z_u (the kernel that found the photon).
     bool case2(const ShiftSubpath &L, int m, const CameraShift &sh, int u, const LightVertex &lv,
-               const VCMCameraTerms *terms, Arena &arena, Offset *o) const;
+               const VCMCameraTerms *terms, Float etaX, Arena &arena, Offset *o) const;
 
     GVCMSettings gset_;
     bool merging_ = false;
-    Float radius1_ = 0, radius_ = 0, eta_ = 0;
+    Float radius1_ = 0, radius_ = 0;
+    MergeKernel kernel_;
     Bounds2i bounds_;
     std::vector<LightVertex> vertices_;
     std::vector<uint32_t> pathStart_;

@@ -27,6 +27,10 @@ ParamTable<MergeRadiusSettings> MergeRadiusParams() {
     t.real("radius", &S::radius, 0, "initial merging radius in scene units (0: from the pixel footprint)", AtLeast(0));
     t.real("radiusscale", &S::radiusScale, 1, "the footprint radius in pixels (radius 0)", Range{1e-3, 1e3});
     t.real("radiusalpha", &S::radiusAlpha, 0.75, "radius reduction r_i^2 = r_1^2 i^(alpha - 1)", Range{1e-3, 1});
+    t.enumeration<bool>("kernel", &S::adaptiveKernel, "adaptive", {{"fixed", false}, {"adaptive", true}},
+                        "fixed (r_i at every vertex) | adaptive (G-VCM Sec. 6: footprint r_1 per path, shrunk per vertex)");
+    t.real("kernelshrink", &S::kernelShrink, 10,
+           "adaptive: r_j = 0.5^(kernelshrink tau) r_{j-1} (tau: roughness at the previous vertex)", Range{0, 100});
     return t;
 }
 
@@ -77,10 +81,10 @@ int VCMLightVertices(const BidirContext &ctx, const PathVertex *v, const BSDF *b
                      std::vector<LightVertex> *out) {
     const size_t before = out->size();
     // B_0 = 0, B_1 = c_{-1} (s' = 0: the emitter can be hit unless it is a delta light),
-    // B_{m+2} = c_m + eta g_m other(v_m) + R_m B_{m+1}.
-    Float B = n > 0 && !v[0].isDeltaLight() ? 1 : 0;  // B_1
+    // B_{m+2} = c_m + eta g_m other(v_m) + R_m B_{m+1}, in the parts Bc + h^beta Be (vcm.h).
+    Float Bc = n > 0 && !v[0].isDeltaLight() ? 1 : 0, Be = 0;  // B_1
     for (int i = 1; i < n; ++i) {
-        // Here B = B_i. c_{i-1}: light endpoint y_{i-1}, camera endpoint y_i.
+        // Here (Bc, Be) = B_i. c_{i-1}: light endpoint y_{i-1}, camera endpoint y_i.
         const bool prevDelta = i - 1 >= 1 && v[i - 1].delta();
         const bool edgeOK = EdgeConnectible(ctx, v[i - 1], v[i]);
         const bool prevMerge = w.merging && i - 1 >= 1 && w.mergeable(v[i - 1], &b[i - 1]);
@@ -99,8 +103,10 @@ int VCMLightVertices(const BidirContext &ctx, const PathVertex *v, const BSDF *b
             lv.pdfFwd = v[i].pdfFwd;
             lv.prevPdfFwd = v[i - 1].pdfFwd;
             lv.prevGeom = ConvertDensity(1, v[i], v[i - 1]);
-            lv.B = B;
-            lv.depth = uint16_t(i);
+            lv.B = Bc;
+            lv.Be = float(Be);
+            GRADUS_CHECK(i < 256);
+            lv.depth = uint8_t(i);
             lv.flags = uint8_t((prevDelta ? LightVertex::kPrevDelta : 0) | (prevMerge ? LightVertex::kPrevMergeable : 0) |
                                (edgeOK ? LightVertex::kPrevEdgeOK : 0));
             out->push_back(lv);
@@ -108,29 +114,44 @@ int VCMLightVertices(const BidirContext &ctx, const PathVertex *v, const BSDF *b
         // B_{i+1} = c_{i-1} + eta g_{i-1} other(y_{i-1}) + R_{i-1} B_i, other(y_{i-1}) = pdfRev (exact);
         // y_i is not an endpoint of c_{i-1} here, so its own lobe counts too.
         const Float c = !prevDelta && edgeOK && !v[i].delta() ? 1 : 0;
-        B = c + (prevMerge ? Mis(w.eta * Remap(v[i - 1].pdfRev), w.power) : 0) +
-            Mis(Remap(v[i - 1].pdfRev) / Remap(v[i - 1].pdfFwd), w.power) * B;
+        const Float Rm = Mis(Remap(v[i - 1].pdfRev) / Remap(v[i - 1].pdfFwd), w.power);
+        // Bc_{i+1} = c_{i-1} + R_{i-1} Bc_i; Be_{i+1} = sigma_i^beta (g_{i-1} o_{i-1}^beta + R_{i-1} Be_i).
+        Bc = c + Rm * Bc;
+        Be = Mis(w.sigma(&b[i]), w.power) * ((prevMerge ? Mis(Remap(v[i - 1].pdfRev), w.power) : 0) + Rm * Be);
     }
     return int(out->size() - before);
 }
 
-Float VCMLightPrevSum(const LightVertex &lv, Float oim1, const VCMWeights &w) {
-    // S_L(i-1) = eta g_{i-1} o_{i-1} + R_{i-1} B_i.
+Float VCMLightPrevSum(const LightVertex &lv, Float oim1, Float h, const VCMWeights &w) {
+    // S_L(i-1) = h g_{i-1} o_{i-1} + R_{i-1} B_i, B_i = Bc_i + h^beta Be_i (h = eta at y_{i-1}).
     const bool gim1 = lv.flags & LightVertex::kPrevMergeable;
-    return (gim1 ? Mis(w.eta * Remap(oim1), w.power) : 0) + Mis(Remap(oim1) / Remap(lv.prevPdfFwd), w.power) * lv.B;
+    return (gim1 ? Mis(h * Remap(oim1), w.power) : 0) +
+           Mis(Remap(oim1) / Remap(lv.prevPdfFwd), w.power) * (lv.B + Mis(h, w.power) * Float(lv.Be));
 }
 
 bool VCMPrevConnectible(const LightVertex &lv) {
     return !(lv.flags & LightVertex::kPrevDelta) && (lv.flags & LightVertex::kPrevEdgeOK);
 }
 
-Float VCMLightSum(const LightVertex &lv, Float oi, Float oim1, const VCMWeights &w) {
-    // S_L(i) = eta g_i o_i + R_i (c_{i-1} + S_L(i-1)).
-    return (w.merging ? Mis(w.eta * Remap(oi), w.power) : 0) +
-           Mis(Remap(oi) / Remap(lv.pdfFwd), w.power) * ((VCMPrevConnectible(lv) ? 1 : 0) + VCMLightPrevSum(lv, oim1, w));
+Float VCMLightSum(const LightVertex &lv, Float oi, Float oim1, Float h, Float sigmaI, const VCMWeights &w) {
+    // S_L(i) = h g_i o_i + R_i (c_{i-1} + S_L(i-1)), eta at y_{i-1} = h sigma(y_i).
+    return (w.merging ? Mis(h * Remap(oi), w.power) : 0) +
+           Mis(Remap(oi) / Remap(lv.pdfFwd), w.power) *
+               ((VCMPrevConnectible(lv) ? 1 : 0) + VCMLightPrevSum(lv, oim1, h * sigmaI, w));
 }
 
-void VCMCameraB(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, int nC, const VCMWeights &w, Float *B) {
+void VCMCameraEta(const VCMWeights &w, const PathVertex *z, const BSDF *zb, int nC, Float *eta) {
+    if (!w.merging || !w.kernel) {
+        std::fill(eta, eta + std::max(nC, 0), Float(0));
+        return;
+    }
+    PathMergeEta(*w.kernel, nC, [&](int j) -> const PathVertex & { return z[j]; },
+                 [&](int j) -> const BSDF * { return z[j].type == VertexType::Surface ? &zb[j] : nullptr; },
+                 [&](int j) { return w.mergeable(z[j], &zb[j]); }, eta);
+}
+
+void VCMCameraB(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, int nC, const VCMWeights &w,
+                const Float *eta, Float *B) {
     // B_0 = 0, B_1 = 0 (t' = 0 is no strategy), B_{m+2} = c_m + eta g_m other(z_m) + R_m B_{m+1}.
     for (int u = 0; u < nC; ++u) {
         if (u < 2) {
@@ -143,13 +164,13 @@ void VCMCameraB(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, in
         const bool cm = (m == 0 ? w.connecting && z[1].pdfFwd != 0 : !z[m].delta()) && !z[m + 1].delta() &&
                         EdgeConnectible(ctx, z[m], z[m + 1]);
         const bool gm = w.merging && m >= 1 && w.mergeable(z[m], &zb[m]);
-        B[u] = (cm ? 1 : 0) + (gm ? Mis(w.eta * Remap(z[m].pdfRev), w.power) : 0) +
+        B[u] = (cm ? 1 : 0) + (gm ? Mis(eta[m] * Remap(z[m].pdfRev), w.power) : 0) +
                Mis(Remap(z[m].pdfRev) / Remap(z[m].pdfFwd), w.power) * B[u - 1];
     }
 }
 
 VCMCameraTerms VCMCameraAt(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, int u, Float Bu,
-                           const VCMWeights &w) {
+                           const Float *eta, const VCMWeights &w) {
     const PathVertex &zu = z[u], &zp = z[u - 1];
     VCMCameraTerms c;
     // c_{u-1}: camera endpoint z_{u-1}, light endpoint z_u. For u = 1 it is light
@@ -161,15 +182,18 @@ VCMCameraTerms VCMCameraAt(const BidirContext &ctx, const PathVertex *z, const B
     c.ownU = Remap(zu.pdfFwd);
     c.ownPrev = Remap(zp.pdfFwd);
     c.B = Bu;
+    c.etaU = eta[u];
+    c.etaPrev = eta[u - 1];
+    c.H = zu.type == VertexType::Surface ? eta[u] * w.sigma(&zb[u]) : 0;
     return c;
 }
 
 Float VCMCameraSum(const VCMCameraTerms &c, Float oz, Float oPrev, bool gu, bool emitter, const VCMWeights &w) {
-    // S_C(u) = eta g_u o_u + R_u (c_{u-1} + eta g_{u-1} o_{u-1} + R_{u-1} B_u).
+    // S_C(u) = eta_u g_u o_u + R_u (c_{u-1} + eta_{u-1} g_{u-1} o_{u-1} + R_{u-1} B_u).
     const Float Ru = Mis(Remap(oz) / c.ownU, w.power), Rp = Mis(Remap(oPrev) / c.ownPrev, w.power);
     const bool cPrev = emitter ? c.cPrevEmitter : c.cPrev;
-    return (gu ? Mis(w.eta * Remap(oz), w.power) : 0) +
-           Ru * ((cPrev ? 1 : 0) + (c.gPrev ? Mis(w.eta * Remap(oPrev), w.power) : 0) + Rp * c.B);
+    return (gu ? Mis(c.etaU * Remap(oz), w.power) : 0) +
+           Ru * ((cPrev ? 1 : 0) + (c.gPrev ? Mis(c.etaPrev * Remap(oPrev), w.power) : 0) + Rp * c.B);
 }
 
 std::vector<ParamInfo> VCMParameters() { return Table().describe(); }
@@ -237,6 +261,34 @@ Float VCMRadius(Float r1, Float alpha, int iteration) {
     return r1 * std::pow(Float(std::max(iteration, 1)), Float(0.5) * (alpha - 1));
 }
 
+MergeKernel VCMKernel(const MergeRadiusSettings &s, Float r1, int iteration, int64_t nLight, const Camera &camera,
+                      bool merging) {
+    MergeKernel k;
+    const Float ri = VCMRadius(r1, s.radiusAlpha, iteration);
+    // eta_VCM = pi r^2 N_light (G-VCM Eq. 12: N p_VM with N light subpaths merged).
+    k.piN = merging ? Pi * Float(nLight) : 0;
+    k.r2 = ri * ri;
+    if (s.adaptiveKernel) {
+        // Sec. 6: r_1 from the path's pixel footprint (unless a radius is given), then the shrink.
+        k.shrink = s.kernelShrink;
+        if (s.radius <= 0) {
+            k.footprint2 = s.radiusScale * s.radiusScale * std::pow(Float(std::max(iteration, 1)), s.radiusAlpha - 1);
+            k.r2Max = 4 * k.r2;  // the grid (built for r_i) answers queries up to 2 r_i
+            k.pixels = Float(camera.fullResolution.x) * Float(camera.fullResolution.y);
+            k.camera = &camera;
+        }
+    }
+    return k;
+}
+
+std::string KernelName(const MergeRadiusSettings &s) {
+    if (!s.adaptiveKernel) return "fixed";
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "adaptive (shrink %g, %s)", s.kernelShrink,
+                  s.radius > 0 ? "r_1 = radius" : "r_1 from each path's footprint, at most 2 r_i");
+    return buf;
+}
+
 Float VCMIntegrator::radiusAt(int iteration) const { return VCMRadius(radius1_, set_.radiusAlpha, iteration); }
 
 void VCMIntegrator::preprocess(const Scene &scene, Film &film) {
@@ -249,6 +301,7 @@ void VCMIntegrator::preprocess(const Scene &scene, Film &film) {
         merging_ = false;
         skipped_ = "no specular or near-specular surface: merging left out (no grid)";
     }
+    if (merging_ && set_.maxDepth > 255) throw Error(loc_, "vcm: maxdepth above 255 is not supported with merging");
     radius1_ = set_.radius > 0 ? set_.radius : VCMFootprintRadius(scene, bounds_, set_.radiusScale);
     GRADUS_CHECK(radius1_ > 0);
 }
@@ -257,9 +310,7 @@ void VCMIntegrator::runPass(PassContext &ctx) {
     scene_ = &ctx.scene();
     const int iteration = ctx.firstSample() + 1;
     radius_ = radiusAt(iteration);
-    const int64_t N = bounds_.area();
-    // eta_VCM = pi r^2 N_light (G-VCM Eq. 12: N p_VM with N light subpaths merged).
-    eta_ = merging_ ? Pi * radius_ * radius_ * Float(N) : 0;
+    kernel_ = VCMKernel(set_, radius1_, iteration, bounds_.area(), *ctx.scene().camera, merging_);
     lightPass(ctx);
     if (ctx.interrupted()) return;
     if (merging_) {
@@ -274,7 +325,7 @@ void VCMIntegrator::runPass(PassContext &ctx) {
 void VCMIntegrator::lightPass(PassContext &ctx) {
     const int64_t N = bounds_.area();
     const int maxLight = set_.maxDepth + 1;
-    const VCMWeights weights{eta_, merging_, connecting_, ctx_.heuristic == MISHeuristic::Power};
+    const VCMWeights weights{merging_ ? &kernel_ : nullptr, merging_, connecting_, ctx_.heuristic == MISHeuristic::Power};
     const int64_t chunks = (N + PassContext::kItemChunk - 1) / PassContext::kItemChunk;
     std::vector<std::vector<LightVertex>> out(static_cast<size_t>(chunks));
     std::vector<uint32_t> count(static_cast<size_t>(N), 0);
@@ -303,7 +354,14 @@ void VCMIntegrator::lightPass(PassContext &ctx) {
             // o_i: camera density of y_i; o_{i-1}: y_i's BSDF from the lens towards y_{i-1}.
             const Float oi = PdfArea(ctx_, lens, nullptr, nullptr, v[i], TransportMode::Radiance);
             const Float oim1 = b[i].pdf(cws.wi, Vec3(v[i].wo), TransportMode::Radiance) * lv.prevGeom;
-            rec.splat(cws.pRaster, L * (splatScale_ / (1 + VCMLightSum(lv, oi, oim1, weights))));
+            // eta at y_i: the footprint of y_i's pixel (the first mergeable vertex from the camera).
+            Float h = 0;
+            if (merging_) {
+                const Vec3 d = v[i].p - lens.p;
+                const Float len = d.length();
+                h = kernel_.firstEta(lens.p, d / len, len, AbsDot(Vec3(v[i].ng), d / len));
+            }
+            rec.splat(cws.pRaster, L * (splatScale_ / (1 + VCMLightSum(lv, oi, oim1, h, weights.sigma(&b[i]), weights))));
         }
     });
     ConcatLightVertices(ctx, out, count, &vertices_, &pathStart_);
@@ -322,20 +380,21 @@ void VCMIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
     AllocSubpath(arena, maxCam, &z, &zb);
     const int nC = GenerateCameraSubpath(ctx_, ray, sampler, arena, maxCam, z, zb);
     const bool power = ctx_.heuristic == MISHeuristic::Power;
-    const Float eta = eta_;
     const Point2i pixel = rec.pixel();
     const int64_t own = int64_t(pixel.y - bounds_.pMin.y) * bounds_.width() + (pixel.x - bounds_.pMin.x);
     uint64_t merges = 0, connections = 0;
     Spectrum L(0);
-    const VCMWeights weights{eta, merging_, connecting_, power};
+    const VCMWeights weights{merging_ ? &kernel_ : nullptr, merging_, connecting_, power};
     Float *Bc = static_cast<Float *>(arena.alloc(sizeof(Float) * maxCam, alignof(Float)));
-    VCMCameraB(ctx_, z, zb, nC, weights, Bc);
+    Float *eta = static_cast<Float *>(arena.alloc(sizeof(Float) * maxCam, alignof(Float)));
+    VCMCameraEta(weights, z, zb, nC, eta);
+    VCMCameraB(ctx_, z, zb, nC, weights, eta, Bc);
     bool specularChain = true;  // z_1 .. z_{u-1} all specular (vm mode)
     for (int u = 1; u < nC; ++u) {
         const PathVertex &zu = z[u], &zp = z[u - 1];
         const BSDF &bu = zb[u];
         const int depthHere = u - 1;  // edges from the camera to z_u, minus 1
-        const VCMCameraTerms terms = VCMCameraAt(ctx_, z, zb, u, Bc[u], weights);
+        const VCMCameraTerms terms = VCMCameraAt(ctx_, z, zb, u, Bc[u], eta, weights);
         auto SC = [&](Float oz, Float oPrev, bool gu, bool emitter = false) {
             return VCMCameraSum(terms, oz, oPrev, gu, emitter, weights);
         };
@@ -398,7 +457,7 @@ void VCMIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
                     // Light side: o_i from z_u, o_{i-1} from y_i's BSDF with z_u as its successor.
                     const Float oi = PdfArea(ctx_, zu, &bu, &zp, y, TransportMode::Radiance);
                     const Float oim1 = by.pdf(-d, Vec3(y.wo), TransportMode::Radiance) * lv.prevGeom;
-                    const Float SL = VCMLightSum(lv, oi, oim1, weights);
+                    const Float SL = VCMLightSum(lv, oi, oim1, terms.H, weights.sigma(&by), weights);
                     // Camera side: other(z_u) from y_i's BSDF, other(z_{u-1}) from z_u's BSDF with y_i as predecessor.
                     const Float oz = ConvertDensity(by.pdf(Vec3(y.wo), -d, TransportMode::Importance), y, zu);
                     const Float oPrev = PdfArea(ctx_, zu, &bu, &y, zp, TransportMode::Importance);
@@ -407,9 +466,10 @@ void VCMIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
             }
         }
         // Merges at z_u with every light vertex within r (Eq. 11).
-        if (merging_ && IsMergeable(zu, &bu)) {
+        if (merging_ && IsMergeable(zu, &bu) && eta[u] > 0) {
             Spectrum Lm(0);
-            grid_.query(zu.p, [&](uint32_t k, Float) {
+            const Float etaU = eta[u];
+            grid_.query(zu.p, std::sqrt(etaU / kernel_.piN), [&](uint32_t k, Float) {
                 const LightVertex &lv = vertices_[k];
                 if (int(lv.depth) + u - 1 > set_.maxDepth) return;
                 const Vec3 wi = lv.wo;  // towards y_{m-1}
@@ -418,18 +478,19 @@ void VCMIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
                 ++merges;
                 Float weight = 1;
                 if (connecting_) {
-                    // w_VM = eta o(z_u) / (c + S_L(m-1) + S_C(u)), o(z_u) = pdfFwd of y_m (vcm.h).
+                    // w_VM = eta_u o(z_u) / (c + S_L(m-1) + S_C(u)), o(z_u) = pdfFwd of y_m (vcm.h);
+                    // eta at y_{m-1} (the junction of S_L) = eta_u sigma(z_u).
                     const Float oz = Remap(lv.pdfFwd);
                     const Float om1 = bu.pdf(Vec3(zu.wo), wi, TransportMode::Radiance) * lv.prevGeom;
-                    const Float SL = VCMLightPrevSum(lv, om1, weights);  // S_L(m-1)
+                    const Float SL = VCMLightPrevSum(lv, om1, terms.H, weights);  // S_L(m-1)
                     const Float cRef = VCMPrevConnectible(lv) ? 1 : 0;  // the connection of y_{m-1} and z_u
                     const Float oPrev = ConvertDensity(bu.pdf(wi, Vec3(zu.wo), TransportMode::Importance), zu, zp);
-                    weight = Mis(eta * oz, power) / (cRef + SL + SC(oz, oPrev, true));
+                    weight = Mis(etaU * oz, power) / (cRef + SL + SC(oz, oPrev, true));
                 }
                 Lm += lv.throughput() * f * weight;
             });
-            // beta_L f beta_C / (pi r^2 N) (Eq. 5 with the uniform disk kernel).
-            L += zu.throughput() * Lm / eta;
+            // beta_L f beta_C / (pi r_u^2 N) (Eq. 5 with the uniform disk kernel).
+            L += zu.throughput() * Lm / etaU;
             if (!connecting_) break;  // vm: merge at the first non-specular vertex only
         }
         specularChain = specularChain && zu.delta();
@@ -442,9 +503,9 @@ void VCMIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
 std::string VCMIntegrator::statistics() const {
     char buf[512];
     std::snprintf(buf, sizeof buf,
-                  "vcm: mode %s, initial radius %.4g (last %.4g), %d iterations, %.3g light vertices per iteration "
+                  "vcm: mode %s, kernel %s, initial radius %.4g (last %.4g), %d iterations, %.3g light vertices per iteration "
                   "(%zu bytes each, grid %.1f MB), %llu merges, %llu connections%s%s",
-                  set_.mode == VCMMode::VCM ? "vcm" : set_.mode == VCMMode::VC ? "vc" : "vm", radius1_, radius_,
+                  set_.mode == VCMMode::VCM ? "vcm" : set_.mode == VCMMode::VC ? "vc" : "vm", KernelName(set_).c_str(), radius1_, radius_,
                   passes_, passes_ ? double(nLightVertices_) / passes_ : 0.0, sizeof(LightVertex),
                   grid_.bytes() / 1e6, (unsigned long long)nMerges_.load(), (unsigned long long)nConnections_.load(),
                   skipped_.empty() ? "" : "; ", skipped_.c_str());

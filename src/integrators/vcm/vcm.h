@@ -38,13 +38,26 @@
 // ratio and merge term is squared. This is the role of Georgiev's dVCM, dVC,
 // dVM, written with the area densities (pdfFwd/pdfRev) the rest of the
 // bidirectional code stores.
+// A kernel that varies along the path (G-VCM Sec. 6, merge_kernel.h) makes
+// eta a per-vertex eta_j, in camera order eta_{j} = eta_{j+1} sigma(v_{j+1})
+// on the light side: the camera subpath knows its own eta_u; a light vertex's
+// depend on the camera-side radius at the junction. So the light side keeps
+// B in two parts, B_i = Bc_i + h^beta Be_i with h = eta at y_{i-1}:
+//   Bc_{i+1} = c_{i-1} + R_{i-1} Bc_i,
+//   Be_{i+1} = sigma_i^beta (g_{i-1} o_{i-1}^beta + R_{i-1} Be_i)   (eta at y_{i-1} = h_i sigma_i),
+// and S_L(i) of a connection takes h = eta at y_i = eta_u sigma(z_u) of the
+// camera endpoint z_u (a merge at z_u: eta at y_{m-1} = eta_u sigma(z_u); light
+// tracing: the footprint eta at y_i). With one radius (sigma = 1) this is the
+// recursion above.
 //
 // Radius: r_1 = `radius` (scene units) or, if 0, `radiusscale` times the
 // median pixel footprint at the primary hits (the G-VCM paper's Sec. 6,
 // "about one pixel"); iteration i (1-based, the global sample index + 1, so
 // partial renders merge exactly) uses r_i^2 = r_1^2 i^(alpha - 1) (alpha =
 // `radiusalpha`; Knaus and Zwicker's schedule, as in Georgiev's reference code;
-// pbrt-v3's SPPM shrinks per pixel instead).
+// pbrt-v3's SPPM shrinks per pixel instead). `kernel adaptive` (default)
+// replaces r_1 by the path's own pixel footprint at its first mergeable
+// camera vertex (clamped to 2 r_i) and shrinks it per vertex (merge_kernel.h).
 // Merging is left out (the grid is not built, statistics say so) in mode vcm
 // when the scene has no specular or near-specular surface: without specular
 // chains merging adds no path that connections cannot sample.
@@ -62,6 +75,8 @@
 //   float radius 0                  initial merging radius in scene units (0: from the pixel footprint)
 //   float radiusscale 1             the footprint radius in pixels (radius 0)
 //   float radiusalpha 0.75          radius reduction r_i^2 = r_1^2 i^(alpha - 1)
+//   string kernel "adaptive"        fixed (r_i at every vertex) | adaptive (G-VCM Sec. 6: footprint r_1 per path, shrunk per vertex)
+//   float kernelshrink 10           adaptive: r_j = 0.5^(kernelshrink tau) r_{j-1} (tau: roughness at the previous vertex)
 //   integer numiterations 0         iterations (samples per pixel) unless --spp is given; 0: the sampler's (pbrt-v3 sppm)
 //   integer photonsperiteration -1  pbrt-v3 sppm: light subpaths per iteration; only -1 (one per sampled pixel)
 //   integer imagewritefrequency 0   pbrt-v3 sppm: accepted; intermediate images are not written
@@ -71,6 +86,7 @@
 #include <vector>
 
 #include "integrators/common/bidir_family.h"
+#include "integrators/common/merge_kernel.h"
 #include "integrators/common/photon_grid.h"
 #include "integrators/integrator.h"
 
@@ -81,8 +97,17 @@ enum class VCMMode { VCM, VC, VM };
 // The merging radius of vcm and gvcm (set by MergeRadiusParams).
 struct MergeRadiusSettings {
     Float radius, radiusScale, radiusAlpha;
+    bool adaptiveKernel;  // G-VCM Sec. 6 (merge_kernel.h)
+    Float kernelShrink;
 };
 ParamTable<MergeRadiusSettings> MergeRadiusParams();
+// The kernel of 1-based iteration i: r_i (VCMRadius) from the median footprint
+// radius r1; adaptive: footprint radius per path (unless `radius` is given),
+// clamped to 2 r_i, and the shrink. The photon grid is built for r_i.
+// The kernel's description for statistics.
+std::string KernelName(const MergeRadiusSettings &s);
+MergeKernel VCMKernel(const MergeRadiusSettings &s, Float r1, int iteration, int64_t nLight, const Camera &camera,
+                      bool merging);
 
 struct VCMSettings : BidirSettings, MergeRadiusSettings {
     VCMMode mode;
@@ -99,8 +124,9 @@ struct LightVertex {
     double pdfFwd;          // own(y_i)
     double prevPdfFwd;      // own(y_{i-1})
     double prevGeom;        // solid angle at y_i -> area at y_{i-1} (|cos| / d^2; 1 for an infinite light)
-    double B;               // B_i = c_{i-2} + S_L(i-2) (vcm.h), with the heuristic's exponent
-    uint16_t depth;         // i (edges from the light)
+    double B;               // B_i = B + eta(y_{i-1})^beta Be (above), with the heuristic's exponent
+    float Be;
+    uint8_t depth;          // i (edges from the light; maxdepth <= 255 with merging)
     uint8_t flags;          // kPrev* below
     int16_t betaExp;        // beta's power-of-two exponent (PackThroughput, path_vertex.h)
     static constexpr uint8_t kPrevDelta = 1, kPrevMergeable = 2, kPrevEdgeOK = 4;
@@ -109,35 +135,42 @@ struct LightVertex {
 
 // The recursive MIS quantities of the derivation above (exposed for tests/vcm).
 struct VCMWeights {
-    Float eta;        // eta_VCM = pi r^2 N (0 without merging)
+    const MergeKernel *kernel;  // eta_VCM = pi r^2 N per vertex (merge_kernel.h); null without merging
     bool merging;     // merges are strategies
     bool connecting;  // connections (and light tracing) are strategies
     bool power;       // power heuristic (exponent 2)
     bool roughOnly = false;  // merges only at vertices not marked VERTEX_DELTA (G-VCM, StrategySet::mergeRoughOnly)
     bool mergeable(const PathVertex &v, const BSDF *b) const { return IsMergeable(v, b) && !(roughOnly && v.delta()); }
+    Float sigma(const BSDF *b) const { return kernel ? kernel->sigma(b) : Float(1); }
 };
 // Appends the stored vertices y_i (i >= 1, non-specular BSDF) of a light subpath
 // with their B_i to *out; returns how many.
 int VCMLightVertices(const BidirContext &ctx, const PathVertex *v, const BSDF *b, int n, const VCMWeights &w,
                      std::vector<LightVertex> *out);
 // S_L(i-1) for light vertex y_i given o_{i-1} (density of y_{i-1} from y_i
-// towards it), and whether the connection of y_{i-1} and y_i is a strategy (c_{i-1}).
-Float VCMLightPrevSum(const LightVertex &lv, Float oim1, const VCMWeights &w);
+// towards it) and h = eta at y_{i-1}, and whether the connection of y_{i-1}
+// and y_i is a strategy (c_{i-1}).
+Float VCMLightPrevSum(const LightVertex &lv, Float oim1, Float h, const VCMWeights &w);
 bool VCMPrevConnectible(const LightVertex &lv);
 // S_L(i) of a connection ending at light vertex y_i, given o_i (density of y_i
-// from the camera side) and o_{i-1}.
-Float VCMLightSum(const LightVertex &lv, Float oi, Float oim1, const VCMWeights &w);
-// B_u of the camera subpath z[0..nC).
-void VCMCameraB(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, int nC, const VCMWeights &w, Float *B);
+// from the camera side), o_{i-1}, h = eta at y_i and sigma(y_i).
+Float VCMLightSum(const LightVertex &lv, Float oi, Float oim1, Float h, Float sigmaI, const VCMWeights &w);
+// eta at each vertex of the camera subpath z[0..nC) (merge_kernel.h; all 0 without merging).
+void VCMCameraEta(const VCMWeights &w, const PathVertex *z, const BSDF *zb, int nC, Float *eta);
+// B_u of the camera subpath z[0..nC) with its eta.
+void VCMCameraB(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, int nC, const VCMWeights &w,
+                const Float *eta, Float *B);
 // What S_C(u) needs of camera vertex z_u besides the connection (once per vertex).
 struct VCMCameraTerms {
     bool cPrev, cPrevEmitter;  // c_{u-1} for a connection / merge at z_u, and with z_u as the light origin
     bool gPrev;                // merging at z_{u-1} is a strategy
     Float ownU, ownPrev;       // own(z_u), own(z_{u-1}) (deltas as 1)
     Float B;                   // B_u
+    Float etaU = 0, etaPrev = 0;  // eta at z_u, z_{u-1}
+    Float H = 0;               // eta of the next vertex after z_u: the light side's junction, eta_u sigma(z_u)
 };
 VCMCameraTerms VCMCameraAt(const BidirContext &ctx, const PathVertex *z, const BSDF *zb, int u, Float Bu,
-                           const VCMWeights &w);
+                           const Float *eta, const VCMWeights &w);
 // S_C(u) given o_u (density of z_u from the light side) and o_{u-1}; gu: merging
 // at z_u is a strategy; emitter: z_u is the light origin (s = 0).
 Float VCMCameraSum(const VCMCameraTerms &c, Float oz, Float oPrev, bool gu, bool emitter, const VCMWeights &w);
@@ -175,7 +208,8 @@ class VCMIntegrator : public PixelSampleIntegrator, public BidirFamily {
     VCMSettings set_;
     FileLoc loc_;
     bool merging_ = false, connecting_ = true;
-    Float radius1_ = 0, radius_ = 0, eta_ = 0;
+    Float radius1_ = 0, radius_ = 0;
+    MergeKernel kernel_;
     Bounds2i bounds_;
     std::vector<LightVertex> vertices_;
     std::vector<uint32_t> pathStart_;  // light subpath j: vertices_[pathStart_[j], pathStart_[j+1])

@@ -142,7 +142,7 @@ void CheckRecursiveWeights(MISHeuristic h) {
                 Float hy = 0;
                 if (set.merging) {
                     const Vec3 d = yv.p - lens.p;
-                    hy = k.firstEta(lens.p, Normalize(d), d.length(), AbsDot(Vec3(yv.ng), Normalize(d)));
+                    hy = k.firstEta(lens.p, Normalize(d), d.length());
                 }
                 const Float rec = 1 / (1 + VCMLightSum(y, oi, oim1, hy, w.sigma(&lb[s - 1]), w));
                 EXPECT_NEAR(rec, ref, 1e-6 * (1 + ref)) << "s=" << s << " t=1 " << kc.name;
@@ -193,8 +193,8 @@ TEST(VCMWeights, RecursiveEqualsReferenceBalance) { CheckRecursiveWeights(MISHeu
 TEST(VCMWeights, RecursiveEqualsReferencePower) { CheckRecursiveWeights(MISHeuristic::Power); }
 
 // The footprint radius of G-VCM Sec. 6 by hand: the centre pixel of a pinhole
-// camera (fov 40 degrees, 16 x 16 pixels) seen on the wall 4.5 units ahead,
-// head-on, covers (4.5 * 2 tan(20 deg) / 16)^2; behind a first vertex the
+// camera (fov 40 degrees, 16 x 16 pixels) is 4.5 * 2 tan(20 deg) / 16 wide on
+// the wall 4.5 units ahead; behind a first vertex the
 // radius shrinks by 0.5^(s tau) per vertex (tau = 1 on the matte wall).
 TEST(MergeKernel, FootprintAndShrinkByHand) {
     using namespace bdpt_test;
@@ -234,11 +234,23 @@ TEST(MergeKernel, FootprintAndShrinkByHand) {
     const Float side = 4.5 * 2 * std::tan(20 * Pi / 180) / 16;
     EXPECT_NEAR(eta[1], 2 * 0.25 * side * side, 1e-9 * eta[1]);
     EXPECT_NEAR(eta[2], eta[1] * std::pow(0.25, 3.0), 1e-12 * eta[1]);
+    // Off axis (pixel column 2): the pixel's solid angle shrinks by cos^3 of the angle to the view axis.
+    cs.pFilm = Point2(2, 8);
+    Ray ray2;
+    camera.generateRay(cs, &ray2);
+    const int n2 = GenerateCameraSubpath(ctx, ray2, *sampler, arena, 4, cv.data(), cb.data());
+    ASSERT_GE(n2, 2);
+    std::vector<Float> eta2(n2);
+    VCMCameraEta(w, cv.data(), cb.data(), n2, eta2.data());
+    const Float l = Distance(cv[1].p, ray2.o), cosT = Dot(Normalize(ray2.d), Vec3(0, 0, -1));
+    const Float w0 = 2 * std::tan(20 * Pi / 180) / 16;
+    EXPECT_LT(cosT, 0.99);
+    EXPECT_NEAR(eta2[1], 2 * 0.25 * l * l * w0 * w0 * cosT * cosT * cosT, 1e-9 * eta2[1]);
     // Clamped to r2Max, and the fixed radius through the filter margin (no camera density).
     k.r2Max = 1e-4;
-    VCMCameraEta(w, cv.data(), cb.data(), n, eta.data());
-    EXPECT_DOUBLE_EQ(eta[1], 2 * 1e-4);
-    EXPECT_DOUBLE_EQ(k.firstEta(ray.o, Normalize(Vec3(0, -1, -1e-3)), 1, 1), 2 * 1e-9);
+    VCMCameraEta(w, cv.data(), cb.data(), n2, eta2.data());
+    EXPECT_DOUBLE_EQ(eta2[1], 2 * 1e-4);
+    EXPECT_DOUBLE_EQ(k.firstEta(ray.o, Normalize(Vec3(0, -1, -1e-3)), 1), 2 * 1e-9);
 }
 
 // Modes vc (= BDPT) and vm (progressive photon mapping) and the power

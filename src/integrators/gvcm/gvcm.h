@@ -10,9 +10,10 @@
 //      and a hash grid built over them;
 //   2. camera pass (lines 9-25): G-BDPT's sample (base camera subpath, its
 //      four shifts, connections with their light-tracing shifts) with VCM's
-//      MIS sums (merging terms at connectable vertices, eta = pi r^2 N), then
+//      MIS sums (merging terms at connectable vertices, eta = pi r^2 N per
+//      vertex, merge_kernel.h), then
 //      merges at every connectable camera vertex z_u with each light vertex
-//      y_m within r (Eq. 5; the base weight is VCM's, Eq. 13) and their
+//      y_m within r_u (Eq. 5; the base weight is VCM's, Eq. 13) and their
 //      offsets per neighbour:
 //        case 1 (Sec. 4, u >= c, the shift's reconnection vertex): the offset
 //          shares z_u, the kernel and the light vertex; Eqs. 16-17 with the
@@ -38,13 +39,20 @@
 // emission through specular chains, every weight 1 (the unused strategies'
 // densities are 0), gradients with CombinedWeight(1, 1, rho).
 //
-// Radius: r_1 = `radius` or `radiusscale` times the median pixel footprint
-// (vcm.h), r_i^2 = r_1^2 i^(alpha - 1) for the global iteration i.
+// Radius (Sec. 6; merge_kernel.h): `kernel adaptive` (default) takes each
+// path's pixel footprint at its first connectable camera vertex z_b times
+// `radiusscale` (unless `radius` is given), at most 2 r_i, and shrinks it by
+// 0.5^(10 tau) per vertex after z_b; `kernel fixed` uses r_i at every vertex.
+// r_i = `radius` or `radiusscale` times the median pixel footprint (vcm.h),
+// r_i^2 = r_1^2 i^(alpha - 1) for the global iteration i. An offset's estimate
+// keeps the base's kernel (the one that found the photon); its weight takes
+// the offset path's own radii (what its own pixel would have used, Eq. 22).
 // Without specular or near-specular surfaces no merging is done (gvcm is then
 // gbdpt; the statistics say so).
 //
-// Limitations (see statistics): the per-vertex adaptive radius of Sec. 6 is
-// not used (one radius per iteration, as vcm); case 2 falls back (zero
+// Limitations (see statistics): the footprint follows the chain's unfolded
+// length (a ray differential without the specular vertices' curvature);
+// case 2 falls back (zero
 // offset, base weight) for photons whose chain starts at an infinite light,
 // contains a glossy (near-specular, non-Dirac) vertex, or whose offset target
 // z'_b lies on another surface than the photon (the walk keeps its end on one
@@ -71,6 +79,8 @@
 //   float radius 0                   initial merging radius in scene units (0: from the pixel footprint)
 //   float radiusscale 1              the footprint radius in pixels (radius 0)
 //   float radiusalpha 0.75           radius reduction r_i^2 = r_1^2 i^(alpha - 1)
+//   string kernel "adaptive"         fixed | adaptive (Sec. 6, above)
+//   float kernelshrink 10            adaptive: r_j = 0.5^(kernelshrink tau) r_{j-1}
 #pragma once
 #include <atomic>
 #include <string>

@@ -359,7 +359,7 @@ void VCMIntegrator::lightPass(PassContext &ctx) {
             if (merging_) {
                 const Vec3 d = v[i].p - lens.p;
                 const Float len = d.length();
-                h = kernel_.firstEta(lens.p, d / len, len, AbsDot(Vec3(v[i].ng), d / len));
+                h = kernel_.firstEta(lens.p, d / len, len);
             }
             rec.splat(cws.pRaster, L * (splatScale_ / (1 + VCMLightSum(lv, oi, oim1, h, weights.sigma(&b[i]), weights))));
         }

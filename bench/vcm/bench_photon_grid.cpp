@@ -18,7 +18,7 @@
 #include "integrators/vcm/vcm.h"
 #include "lights/light_sampler.h"
 #include "parser/scene_desc.h"
-#include "render/builder.h"
+#include "render/scene_builder.h"
 #include "samplers/rng_sampler.h"
 
 using namespace gradus;
@@ -148,7 +148,10 @@ void GridQuery(benchmark::State &st, const std::string &file) {
     PhotonGrid g;
     g.build(d.points.size(), [&](size_t i) { return d.points[i]; }, d.radius, Serial());
     size_t found = 0;
-    for (auto _ : st) found = GridCount(g, d.queries);
+    for (auto _ : st) {
+        found = GridCount(g, d.queries);
+        benchmark::DoNotOptimize(found);
+    }
     Report(st, d, found);
     st.SetItemsProcessed(int64_t(st.iterations() * d.queries.size()));
 }
@@ -170,7 +173,10 @@ void KdQuery(benchmark::State &st, const std::string &file) {
     KdTree t(3, c, nanoflann::KDTreeSingleIndexAdaptorParams(int(st.range(0))));
     t.buildIndex();
     size_t found = 0;
-    for (auto _ : st) found = KdCount(t, d.queries, d.radius * d.radius);
+    for (auto _ : st) {
+        found = KdCount(t, d.queries, d.radius * d.radius);
+        benchmark::DoNotOptimize(found);
+    }
     Report(st, d, found);
     PhotonGrid g;
     g.build(d.points.size(), [&](size_t i) { return d.points[i]; }, d.radius, Serial());

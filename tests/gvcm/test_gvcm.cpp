@@ -4,9 +4,9 @@
 // specular-diffuse-specular paths seen through the glass; a mirror sphere).
 // The radius is fixed in scene units (0.02, about a sixth of a pixel's footprint)
 // so that the kernel's blur, which case-2 offsets do not share, stays below
-// the noise; a third test takes the adaptive kernel's own per-path footprint
-// radius (radiusscale 1/6; G-VCM Sec. 6), where offsets weigh with their own
-// radii (both runs use the default adaptive kernel's shrink). Gradients: z = (dx(p) - (P(p+1) - P(p))) / sqrt(var) on disjoint
+// the noise; a third test takes G-VCM Sec. 6's kernel (per-path footprint
+// radius, radiusscale 1/6, shrunk per vertex), where offsets weigh with
+// their own radii. Gradients: z = (dx(p) - (P(p+1) - P(p))) / sqrt(var) on disjoint
 // pixel pairs (gbdpt_test_util.h); S = mean z^2 < 1.8 and |Z| < 4.5 (Gaussian
 // false-positive rates < 1e-9 and 7e-6; fixed seeds). L2 and primal means vs
 // the reference: |z| < 4.5. Power: the same statistics reject gvcm's
@@ -26,7 +26,7 @@ namespace {
 
 const char *const kRadius = " \"float radius\" [0.02]";
 
-const char *const kFootprint = " \"float radiusscale\" [0.1667]";
+const char *const kFootprint = " \"float radiusscale\" [0.1667] \"string footprint\" \"path\" \"string kernel\" \"adaptive\"";
 
 test::MeanOfRuns Reference(const std::string &mode, int runs, int spp, const char *radius = kRadius) {
     return test::AverageRuns(runs, [&](int k) {

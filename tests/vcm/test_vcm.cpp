@@ -186,11 +186,38 @@ void CheckRecursiveWeights(MISHeuristic h) {
         EXPECT_GE(checked, 1000) << kc.name;
         EXPECT_GE(lightTraced, 300) << kc.name;
         EXPECT_GE(withSpecular, 30) << "connections with a specular interior vertex, " << kc.name;
-        if (adaptive && kc.shrink > 0) EXPECT_GE(shrunk, 300) << "camera vertices with a shrunk radius, " << kc.name;
+        if (adaptive && kc.shrink > 0) {
+            EXPECT_GE(shrunk, 300) << "camera vertices with a shrunk radius, " << kc.name;
+        }
     }
 }
 TEST(VCMWeights, RecursiveEqualsReferenceBalance) { CheckRecursiveWeights(MISHeuristic::Balance); }
 TEST(VCMWeights, RecursiveEqualsReferencePower) { CheckRecursiveWeights(MISHeuristic::Power); }
+
+// Settings that another choice would silently ignore are located errors.
+TEST(MergeKernel, IgnoredSettingsAreLocatedErrors) {
+    using namespace bdpt_test;
+    for (const char *bad : {"\"float kernelshrink\" [3]", "\"float radius\" [0.1] \"string footprint\" \"path\""})
+        for (const char *integrator : {"vcm", "gvcm"}) {
+            std::string text = BoxScene(integrator, CeilingLight(0.3, 10), "");
+            const size_t eol = text.find('\n');
+            text.insert(eol, std::string(" ") + bad);
+            BuildOptions bo;
+            bo.quiet = true;
+            try {
+                BuildRenderJob(ParseString(text), bo);
+                ADD_FAILURE() << integrator << " accepted " << bad;
+            } catch (const Error &e) {
+                EXPECT_NE(std::string(e.what()).find("<string>:1:"), std::string::npos) << e.what();
+            }
+        }
+    // The same settings where they take effect are accepted.
+    BuildOptions bo;
+    bo.quiet = true;
+    std::string text = BoxScene("vcm", CeilingLight(0.3, 10), "");
+    text.insert(text.find('\n'), " \"string kernel\" \"adaptive\" \"float kernelshrink\" [3] \"string footprint\" \"path\"");
+    EXPECT_NO_THROW(BuildRenderJob(ParseString(text), bo));
+}
 
 // The footprint radius of G-VCM Sec. 6 by hand: the centre pixel of a pinhole
 // camera (fov 40 degrees, 16 x 16 pixels) is 4.5 * 2 tan(20 deg) / 16 wide on

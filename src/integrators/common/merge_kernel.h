@@ -1,12 +1,10 @@
 // The merging kernel of vertex merging (vcm, gvcm): its radius at each vertex
 // of a path, as eta_j = pi r_j^2 N_light (VCM's eta_VCM per vertex).
 //
-// fixed:    r_j = r_i (one radius per iteration i) at every vertex.
-// adaptive: the G-VCM paper's Sec. 6. With the path in camera order
-//           x_0 (lens), x_1, ... and x_b its first mergeable vertex,
-//             r_b^2 = min(k_i F_b^2, r_max^2)   (the pixel's width at x_b),
-//             r_j   = 0.5^(s tau(x_{j-1})) r_{j-1}   for j > b  (s = `shrink`, 10 in the paper),
-//           tau the BSDF's roughness (0 specular, 1 diffuse; BSDF::roughness).
+// Without options: r_j = r_i (one radius per iteration i) at every vertex.
+// The G-VCM paper's Sec. 6, in two independent parts. With the path in camera
+// order x_0 (lens), x_1, ... and x_b its first mergeable vertex:
+//   footprint: r_b^2 = min(k_i F_b^2, r_max^2)   (the pixel's width at x_b);
 //           F_b^2 = l^2 Omega(w_0): Omega(w_0) = 1 / (p_dir(w_0) N_pixels) the
 //           pixel's solid angle in the first direction, l the length of the
 //           chain x_0 .. x_b unfolded (the ray differential of the chain
@@ -15,9 +13,11 @@
 //           longest axis whatever the angle at x_b ("about the pixel filter
 //           size", Sec. 6); an area match (F^2 / cos) would stretch it at
 //           grazing angles (measured: 1.5x the merges on glass-cube with G-PM).
-//           k_i = radiusscale^2 times the
-//           iteration's shrink i^(alpha - 1). A ray through the filter margin
-//           (p_dir 0) takes the iteration's fixed radius.
+//           k_i = radiusscale^2 times the iteration's shrink i^(alpha - 1). A
+//           ray through the filter margin (p_dir 0) takes the iteration's r_i.
+//   shrink: r_j = 0.5^(s tau(x_{j-1})) r_{j-1} for j > b (s = `shrink`, 10 in
+//           the paper), tau the BSDF's roughness (0 specular, 1 diffuse;
+//           BSDF::roughness: a mixture's smallest lobe roughness).
 // A path's radii depend on the path alone (not on which strategy sampled it),
 // as its MIS sums require: camera subpaths compute them from their own
 // vertices, the light side of a connection or merge from the camera-side
@@ -44,7 +44,7 @@ struct MergeKernel {
     Float sigma(const BSDF *b) const {
         if (shrink <= 0 || !b || !*b) return 1;
         const Float tau = b->roughness();
-        return tau > 0 ? std::pow(Float(0.25), shrink * tau) : Float(1);
+        return tau > 0 ? std::exp2(-2 * shrink * tau) : Float(1);  // 0.25^(s tau)
     }
     // eta at the first mergeable vertex x_b: lens point, first direction (unit),
     // unfolded length l of x_0 .. x_b.

@@ -51,6 +51,7 @@ GVCMIntegrator::GVCMIntegrator(const EntityDesc &desc) : GVCMIntegrator(desc, Ta
 GVCMIntegrator::GVCMIntegrator(const EntityDesc &desc, const GVCMSettings &set)
     : GBDPTIntegrator(desc, set), gset_(set) {
     connections_ = !gset_.mergeOnly;
+    CheckMergeRadiusParams(desc, gset_);
 }
 
 void GVCMIntegrator::preprocess(const Scene &scene, Film &film) {

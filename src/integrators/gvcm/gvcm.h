@@ -39,12 +39,12 @@
 // emission through specular chains, every weight 1 (the unused strategies'
 // densities are 0), gradients with CombinedWeight(1, 1, rho).
 //
-// Radius (Sec. 6; merge_kernel.h): `kernel adaptive` (default) takes each
-// path's pixel footprint at its first connectable camera vertex z_b times
-// `radiusscale` (unless `radius` is given), at most 2 r_i, and shrinks it by
-// 0.5^(10 tau) per vertex after z_b; `kernel fixed` uses r_i at every vertex.
-// r_i = `radius` or `radiusscale` times the median pixel footprint (vcm.h),
-// r_i^2 = r_1^2 i^(alpha - 1) for the global iteration i. An offset's estimate
+// Radius: r_i = `radius` or `radiusscale` times the median pixel footprint
+// (vcm.h), r_i^2 = r_1^2 i^(alpha - 1) for the global iteration i. Sec. 6 as
+// options (merge_kernel.h; off by default, as measured in bench/gvcm):
+// `footprint path` takes each path's pixel width at its first connectable
+// camera vertex z_b times `radiusscale` (at most 2 r_i), `kernel adaptive`
+// shrinks the radius by 0.5^(10 tau) per vertex after z_b. An offset's estimate
 // keeps the base's kernel (the one that found the photon); its weight takes
 // the offset path's own radii (what its own pixel would have used, Eq. 22).
 // Without specular or near-specular surfaces no merging is done (gvcm is then
@@ -79,8 +79,9 @@
 //   float radius 0                   initial merging radius in scene units (0: from the pixel footprint)
 //   float radiusscale 1              the footprint radius in pixels (radius 0)
 //   float radiusalpha 0.75           radius reduction r_i^2 = r_1^2 i^(alpha - 1)
-//   string kernel "adaptive"         fixed | adaptive (Sec. 6, above)
+//   string kernel "fixed"            fixed | adaptive (Sec. 6, above)
 //   float kernelshrink 10            adaptive: r_j = 0.5^(kernelshrink tau) r_{j-1}
+//   string footprint "median"        median | path (Sec. 6, above)
 #pragma once
 #include <atomic>
 #include <string>

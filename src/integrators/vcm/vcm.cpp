@@ -27,10 +27,13 @@ ParamTable<MergeRadiusSettings> MergeRadiusParams() {
     t.real("radius", &S::radius, 0, "initial merging radius in scene units (0: from the pixel footprint)", AtLeast(0));
     t.real("radiusscale", &S::radiusScale, 1, "the footprint radius in pixels (radius 0)", Range{1e-3, 1e3});
     t.real("radiusalpha", &S::radiusAlpha, 0.75, "radius reduction r_i^2 = r_1^2 i^(alpha - 1)", Range{1e-3, 1});
-    t.enumeration<bool>("kernel", &S::adaptiveKernel, "adaptive", {{"fixed", false}, {"adaptive", true}},
-                        "fixed (r_i at every vertex) | adaptive (G-VCM Sec. 6: footprint r_1 per path, shrunk per vertex)");
+    t.enumeration<bool>("kernel", &S::adaptiveKernel, "fixed", {{"fixed", false}, {"adaptive", true}},
+                        "fixed (r_1 at every vertex) | adaptive (G-VCM Sec. 6: r_j = 0.5^(kernelshrink tau) r_{j-1})");
     t.real("kernelshrink", &S::kernelShrink, 10,
            "adaptive: r_j = 0.5^(kernelshrink tau) r_{j-1} (tau: roughness at the previous vertex)", Range{0, 100});
+    t.enumeration<bool>("footprint", &S::pathFootprint, "median", {{"median", false}, {"path", true}},
+                        "radius 0: r_1 from the median pixel footprint of the primary hits | from each path's "
+                        "pixel width at its first mergeable vertex (G-VCM Sec. 6), at most 2 r_i");
     return t;
 }
 
@@ -202,6 +205,16 @@ VCMIntegrator::VCMIntegrator(const EntityDesc &desc) : BidirFamily("vcm", 1), se
     if (set_.visStrategies || set_.visWeights)
         throw Error(desc.params.locOf(set_.visStrategies ? "visualizestrategies" : "visualizeweights", desc.loc),
                     "strategy layers are not supported by vcm");
+    CheckMergeRadiusParams(desc, set_);
+}
+
+void CheckMergeRadiusParams(const EntityDesc &desc, const MergeRadiusSettings &s) {
+    // A setting that the other choices would silently ignore is an error (a
+    // default value changes nothing and passes).
+    if (!s.adaptiveKernel && desc.params.has("kernelshrink") && s.kernelShrink != 10)
+        throw Error(desc.params.locOf("kernelshrink", desc.loc), "\"kernelshrink\" needs \"kernel\" \"adaptive\"");
+    if (s.pathFootprint && s.radius > 0)
+        throw Error(desc.params.locOf("footprint", desc.loc), "\"footprint\" \"path\" needs \"radius\" 0");
 }
 
 Float VCMFootprintRadius(const Scene &scene, const Bounds2i &bounds, Float scale) {
@@ -268,25 +281,24 @@ MergeKernel VCMKernel(const MergeRadiusSettings &s, Float r1, int iteration, int
     // eta_VCM = pi r^2 N_light (G-VCM Eq. 12: N p_VM with N light subpaths merged).
     k.piN = merging ? Pi * Float(nLight) : 0;
     k.r2 = ri * ri;
-    if (s.adaptiveKernel) {
-        // Sec. 6: r_1 from the path's pixel footprint (unless a radius is given), then the shrink.
-        k.shrink = s.kernelShrink;
-        if (s.radius <= 0) {
-            k.footprint2 = s.radiusScale * s.radiusScale * std::pow(Float(std::max(iteration, 1)), s.radiusAlpha - 1);
-            k.r2Max = 4 * k.r2;  // the grid (built for r_i) answers queries up to 2 r_i
-            k.pixels = Float(camera.fullResolution.x) * Float(camera.fullResolution.y);
-            k.camera = &camera;
-        }
+    // Sec. 6: the shrink along the camera subpath, and r_1 from the path's pixel footprint.
+    if (s.adaptiveKernel) k.shrink = s.kernelShrink;
+    if (s.pathFootprint && s.radius <= 0) {
+        k.footprint2 = s.radiusScale * s.radiusScale * std::pow(Float(std::max(iteration, 1)), s.radiusAlpha - 1);
+        k.r2Max = 4 * k.r2;  // the grid (built for r_i) answers queries up to 2 r_i
+        k.pixels = Float(camera.fullResolution.x) * Float(camera.fullResolution.y);
+        k.camera = &camera;
     }
     return k;
 }
 
 std::string KernelName(const MergeRadiusSettings &s) {
-    if (!s.adaptiveKernel) return "fixed";
-    char buf[96];
-    std::snprintf(buf, sizeof buf, "adaptive (shrink %g, %s)", s.kernelShrink,
-                  s.radius > 0 ? "r_1 = radius" : "r_1 from each path's footprint, at most 2 r_i");
-    return buf;
+    char shrink[48] = "fixed";
+    if (s.adaptiveKernel) std::snprintf(shrink, sizeof shrink, "adaptive (shrink %g)", s.kernelShrink);
+    const char *r1 = s.radius > 0       ? "r_1 = radius"
+                     : s.pathFootprint ? "r_1 from each path's footprint (at most 2 r_i)"
+                                       : "r_1 from the median footprint";
+    return std::string(shrink) + ", " + r1;
 }
 
 Float VCMIntegrator::radiusAt(int iteration) const { return VCMRadius(radius1_, set_.radiusAlpha, iteration); }

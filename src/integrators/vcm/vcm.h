@@ -55,9 +55,12 @@
 // "about one pixel"); iteration i (1-based, the global sample index + 1, so
 // partial renders merge exactly) uses r_i^2 = r_1^2 i^(alpha - 1) (alpha =
 // `radiusalpha`; Knaus and Zwicker's schedule, as in Georgiev's reference code;
-// pbrt-v3's SPPM shrinks per pixel instead). `kernel adaptive` (default)
-// replaces r_1 by the path's own pixel footprint at its first mergeable
-// camera vertex (clamped to 2 r_i) and shrinks it per vertex (merge_kernel.h).
+// pbrt-v3's SPPM shrinks per pixel instead). The G-VCM paper's Sec. 6
+// (merge_kernel.h) as options: `kernel adaptive` shrinks the radius per vertex
+// along the camera subpath, `footprint path` replaces r_1 by the path's own
+// pixel width at its first mergeable camera vertex (at most 2 r_i). Both off
+// by default: on the three SDS benchmark scenes neither lowers relMSE at equal
+// time (bench/gvcm/RESULTS.md, "Merging kernel").
 // Merging is left out (the grid is not built, statistics say so) in mode vcm
 // when the scene has no specular or near-specular surface: without specular
 // chains merging adds no path that connections cannot sample.
@@ -75,8 +78,9 @@
 //   float radius 0                  initial merging radius in scene units (0: from the pixel footprint)
 //   float radiusscale 1             the footprint radius in pixels (radius 0)
 //   float radiusalpha 0.75          radius reduction r_i^2 = r_1^2 i^(alpha - 1)
-//   string kernel "adaptive"        fixed (r_i at every vertex) | adaptive (G-VCM Sec. 6: footprint r_1 per path, shrunk per vertex)
-//   float kernelshrink 10           adaptive: r_j = 0.5^(kernelshrink tau) r_{j-1} (tau: roughness at the previous vertex)
+//   string kernel "fixed"           fixed (r_1 at every vertex) | adaptive (G-VCM Sec. 6: r_j = 0.5^(kernelshrink tau) r_{j-1})
+//   float kernelshrink 10           adaptive: the exponent's factor (tau: roughness at the previous vertex)
+//   string footprint "median"       radius 0: r_1 from the median primary-hit footprint | path (each path's own, Sec. 6)
 //   integer numiterations 0         iterations (samples per pixel) unless --spp is given; 0: the sampler's (pbrt-v3 sppm)
 //   integer photonsperiteration -1  pbrt-v3 sppm: light subpaths per iteration; only -1 (one per sampled pixel)
 //   integer imagewritefrequency 0   pbrt-v3 sppm: accepted; intermediate images are not written
@@ -97,13 +101,16 @@ enum class VCMMode { VCM, VC, VM };
 // The merging radius of vcm and gvcm (set by MergeRadiusParams).
 struct MergeRadiusSettings {
     Float radius, radiusScale, radiusAlpha;
-    bool adaptiveKernel;  // G-VCM Sec. 6 (merge_kernel.h)
+    bool adaptiveKernel;  // G-VCM Sec. 6's shrink (merge_kernel.h)
     Float kernelShrink;
+    bool pathFootprint;   // G-VCM Sec. 6's per-path footprint r_1
 };
 ParamTable<MergeRadiusSettings> MergeRadiusParams();
 // The kernel of 1-based iteration i: r_i (VCMRadius) from the median footprint
 // radius r1; adaptive: footprint radius per path (unless `radius` is given),
 // clamped to 2 r_i, and the shrink. The photon grid is built for r_i.
+// Located errors for merging-radius parameters that the others leave unused.
+void CheckMergeRadiusParams(const EntityDesc &desc, const MergeRadiusSettings &s);
 // The kernel's description for statistics.
 std::string KernelName(const MergeRadiusSettings &s);
 MergeKernel VCMKernel(const MergeRadiusSettings &s, Float r1, int iteration, int64_t nLight, const Camera &camera,

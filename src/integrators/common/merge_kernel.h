@@ -33,7 +33,7 @@ namespace gradus {
 
 struct MergeKernel {
     Float piN = 0;          // pi N_light (0: no merging)
-    Float r2 = 0;           // fixed r^2 of this iteration (adaptive: the filter-margin fallback)
+    Float r2 = 0;           // fixed r^2 of this iteration (footprint: the filter-margin fallback)
     Float footprint2 = 0;   // k_i (> 0: r_b from the pixel footprint; 0: r_b^2 = r2)
     Float r2Max = 0;        // clamp of r_b^2 (the photon grid's reach)
     Float shrink = 0;       // s of r_j = 0.5^(s tau) r_{j-1}; 0: no shrink

@@ -219,6 +219,26 @@ TEST(MergeKernel, IgnoredSettingsAreLocatedErrors) {
     EXPECT_NO_THROW(BuildRenderJob(ParseString(text), bo));
 }
 
+// With both Sec. 6 options on, vcm and gvcm stay independent of the thread
+// count (the conformance table renders the defaults): bit-identical images,
+// every layer, for 1, 2 and 7 threads; and the options change the image.
+TEST(MergeKernel, AdaptiveOptionsAreThreadCountIndependent) {
+    using namespace bdpt_test;
+    const std::string objects = Sphere("Material \"glass\"", 0.2, 0.45, 0.1, 0.4);
+    for (const char *integrator : {"vcm", "gvcm"}) {
+        std::string text = BoxScene(integrator, CeilingLight(0.3, 10), objects);
+        const std::string plain = text;
+        text.insert(text.find('\n'), " \"string kernel\" \"adaptive\" \"string footprint\" \"path\"");
+        const Image ref = test::RenderTestDesc(ParseString(text), 4, 42, 1).image;
+        for (int n : {2, 7}) {
+            const Image img = test::RenderTestDesc(ParseString(text), 4, 42, n).image;
+            ASSERT_EQ(img.channelNames(), ref.channelNames()) << integrator;
+            EXPECT_TRUE(img.data() == ref.data()) << integrator << ": --nthreads " << n << " differs from 1";
+        }
+        EXPECT_FALSE(test::RenderTestDesc(ParseString(plain), 4, 42, 1).image.data() == ref.data()) << integrator;
+    }
+}
+
 // The footprint radius of G-VCM Sec. 6 by hand: the centre pixel of a pinhole
 // camera (fov 40 degrees, 16 x 16 pixels) is 4.5 * 2 tan(20 deg) / 16 wide on
 // the wall 4.5 units ahead; behind a first vertex the

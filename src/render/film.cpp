@@ -51,13 +51,18 @@ Bounds2i Film::sampleBounds() const {
     return b;
 }
 
-int Film::addLayer(const std::string &name) {
+int Film::addLayer(const std::string &name, LayerUse use) {
     for (int i = 0; i < numLayers(); ++i)
-        if (layerNames_[i] == name) return i;
+        if (layerNames_[i] == name) {
+            GRADUS_CHECK(use == LayerUse::Both ? !layers_[i].empty() && !layerSplats_[i].empty()
+                                               : !(use == LayerUse::Samples ? layers_[i] : layerSplats_[i]).empty());
+            return i;
+        }
     checkMemory("layer \"" + name + "\"", kLayerBytesPerPixel);
     layerNames_.push_back(name);
-    layers_.emplace_back(size_t(bounds_.area()), Spectrum(0));
-    layerSplats_.emplace_back(size_t(bounds_.area()), Spectrum(0));
+    const size_t n = size_t(bounds_.area());
+    layers_.emplace_back(use != LayerUse::Splats ? n : 0, Spectrum(0));
+    layerSplats_.emplace_back(use != LayerUse::Samples ? n : 0, Spectrum(0));
     return numLayers() - 1;
 }
 
@@ -78,7 +83,8 @@ FilmTile::FilmTile(const Film &film, const Bounds2i &sp, bool splatsOnly) : film
     weight_.assign(n, 0);
     count_.assign(n, 0);
     layers_.resize(film.numLayers());
-    for (auto &l : layers_) l.assign(n, Spectrum(0));
+    for (int l = 0; l < film.numLayers(); ++l)
+        if (!film.layers_[l].empty()) layers_[l].assign(n, Spectrum(0));  // splat-only layers: none
 }
 
 void FilmTile::addSample(Point2 pFilm, const Spectrum &L, Float w) {
@@ -101,6 +107,7 @@ void FilmTile::addSample(Point2 pFilm, const Spectrum &L, Float w) {
 
 void FilmTile::addLayer(int layer, Point2i p, const Spectrum &v) {
     if (!film_.bounds_.inside(p) || !inTile(p)) return;
+    GRADUS_CHECK(!layers_[layer].empty());  // a LayerUse::Splats layer
     layers_[layer][index(p)] += v;
 }
 
@@ -118,15 +125,18 @@ void Film::mergeTile(const FilmTile &t) {
             sum_[i] += t.sum_[j];
             weight_[i] += t.weight_[j];
             count_[i] += t.count_[j];
-            for (int l = 0; l < numLayers(); ++l) layers_[l][i] += t.layers_[l][j];
+            for (int l = 0; l < numLayers(); ++l)
+                if (!t.layers_[l].empty()) layers_[l][i] += t.layers_[l][j];
         }
     for (const auto &s : t.splats_) {
         Point2i p{int(std::floor(s.p.x)), int(std::floor(s.p.y))};
         if (!bounds_.inside(p)) continue;
         if (s.layer < 0)
             splat_[index(p)] += s.v;
-        else
+        else {
+            GRADUS_CHECK(!layerSplats_[s.layer].empty());  // a LayerUse::Samples layer
             layerSplats_[s.layer][index(p)] += s.v;
+        }
     }
 }
 
@@ -158,8 +168,8 @@ Image Film::layerImage(int layer) const {
     for (int y = 0; y < bounds_.height(); ++y)
         for (int x = 0; x < bounds_.width(); ++x) {
             size_t i = size_t(y) * bounds_.width() + x;
-            Spectrum v = count_[i] > 0 ? layers_[layer][i] / count_[i] : Spectrum(0);
-            if (splatSpp_ > 0) v += layerSplats_[layer][i] / splatSpp_;
+            Spectrum v = count_[i] > 0 && !layers_[layer].empty() ? layers_[layer][i] / count_[i] : Spectrum(0);
+            if (splatSpp_ > 0 && !layerSplats_[layer].empty()) v += layerSplats_[layer][i] / splatSpp_;
             v *= scale_;
             for (int c = 0; c < 3; ++c) img.at(x, y, c) = toOutput(v[c]);
         }
@@ -273,10 +283,14 @@ std::string Film::saveState() const {
     PutArray(&s, weight_.data(), n);
     PutArray(&s, splat_.data(), 3 * n);
     PutArray(&s, count_.data(), n);
-    for (size_t l = 0; l < layers_.size(); ++l) {
-        PutArray(&s, layers_[l].data(), 3 * n);
-        PutArray(&s, layerSplats_[l].data(), 3 * n);
-    }
+    // A layer's unused kind is written as an all-zero array (the format of every state).
+    for (size_t l = 0; l < layers_.size(); ++l)
+        for (const auto *a : {&layers_[l], &layerSplats_[l]}) {
+            if (a->empty())
+                s.push_back(0);
+            else
+                PutArray(&s, a->data(), 3 * n);
+        }
     return s;
 }
 
@@ -286,9 +300,15 @@ void Film::loadState(const std::string &state) {
         throw Error("film state: its pixel bounds differ from this film's");
     if (ps.names != layerNames_) throw Error("film state: its layers differ from this render's");
     std::vector<void *> dst = {sum_.data(), weight_.data(), splat_.data(), count_.data()};
-    for (size_t l = 0; l < layers_.size(); ++l) dst.insert(dst.end(), {layers_[l].data(), layerSplats_[l].data()});
+    for (size_t l = 0; l < layers_.size(); ++l)
+        for (auto *a : {&layers_[l], &layerSplats_[l]}) dst.push_back(a->empty() ? nullptr : a->data());
     for (size_t k = 0; k < dst.size(); ++k) {
         const auto &a = ps.arrays[k];
+        if (!dst[k]) {  // a kind this layer does not hold: the state must have nothing there
+            if (a.first != std::string::npos)
+                throw Error("film state: layer \"" + layerNames_[(k - 4) / 2] + "\" holds values this render does not use");
+            continue;
+        }
         if (a.first == std::string::npos) std::memset(dst[k], 0, a.second * sizeof(double));
         else std::memcpy(dst[k], state.data() + a.first, a.second * sizeof(double));
     }

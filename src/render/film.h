@@ -25,6 +25,11 @@ struct Bounds2i {
 
 class FilmTile;
 
+// What a layer accumulates: per-pixel sample sums (FilmTile::addLayer), splats
+// (FilmTile::addSplat), or both. A layer holds storage only for its kinds
+// (24 bytes per pixel each); the other kind is an error.
+enum class LayerUse { Both, Samples, Splats };
+
 class Film {
   public:
     Film(Point2i fullResolution, const Float cropWindow[4], std::unique_ptr<Filter> filter, std::string filename,
@@ -38,7 +43,7 @@ class Film {
 
     // Extra per-pixel layer: value = sum of contributions / samples of that pixel,
     // plus the layer's splats / total samples per pixel (like the main image).
-    int addLayer(const std::string &name);
+    int addLayer(const std::string &name, LayerUse use = LayerUse::Both);
     int numLayers() const { return int(layerNames_.size()); }
     const std::string &layerName(int i) const { return layerNames_[i]; }
 
@@ -88,7 +93,7 @@ class Film {
     double splatSpp_ = 0;
     float toOutput(double v) const;
     static constexpr double kBaseBytesPerPixel = 2 * sizeof(Spectrum) + 2 * sizeof(double);
-    static constexpr double kLayerBytesPerPixel = 2 * sizeof(Spectrum);
+    static constexpr double kLayerBytesPerPixel = 2 * sizeof(Spectrum);  // an upper bound (LayerUse::Both)
     void checkMemory(const std::string &what, double bytesPerPixel) const;
     mutable std::atomic<uint64_t> clamped_{0};
 };

@@ -34,10 +34,12 @@ void GradientFilm::init(Film &film, bool useFilmFilter, bool lightTracing, bool 
     static const char *names[NumLayers] = {"gd.primal", "gd.primal2", "gd.dxf", "gd.dxf2", "gd.dxb",
                                            "gd.dxb2",   "gd.dyf",     "gd.dyf2", "gd.dyb", "gd.dyb2"};
     samples_ = samples;
-    for (int i = 0; i < NumLayers; ++i) layer_[i] = samples ? film.addLayer(names[i]) : -1;
+    // Sample layers hold no splat storage and splat layers no sample storage (24 B per pixel each).
+    for (int i = 0; i < NumLayers; ++i) layer_[i] = samples ? film.addLayer(names[i], LayerUse::Samples) : -1;
     lightTracing_ = lightTracing;
     if (lightTracing)
-        for (int i = 0; i < NumLayers; ++i) splatLayer_[i] = film.addLayer(std::string("gd.lt.") + (names[i] + 3));
+        for (int i = 0; i < NumLayers; ++i)
+            splatLayer_[i] = film.addLayer(std::string("gd.lt.") + (names[i] + 3), LayerUse::Splats);
 }
 
 namespace {

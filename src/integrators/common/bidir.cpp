@@ -472,28 +472,31 @@ Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathVi
     // density of x_j from the other side (Georgiev et al. 2012, Sec. 4.2); a
     // delta density (x_j after a specular vertex: a caustic) counts as 1, as in
     // every ratio here.
-    const Float eta = set.merging ? (set.kernel ? Float(1) : set.mergeFactor) * relOther : 0;
+    // A kernel whose eta is the same at every vertex takes the constant path.
+    const MergeKernel *varying = set.kernel && set.kernel->varies() ? set.kernel : nullptr;
+    const Float etaConst = varying ? Float(1) : set.kernel ? set.kernel->piN * set.kernel->r2 : set.mergeFactor;
+    const Float eta = set.merging ? etaConst * relOther : 0;
     // With a varying kernel (merge_kernel.h), eta_j of each vertex of the path
     // in camera order (Cv(0) .. Cv(t-1), Lv(s-1) .. Lv(0)); the light origin is no merge.
     const int nPath = s + t;
     Float etaBuf[128];
     std::vector<Float> etaVec;
     Float *etaPath = etaBuf;
-    if (set.merging && set.kernel) {
+    if (set.merging && varying) {
         if (nPath > 128) {
             etaVec.resize(size_t(nPath));
             etaPath = etaVec.data();
         }
         auto pv = [&](int k) -> const PathVertex & { return k < t ? Cv(k) : Lv(s - 1 - (k - t)); };
         auto pb = [&](int k) -> const BSDF * { return k < t ? Cb(k) : Lb(s - 1 - (k - t)); };
-        PathMergeEta(*set.kernel, nPath, pv, pb,
+        PathMergeEta(*varying, nPath, pv, pb,
                      [&](int k) { return k + 1 < nPath && pb(k) && MergeableIn(set, pv(k), pb(k)); }, etaPath);
         if (etaOwnOut) *etaOwnOut = etaPath[t - 1];
     } else if (etaOwnOut) {
-        *etaOwnOut = set.mergeFactor;
+        *etaOwnOut = etaConst;
     }
-    auto etaCam = [&](int i) { return set.kernel ? eta * etaPath[i] : eta; };
-    auto etaLight = [&](int i) { return set.kernel ? eta * etaPath[t + (s - 1 - i)] : eta; };
+    auto etaCam = [&](int i) { return varying ? eta * etaPath[i] : eta; };
+    auto etaLight = [&](int i) { return varying ? eta * etaPath[t + (s - 1 - i)] : eta; };
 
     // w = 1 / sum_k (n_k p_k / n_s p_s)^beta with p_k / p_{k+1} = pdfRev / pdfFwd
     // of the vertex that changes sides (Veach 1997 Eq. 10.9).

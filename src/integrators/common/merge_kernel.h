@@ -40,6 +40,8 @@ struct MergeKernel {
     Float pixels = 0;       // N_pixels of the camera's full film
     const Camera *camera = nullptr;
 
+    // Whether eta differs between vertices or paths (else it is piN r2 at every vertex).
+    bool varies() const { return shrink > 0 || footprint2 > 0; }
     // r_{j+1}^2 / r_j^2 after a vertex with BSDF b: 0.25^(s tau).
     Float sigma(const BSDF *b) const {
         if (shrink <= 0 || !b || !*b) return 1;

@@ -284,7 +284,8 @@ MergeKernel VCMKernel(const MergeRadiusSettings &s, Float r1, int iteration, int
     // Sec. 6: the shrink along the camera subpath, and r_1 from the path's pixel footprint.
     if (s.adaptiveKernel) k.shrink = s.kernelShrink;
     if (s.pathFootprint && s.radius <= 0) {
-        k.footprint2 = s.radiusScale * s.radiusScale * std::pow(Float(std::max(iteration, 1)), s.radiusAlpha - 1);
+        const Float scale = s.radiusScale * VCMRadius(1, s.radiusAlpha, iteration);  // radiusscale times the schedule
+        k.footprint2 = scale * scale;
         k.r2Max = 4 * k.r2;  // the grid (built for r_i) answers queries up to 2 r_i
         k.pixels = Float(camera.fullResolution.x) * Float(camera.fullResolution.y);
         k.camera = &camera;

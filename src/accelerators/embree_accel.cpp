@@ -130,32 +130,51 @@ EmbreeAccel::EmbreeAccel() {
 
 EmbreeAccel::~EmbreeAccel() {
     if (scene_) rtcReleaseScene(scene_);
+    for (Object &o : objects_) rtcReleaseScene(o.scene);
     if (device_) rtcReleaseDevice(device_);
 }
 
-int EmbreeAccel::addMesh(std::shared_ptr<const TriangleMesh> mesh) {
-    RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+namespace {
+
+// A committed Embree triangle geometry holding the mesh's positions (float).
+RTCGeometry NewTriangleGeometry(RTCDevice device, const TriangleMesh &mesh) {
+    RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     auto *v = static_cast<float *>(
-        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh->p.size()));
-    for (size_t i = 0; i < mesh->p.size(); ++i) {
-        v[3 * i] = float(mesh->p[i].x);
-        v[3 * i + 1] = float(mesh->p[i].y);
-        v[3 * i + 2] = float(mesh->p[i].z);
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.p.size()));
+    for (size_t i = 0; i < mesh.p.size(); ++i) {
+        v[3 * i] = float(mesh.p[i].x);
+        v[3 * i + 1] = float(mesh.p[i].y);
+        v[3 * i + 2] = float(mesh.p[i].z);
     }
-    size_t nt = mesh->indices.size() / 3;
+    size_t nt = mesh.indices.size() / 3;
     auto *idx = static_cast<unsigned *>(
         rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), nt));
-    for (size_t i = 0; i < 3 * nt; ++i) idx[i] = unsigned(mesh->indices[i]);
+    for (size_t i = 0; i < 3 * nt; ++i) idx[i] = unsigned(mesh.indices[i]);
+    return g;
+}
+
+}  // namespace
+
+void EmbreeAccel::attachTop(void *geometry, int firstRecord, int records) {
+    RTCGeometry g = static_cast<RTCGeometry>(geometry);
+    rtcCommitGeometry(g);
+    rtcAttachGeometryByID(scene_, g, unsigned(nextId_++));
+    rtcReleaseGeometry(g);
+    recordOfTop_.push_back(firstRecord);
+    nextRecord_ += records;
+}
+
+int EmbreeAccel::addMesh(std::shared_ptr<const TriangleMesh> mesh) {
+    RTCGeometry g = NewTriangleGeometry(device_, *mesh);
     if (mesh->alpha || mesh->shadowAlpha) {
         rtcSetGeometryUserData(g, const_cast<TriangleMesh *>(mesh.get()));
         rtcSetGeometryIntersectFilterFunction(g, AlphaIntersectFilter);
         rtcSetGeometryOccludedFilterFunction(g, AlphaOccludedFilter);
         alphaMeshes_.push_back(mesh);
     }
-    rtcCommitGeometry(g);
-    rtcAttachGeometryByID(scene_, g, unsigned(nextId_));
-    rtcReleaseGeometry(g);
-    return nextId_++;
+    const int record = nextRecord_;
+    attachTop(g, record, 1);
+    return record;
 }
 
 int EmbreeAccel::addAnalytic(std::shared_ptr<const AnalyticShape> shape) {
@@ -165,11 +184,54 @@ int EmbreeAccel::addAnalytic(std::shared_ptr<const AnalyticShape> shape) {
     rtcSetGeometryBoundsFunction(g, AnalyticBounds, nullptr);
     rtcSetGeometryIntersectFunction(g, AnalyticIntersect);
     rtcSetGeometryOccludedFunction(g, AnalyticOccluded);
-    rtcCommitGeometry(g);
-    rtcAttachGeometryByID(scene_, g, unsigned(nextId_));
-    rtcReleaseGeometry(g);
     analytic_.push_back(std::move(shape));
-    return nextId_++;
+    const int record = nextRecord_;
+    attachTop(g, record, 1);
+    return record;
+}
+
+int EmbreeAccel::newObject() {
+    Object o;
+    o.scene = rtcNewScene(device_);
+    rtcSetSceneBuildQuality(o.scene, RTC_BUILD_QUALITY_HIGH);
+    rtcSetSceneFlags(o.scene, RTC_SCENE_FLAG_ROBUST);
+    objects_.push_back(std::move(o));
+    return int(objects_.size()) - 1;
+}
+
+void EmbreeAccel::addObjectMesh(int object, std::shared_ptr<const TriangleMesh> mesh) {
+    Object &o = objects_.at(size_t(object));
+    if (o.committed) throw Error("internal: mesh added to an object already instanced");
+    if (mesh->alpha || mesh->shadowAlpha) throw Error("internal: alpha cut-outs in an instanced object");
+    RTCGeometry g = NewTriangleGeometry(device_, *mesh);
+    rtcCommitGeometry(g);
+    rtcAttachGeometryByID(o.scene, g, unsigned(o.meshes.size()));  // geomID = index in the object
+    rtcReleaseGeometry(g);
+    o.meshes.push_back(std::move(mesh));
+}
+
+int EmbreeAccel::objectMeshCount(int object) const { return int(objects_.at(size_t(object)).meshes.size()); }
+
+int EmbreeAccel::addInstance(int object, const Transform &worldFromObject) {
+    Object &o = objects_.at(size_t(object));
+    if (!o.committed) {
+        rtcCommitScene(o.scene);
+        o.committed = true;
+    }
+    RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(g, o.scene);
+    rtcSetGeometryTimeStepCount(g, 1);
+    // Embree's 3x4 column-major float layout; the renderer's interactions use
+    // the double transform (GeometryRecord::placement), as it uses double
+    // positions for world meshes traced in float.
+    const Matrix4 &m = worldFromObject.matrix();
+    float xfm[12];
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 3; ++r) xfm[3 * c + r] = float(m.m[r][c]);
+    rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, xfm);
+    const int record = nextRecord_;
+    attachTop(g, record, int(o.meshes.size()));
+    return record;
 }
 
 void EmbreeAccel::commit() { rtcCommitScene(scene_); }
@@ -189,7 +251,10 @@ bool EmbreeAccel::intersect(const Ray &r, RayHit *hit) const {
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(scene_, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
-    hit->geomId = int(rh.hit.geomID);
+    // An instance hit: instID[0] is the instance's top-level id, geomID the mesh within its object.
+    const bool inInstance = rh.hit.instID[0] != RTC_INVALID_GEOMETRY_ID;
+    const unsigned top = inInstance ? rh.hit.instID[0] : rh.hit.geomID;
+    hit->geomId = recordOfTop_[top] + (inInstance ? int(rh.hit.geomID) : 0);
     hit->primId = int(rh.hit.primID);
     hit->t = rh.ray.tfar * scale;
     hit->b1 = rh.hit.u;

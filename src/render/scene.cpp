@@ -25,8 +25,8 @@ bool Scene::intersect(const Ray &r, SurfaceInteraction *si) const {
     Vec3 wo = -r.d / dlen;
     if (g.mesh) {
         Float b1 = h.b1, b2 = h.b2;
-        g.mesh->refineBarycentrics(h.primId, r, &b1, &b2);
-        g.mesh->interaction(h.primId, b1, b2, wo, si);
+        g.mesh->refineBarycentrics(h.primId, r, &b1, &b2, g.placement);
+        g.meshInteraction(h.primId, b1, b2, wo, si);
     } else {
         // Refine the analytic hit in double precision along the original ray.
         Float t;
@@ -60,7 +60,8 @@ std::string SceneFeatures::describe() const {
     std::ostringstream os;
     auto yn = [](bool b) { return b ? "yes" : "no"; };
     os << "Scene features:\n"
-       << "  triangles: " << numTriangles << ", spheres: " << numSpheres << ", other analytic shapes: " << numAnalytic << ", lights: " << numLights << "\n"
+       << "  triangles: " << numTriangles << " (stored: " << numStoredTriangles << ", in " << numInstances
+       << " instances: " << numInstancedTriangles << "), spheres: " << numSpheres << ", other analytic shapes: " << numAnalytic << ", lights: " << numLights << "\n"
        << "  specular surfaces: " << yn(specularSurfaces) << "\n"
        << "  near-specular surfaces (roughness < 0.001): " << yn(nearSpecularSurfaces) << "\n"
        << "  lowest material roughness: " << minRoughness << "\n"

@@ -27,16 +27,31 @@ struct SceneFeatures {
     int64_t numTriangles = 0;
     int numSpheres = 0;
     int numAnalytic = 0;  // analytic shapes other than spheres (disk, cylinder, ...)
+    int numInstances = 0;            // Embree instances (objects used more than once)
+    int64_t numInstancedTriangles = 0;  // triangles of those instances, counted once per instance
+    int64_t numStoredTriangles = 0;     // triangles held in memory (an instanced object's once)
     std::string describe() const;
 };
 
+// One per Embree geometry a ray can hit, instances included: the record id
+// (SurfaceInteraction::geomId) names the pair (instance, geometry of its
+// object); EmbreeAccel maps Embree's (instID, geomID) onto it.
 struct GeometryRecord {
     std::shared_ptr<const TriangleMesh> mesh;  // or
+    // Non-null for a mesh of an instanced object: the instance's transform
+    // (owned by Scene::placements); the mesh is then in the object's space.
+    const MeshPlacement *placement = nullptr;
     std::shared_ptr<const AnalyticShape> analytic;  // sphere, disk, cylinder, cone, paraboloid, hyperboloid
     // Same object as `analytic` (older name, kept while callers move to `analytic`).
     std::shared_ptr<const AnalyticShape> sphere;
     const Material *material = nullptr;
     std::vector<const AreaLight *> areaLights;  // per primitive; empty if not emissive
+
+    // World-space triangle data of a mesh record (placement applied).
+    void meshInteraction(int tri, Float b1, Float b2, const Vec3 &wo, SurfaceInteraction *si) const {
+        mesh->interaction(tri, b1, b2, wo, si, placement);
+    }
+    void triangleCorners(int tri, Point3 c[3]) const { mesh->corners(tri, placement, c); }
 };
 
 class Scene {
@@ -56,7 +71,8 @@ class Scene {
     bool unoccluded(const Interaction &a, const Interaction &b) const { return !occluded(a.spawnRayTo(b)); }
 
     EmbreeAccel accel;
-    std::vector<GeometryRecord> geometry;   // indexed by Embree geometry id
+    std::vector<GeometryRecord> geometry;   // indexed by record id (EmbreeAccel)
+    std::vector<std::unique_ptr<MeshPlacement>> placements;  // one per object instance
     std::vector<std::shared_ptr<Light>> lights;
     std::vector<const Light *> infiniteLights;
     std::vector<std::shared_ptr<Material>> materials;  // owned

@@ -212,29 +212,80 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
     auto defaultMaterial = CreateMaterial(defDesc, textures, named);
     scene->materials.push_back(defaultMaterial);
 
-    // Shapes: world shapes, then flattened object instances.
+    // Shapes: world shapes and object instances. An object used more than once
+    // becomes an Embree instance: its triangle meshes are built and stored once,
+    // in the object's space, and every use adds only a transform (records with
+    // a MeshPlacement). Its analytic shapes and alpha-cut meshes, and objects
+    // used once, are flattened into world shapes (transformed copies).
     std::vector<ShapeDesc> shapes = desc.shapes;
+    std::map<std::string, int> uses;
     for (const auto &use : desc.instanceUses) {
         auto it = desc.instances.find(use.name);
         if (it == desc.instances.end()) throw Error(use.loc, "unknown object \"" + use.name + "\"");
-        for (ShapeDesc s : it->second.shapes) {
+        for (const ShapeDesc &s : it->second.shapes)
             if (s.areaLight >= 0) throw UnsupportedError(s.loc, "area lights inside object instances");
+        ++uses[use.name];
+    }
+    auto materialOf = [&](const ShapeDesc &sd) {
+        if (sd.material >= 0 && matByIndex[sd.material])
+            feat.minRoughness = std::min(feat.minRoughness, matByIndex[sd.material]->minRoughness());
+        return sd.material >= 0 ? matByIndex[sd.material] : defaultMaterial.get();
+    };
+    struct ObjectBuild {
+        int embreeObject = -1;
+        std::vector<const Material *> materials;  // per mesh of the Embree object
+        Bounds3 bounds;                           // of those meshes, in the object's space
+        int64_t triangles = 0;
+        std::vector<ShapeDesc> flattened;  // shapes copied per use
+    };
+    std::map<std::string, ObjectBuild> objects;
+    std::vector<std::pair<const InstanceUseDesc *, const ObjectBuild *>> instanced;
+    for (const auto &use : desc.instanceUses) {
+        const InstanceDesc &inst = desc.instances.at(use.name);
+        if (uses[use.name] == 1) {  // nothing to share: flatten
+            for (ShapeDesc s : inst.shapes) {
+                s.worldFromObject = use.worldFromInstance * s.worldFromObject;
+                shapes.push_back(std::move(s));
+            }
+            continue;
+        }
+        auto found = objects.find(use.name);
+        if (found == objects.end()) {
+            ObjectBuild &ob = objects[use.name];
+            for (const ShapeDesc &sd : inst.shapes) {
+                ShapeBuild b = CreateShape(sd, desc, textures);
+                if (!b.mesh || b.mesh->alpha || b.mesh->shadowAlpha) {
+                    ob.flattened.push_back(sd);
+                    continue;
+                }
+                if (b.mesh->numTriangles() == 0) continue;
+                if (b.subdivision) feat.subdivisionSurfaces = true;
+                if (ob.embreeObject < 0) ob.embreeObject = scene->accel.newObject();
+                for (const auto &q : b.mesh->p) ob.bounds.expand(q);
+                ob.triangles += b.mesh->numTriangles();
+                ob.materials.push_back(materialOf(sd));
+                scene->accel.addObjectMesh(ob.embreeObject, b.mesh);
+            }
+            feat.numStoredTriangles += ob.triangles;
+            found = objects.find(use.name);
+        }
+        const ObjectBuild &ob = found->second;
+        if (ob.embreeObject >= 0) CheckTraceableBounds(use.worldFromInstance.applyBounds(ob.bounds), use.loc);
+        for (ShapeDesc s : ob.flattened) {
             s.worldFromObject = use.worldFromInstance * s.worldFromObject;
             shapes.push_back(std::move(s));
         }
+        if (ob.embreeObject >= 0) instanced.emplace_back(&use, &ob);
     }
     for (const auto &sd : shapes) {
         ShapeBuild b = CreateShape(sd, desc, textures);
         GeometryRecord rec;
-        rec.material = sd.material >= 0 ? matByIndex[sd.material] : defaultMaterial.get();
-        if (sd.material >= 0 && matByIndex[sd.material]) {
-            Float r = matByIndex[sd.material]->minRoughness();
-            feat.minRoughness = std::min(feat.minRoughness, r);
-        }
+        rec.material = materialOf(sd);
         if (b.mesh) {
             if (b.mesh->numTriangles() == 0) continue;  // empty mesh: nothing to add
             rec.mesh = b.mesh;
             feat.numTriangles += b.mesh->numTriangles();
+            feat.numStoredTriangles += b.mesh->numTriangles();
             if (b.subdivision) feat.subdivisionSurfaces = true;
             Bounds3 sb;
             for (const auto &p : b.mesh->p) sb.expand(p);
@@ -308,6 +359,23 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
         int id = b.mesh ? scene->accel.addMesh(b.mesh) : scene->accel.addAnalytic(b.analytic);
         if (id != int(scene->geometry.size())) throw Error("internal: geometry ids out of order");
         scene->geometry.push_back(std::move(rec));
+    }
+    for (const auto &[use, ob] : instanced) {
+        scene->bounds.expand(use->worldFromInstance.applyBounds(ob->bounds));
+        scene->placements.push_back(std::make_unique<MeshPlacement>(use->worldFromInstance));
+        const MeshPlacement *pl = scene->placements.back().get();
+        const int first = scene->accel.addInstance(ob->embreeObject, use->worldFromInstance);
+        if (first != int(scene->geometry.size())) throw Error("internal: geometry ids out of order");
+        for (int k = 0; k < scene->accel.objectMeshCount(ob->embreeObject); ++k) {
+            GeometryRecord rec;
+            rec.mesh = scene->accel.objectMesh(ob->embreeObject, k);
+            rec.placement = pl;
+            rec.material = ob->materials[size_t(k)];
+            scene->geometry.push_back(std::move(rec));
+        }
+        feat.numInstances++;
+        feat.numInstancedTriangles += ob->triangles;
+        feat.numTriangles += ob->triangles;
     }
     scene->accel.commit();
     if (!scene->bounds.empty()) {

@@ -54,8 +54,18 @@ std::shared_ptr<TriangleMesh> TriangleMesh::Create(const Transform &xf, bool rev
     return m;
 }
 
-void TriangleMesh::refineBarycentrics(int tri, const Ray &r, Float *b1, Float *b2) const {
-    const Point3 &p0 = p[indices[3 * tri]], &p1 = p[indices[3 * tri + 1]], &p2 = p[indices[3 * tri + 2]];
+void TriangleMesh::corners(int tri, const MeshPlacement *placement, Point3 c[3]) const {
+    for (int k = 0; k < 3; ++k) {
+        const Point3 &q = p[indices[3 * tri + k]];
+        c[k] = placement ? placement->worldFromMesh.applyPoint(q) : q;
+    }
+}
+
+void TriangleMesh::refineBarycentrics(int tri, const Ray &r, Float *b1, Float *b2,
+                                      const MeshPlacement *placement) const {
+    Point3 c[3];
+    corners(tri, placement, c);
+    const Point3 &p0 = c[0], &p1 = c[1], &p2 = c[2];
     Vec3 e1 = p1 - p0, e2 = p2 - p0;
     Vec3 pv = Cross(r.d, e2);
     Float det = Dot(e1, pv);
@@ -76,9 +86,16 @@ void TriangleMesh::refineBarycentrics(int tri, const Ray &r, Float *b1, Float *b
     *b2 = v;
 }
 
-void TriangleMesh::interaction(int tri, Float b1, Float b2, const Vec3 &wo, SurfaceInteraction *si) const {
+void TriangleMesh::interaction(int tri, Float b1, Float b2, const Vec3 &wo, SurfaceInteraction *si,
+                               const MeshPlacement *placement) const {
     const int i0 = indices[3 * tri], i1 = indices[3 * tri + 1], i2 = indices[3 * tri + 2];
-    const Point3 &p0 = p[i0], &p1 = p[i1], &p2 = p[i2];
+    Point3 c[3];
+    corners(tri, placement, c);
+    const Point3 &p0 = c[0], &p1 = c[1], &p2 = c[2];
+    // Per-vertex normals and tangents, placed as TriangleMesh::Create places them.
+    auto normalAt = [&](int i) { return placement ? placement->worldFromMesh.applyNormal(n[i]) : n[i]; };
+    auto tangentAt = [&](int i) { return placement ? placement->worldFromMesh.applyVector(s[i]) : s[i]; };
+    const bool flip = reverseOrientation ^ transformSwapsHandedness ^ (placement && placement->swapsHandedness);
     Float b0 = 1 - b1 - b2;
     Point2 uv0(0, 0), uv1(1, 0), uv2(1, 1);
     if (!uv.empty()) { uv0 = uv[i0]; uv1 = uv[i1]; uv2 = uv[i2]; }
@@ -111,10 +128,11 @@ void TriangleMesh::interaction(int tri, Float b1, Float b2, const Vec3 &wo, Surf
     si->shading.dndu = si->shading.dndv = Normal3(0, 0, 0);
 
     if (!n.empty()) {
-        Normal3 ns = n[i0] * b0 + n[i1] * b1 + n[i2] * b2;
+        const Normal3 n0 = normalAt(i0), n1 = normalAt(i1), n2 = normalAt(i2);
+        Normal3 ns = n0 * b0 + n1 * b1 + n2 * b2;
         ns = ns.lengthSquared() > 0 ? Normalize(ns) : si->n;
         si->n = FaceForward(si->n, ns);
-        Vec3 ss = s.empty() ? si->dpdu : s[i0] * b0 + s[i1] * b1 + s[i2] * b2;
+        Vec3 ss = s.empty() ? si->dpdu : tangentAt(i0) * b0 + tangentAt(i1) * b1 + tangentAt(i2) * b2;
         if (ss.lengthSquared() == 0) ss = si->dpdu;
         Vec3 ts = Cross(ss, ns);
         if (ts.lengthSquared() > 0) {
@@ -126,13 +144,13 @@ void TriangleMesh::interaction(int tri, Float b1, Float b2, const Vec3 &wo, Surf
         // Normal derivatives from the per-vertex normals.
         Normal3 dndu(0, 0, 0), dndv(0, 0, 0);
         if (!degenerateUV) {
-            Normal3 dn1 = n[i0] - n[i2], dn2 = n[i1] - n[i2];
+            Normal3 dn1 = n0 - n2, dn2 = n1 - n2;
             Float inv = 1 / det;
             dndu = (dn1 * duv12.y - dn2 * duv02.y) * inv;
             dndv = (dn2 * duv02.x - dn1 * duv12.x) * inv;
         }
         si->setShadingGeometry(ss, ts, dndu, dndv, true);
-    } else if (reverseOrientation ^ transformSwapsHandedness) {
+    } else if (flip) {
         si->n = -si->n;
         si->shading.n = si->n;
     }

@@ -1,4 +1,5 @@
-// Triangle meshes, stored in world space (transformed at load, like pbrt-v3).
+// Triangle meshes, stored in world space (transformed at load, like pbrt-v3),
+// or in an object's space when the object is instanced (MeshPlacement).
 #pragma once
 #include <memory>
 #include <vector>
@@ -8,6 +9,15 @@
 #include "textures/texture.h"
 
 namespace gradus {
+
+// Where an instanced (shared) mesh sits in the world: one per object instance.
+// swapsHandedness is that of worldFromMesh alone; the mesh's own
+// transformSwapsHandedness is that of the transform it was built with.
+struct MeshPlacement {
+    Transform worldFromMesh;
+    bool swapsHandedness = false;
+    explicit MeshPlacement(const Transform &xf) : worldFromMesh(xf), swapsHandedness(xf.swapsHandedness()) {}
+};
 
 struct TriangleMesh {
     std::vector<Point3> p;     // world space
@@ -27,12 +37,19 @@ struct TriangleMesh {
                                                 std::vector<Point3> P, std::vector<int> indices,
                                                 std::vector<Normal3> N, std::vector<Vec3> S,
                                                 std::vector<Point2> uv, const FileLoc &loc);
-    // Recomputes the barycentrics of ray r's hit on triangle `tri` in double
-    // precision (Embree's are single precision); keeps the given ones when the
-    // ray is parallel to the triangle. Clamped onto the triangle.
-    void refineBarycentrics(int tri, const Ray &r, Float *b1, Float *b2) const;
-    // Fills the surface interaction for a hit with barycentrics (b1, b2) on triangle `tri`.
-    void interaction(int tri, Float b1, Float b2, const Vec3 &wo, SurfaceInteraction *si) const;
+    // World-space corners of triangle `tri` (placement: null for a world mesh).
+    void corners(int tri, const MeshPlacement *placement, Point3 c[3]) const;
+    // Recomputes the barycentrics of ray r's (world-space) hit on triangle `tri`
+    // in double precision (Embree's are single precision); keeps the given ones
+    // when the ray is parallel to the triangle. Clamped onto the triangle.
+    void refineBarycentrics(int tri, const Ray &r, Float *b1, Float *b2,
+                            const MeshPlacement *placement = nullptr) const;
+    // Fills the world-space surface interaction for a hit with barycentrics
+    // (b1, b2) on triangle `tri`. With a placement, the corners, normals and
+    // tangents are placed first, so the result equals that of the mesh
+    // flattened with worldFromMesh (up to rounding).
+    void interaction(int tri, Float b1, Float b2, const Vec3 &wo, SurfaceInteraction *si,
+                     const MeshPlacement *placement = nullptr) const;
 };
 
 class Triangle : public Shape {

@@ -32,8 +32,10 @@ Float ShadingCorrection(const PathVertex &v, const Vec3 &wo, const Vec3 &wi) {
     return AbsDot(wo, ns) * AbsDot(wi, ng) / den;
 }
 
-void Barycentrics(const TriangleMesh &m, int tri, const Point3 &p, float *b1, float *b2) {
-    const Point3 &p0 = m.p[m.indices[3 * tri]], &p1 = m.p[m.indices[3 * tri + 1]], &p2 = m.p[m.indices[3 * tri + 2]];
+void Barycentrics(const GeometryRecord &g, int tri, const Point3 &p, float *b1, float *b2) {
+    Point3 c[3];
+    g.triangleCorners(tri, c);
+    const Point3 &p0 = c[0], &p1 = c[1], &p2 = c[2];
     Vec3 e1 = p1 - p0, e2 = p2 - p0, d = p - p0;
     Float d11 = Dot(e1, e1), d12 = Dot(e1, e2), d22 = Dot(e2, e2), dd1 = Dot(d, e1), dd2 = Dot(d, e2);
     Float den = d11 * d22 - d12 * d12;
@@ -144,7 +146,7 @@ void MakeSurfaceVertex(const BidirContext &ctx, const SurfaceInteraction &isect,
     v.geomId = isect.geomId;
     v.primId = isect.primId;
     const GeometryRecord &g = ctx.scene->geometry[isect.geomId];
-    if (g.mesh) Barycentrics(*g.mesh, isect.primId, isect.p, &v.b1, &v.b2);
+    if (g.mesh) Barycentrics(g, isect.primId, isect.p, &v.b1, &v.b2);
     v.ns = bsdf ? bsdf.ns() : isect.shading.n;
     if (bsdf) v.setRoughnessClass(bsdf.roughnessClass(0.001));
 }
@@ -391,7 +393,7 @@ BSDF RebuildBSDF(const BidirContext &ctx, const PathVertex &v, TransportMode mod
     const GeometryRecord &g = ctx.scene->geometry[v.geomId];
     SurfaceInteraction si;
     if (g.mesh) {
-        g.mesh->interaction(v.primId, v.b1, v.b2, v.wo, &si);
+        g.meshInteraction(v.primId, v.b1, v.b2, v.wo, &si);
     } else {
         Vec3 wo = v.wo;
         g.sphere->interaction(Ray(v.p + wo, -wo), 1, &si);

@@ -166,7 +166,7 @@ bool VertexInteraction(const Scene &scene, const PathVertex &v, const Point3 &fr
     if (v.type != VertexType::Surface || v.geomId < 0) return false;
     const GeometryRecord &g = scene.geometry[v.geomId];
     if (g.mesh) {
-        g.mesh->interaction(v.primId, v.b1, v.b2, v.wo, si);
+        g.meshInteraction(v.primId, v.b1, v.b2, v.wo, si);
         si->p = v.p;
         si->geomId = v.geomId;
         si->primId = v.primId;

@@ -1,6 +1,7 @@
 #include "render/scene_builder.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <map>
 #include <sstream>
 #include <thread>
@@ -167,7 +168,18 @@ void CheckTraceableBounds(const Bounds3 &b, const FileLoc &loc) {
         if (!(std::abs(b.pMin[i]) <= kMax && std::abs(b.pMax[i]) <= kMax))
             throw Error(loc, "shape extends beyond 1e15 scene units from the origin (the range the ray tracer handles)");
 }
+// The process's own peak: /proc's VmHWM. getrusage's ru_maxrss survives
+// execve, so a process started by a large parent (a benchmark script holding a
+// mesh) would report the parent's size; it is the fallback without /proc.
 double PeakRSSMegabytes() {
+    if (FILE *f = std::fopen("/proc/self/status", "r")) {
+        char line[256];
+        long kb = -1;
+        while (std::fgets(line, sizeof line, f))
+            if (std::sscanf(line, "VmHWM: %ld kB", &kb) == 1) break;
+        std::fclose(f);
+        if (kb >= 0) return kb / 1024.0;
+    }
     rusage u;
     getrusage(RUSAGE_SELF, &u);
     return u.ru_maxrss / 1024.0;  // ru_maxrss is in KiB on Linux

@@ -3,6 +3,7 @@
 #include <atomic>
 
 #include "core/error.h"
+#include "samplers/rng.h"
 
 namespace gradus {
 
@@ -24,16 +25,35 @@ Float RadicalInverse(int dim, uint64_t a) {
 // Voxel distributions in a flat array of atomic pointers: lookups are one
 // load; a missing voxel is built by whichever thread needs it first and
 // published with a compare-and-swap (a losing builder discards its copy).
+// A voxel's distribution is one block of n + 1 cumulative values (cdf[0] = 0,
+// cdf[n] = 1): sampling and the pmf read that block alone, so a lookup costs
+// two dependent loads (the voxel's pointer, its block), not four
+// (pointer, Distribution1D, its cdf and its func arrays).
 struct LightSampler::Grid {
     Bounds3 bounds;
     int res[3] = {1, 1, 1};
-    std::unique_ptr<std::atomic<Distribution1D *>[]> voxels;
+    std::unique_ptr<std::atomic<const Float *>[]> voxels;
     size_t count = 0;
     std::atomic<int64_t> built{0};
     ~Grid() {
-        for (size_t i = 0; i < count; ++i) delete voxels[i].load();
+        for (size_t i = 0; i < count; ++i) delete[] voxels[i].load();
     }
 };
+
+namespace {
+// Index i with cdf[i] <= u < cdf[i + 1], over buckets of positive width.
+int SampleCdf(const Float *cdf, int n, Float u, Float *pmf) {
+    u = Clamp<Float>(u, 0, OneMinusEpsilon);
+    int lo = 0, hi = n;  // invariant: cdf[lo] <= u < cdf[hi]
+    while (hi - lo > 1) {
+        const int mid = (lo + hi) / 2;
+        if (cdf[mid] <= u) lo = mid;
+        else hi = mid;
+    }
+    if (pmf) *pmf = cdf[lo + 1] - cdf[lo];
+    return lo;
+}
+}  // namespace
 
 LightSampler::LightSampler() = default;
 LightSampler::~LightSampler() = default;
@@ -60,14 +80,14 @@ LightSampler::LightSampler(const std::vector<std::shared_ptr<Light>> &lights, co
         for (int i = 0; i < 3; ++i)
             grid_->res[i] = maxExtent > 0 ? std::max(1, int(std::round(64 * d[i] / maxExtent))) : 1;
         grid_->count = size_t(grid_->res[0]) * grid_->res[1] * grid_->res[2];
-        grid_->voxels.reset(new std::atomic<Distribution1D *>[grid_->count]);
+        grid_->voxels.reset(new std::atomic<const Float *>[grid_->count]);
         for (size_t i = 0; i < grid_->count; ++i) grid_->voxels[i].store(nullptr, std::memory_order_relaxed);
     }
 }
 
 int64_t LightSampler::voxelsBuilt() const { return grid_ ? grid_->built.load() : 0; }
 
-const Distribution1D &LightSampler::lookup(const Point3 &p) const {
+const Float *LightSampler::lookup(const Point3 &p) const {
     const Grid &g = *grid_;
     int vi[3];
     for (int i = 0; i < 3; ++i) {
@@ -79,7 +99,7 @@ const Distribution1D &LightSampler::lookup(const Point3 &p) const {
         vi[i] = Clamp(int(t * g.res[i]), 0, g.res[i] - 1);
     }
     size_t key = (size_t(vi[2]) * g.res[1] + vi[1]) * g.res[0] + vi[0];
-    if (Distribution1D *d = g.voxels[key].load(std::memory_order_acquire)) return *d;
+    if (const Float *d = g.voxels[key].load(std::memory_order_acquire)) return d;
     // Estimate each light's contribution at 128 low-discrepancy points of the voxel.
     Bounds3 vb;
     for (int i = 0; i < 3; ++i) {
@@ -104,14 +124,20 @@ const Distribution1D &LightSampler::lookup(const Point3 &p) const {
     Float avg = sum / (nSamples * Float(contrib.size()));
     Float floorC = avg > 0 ? 1e-3 * avg : 1;
     for (Float &c : contrib) c = std::max(c, floorC);
-    auto *dist = new Distribution1D(contrib.data(), int(contrib.size()));
-    Distribution1D *expected = nullptr;
-    if (g.voxels[key].compare_exchange_strong(expected, dist, std::memory_order_acq_rel)) {
+    Float total = 0;
+    for (Float c : contrib) total += c;
+    const int n = int(contrib.size());
+    Float *cdf = new Float[size_t(n) + 1];
+    cdf[0] = 0;
+    for (int j = 0; j < n; ++j) cdf[j + 1] = cdf[j] + contrib[j] / total;
+    cdf[n] = 1;
+    const Float *expected = nullptr;
+    if (g.voxels[key].compare_exchange_strong(expected, cdf, std::memory_order_acq_rel)) {
         ++grid_->built;
-        return *dist;
+        return cdf;
     }
-    delete dist;
-    return *expected;
+    delete[] cdf;
+    return expected;
 }
 
 const Light *LightSampler::sample(Float u, Float *pmf) const {
@@ -128,7 +154,7 @@ Float LightSampler::pmf(const Light *light) const {
 
 const Light *LightSampler::sample(const Point3 &p, Float u, Float *pmf) const {
     if (!grid_) return sample(u, pmf);
-    int i = lookup(p).sampleDiscrete(u, pmf);
+    int i = SampleCdf(lookup(p), int(lights_.size()), u, pmf);
     return lights_[i];
 }
 
@@ -136,7 +162,8 @@ Float LightSampler::pmf(const Point3 &p, const Light *light) const {
     if (!grid_) return pmf(light);
     auto it = index_.find(light);
     if (it == index_.end()) return 0;
-    return lookup(p).discretePmf(it->second);
+    const Float *cdf = lookup(p);
+    return cdf[it->second + 1] - cdf[it->second];
 }
 
 }  // namespace gradus

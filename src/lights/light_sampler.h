@@ -39,7 +39,7 @@ class LightSampler {
 
   private:
     struct Grid;
-    const Distribution1D &lookup(const Point3 &p) const;
+    const Float *lookup(const Point3 &p) const;  // the voxel's cumulative distribution
     std::vector<const Light *> lights_;
     Distribution1D distrib_;
     std::unordered_map<const Light *, int> index_;

@@ -156,54 +156,56 @@ void TriangleMesh::interaction(int tri, Float b1, Float b2, const Vec3 &wo, Surf
     }
 }
 
-void Triangle::vertices(Point3 *p0, Point3 *p1, Point3 *p2) const {
+Triangle::Triangle(std::shared_ptr<const TriangleMesh> mesh, int tri) : mesh_(std::move(mesh)), tri_(tri) {
     const int *v = &mesh_->indices[3 * tri_];
-    *p0 = mesh_->p[v[0]];
-    *p1 = mesh_->p[v[1]];
-    *p2 = mesh_->p[v[2]];
+    for (int k = 0; k < 3; ++k) p_[k] = mesh_->p[v[k]];
+    const Normal3 n = Cross(p_[1] - p_[0], p_[2] - p_[0]);
+    const Float len = n.length();
+    area_ = 0.5 * len;
+    n_ = len > 0 ? n / len : Normal3(0, 0, 1);
+    if (!mesh_->n.empty()) {
+        // FaceForward against the interpolated shading normal: constant over the
+        // triangle when the three vertex normals lie on one side of n_.
+        int pos = 0, neg = 0;
+        for (int k = 0; k < 3; ++k) {
+            const Float d = Dot(n_, mesh_->n[v[k]]);
+            pos += d > 0;
+            neg += d < 0;
+        }
+        if (pos == 3) varies_ = false;
+        else if (neg == 3) n_ = -n_, varies_ = false;
+        else varies_ = true;
+    } else if (mesh_->reverseOrientation ^ mesh_->transformSwapsHandedness) {
+        n_ = -n_;
+    }
 }
 
-Float Triangle::area() const {
-    Point3 p0, p1, p2;
-    vertices(&p0, &p1, &p2);
-    return 0.5 * Cross(p1 - p0, p2 - p0).length();
+Normal3 Triangle::orientedNormal(Float b0, Float b1) const {
+    if (!varies_) return n_;
+    const int *v = &mesh_->indices[3 * tri_];
+    return FaceForward(n_, mesh_->n[v[0]] * b0 + mesh_->n[v[1]] * b1 + mesh_->n[v[2]] * (1 - b0 - b1));
 }
+
+Float Triangle::area() const { return area_; }
 
 Bounds3 Triangle::worldBound() const {
-    Point3 p0, p1, p2;
-    vertices(&p0, &p1, &p2);
     Bounds3 b;
-    b.expand(p0);
-    b.expand(p1);
-    b.expand(p2);
+    for (const Point3 &q : p_) b.expand(q);
     return b;
 }
 
 Interaction Triangle::sampleArea(Point2 u, Float *pdf) const {
-    Point3 p0, p1, p2;
-    vertices(&p0, &p1, &p2);
-    Point2 b = SampleUniformTriangle(u);
+    const Point2 b = SampleUniformTriangle(u);
     Interaction it;
-    it.p = p0 * b.x + p1 * b.y + p2 * (1 - b.x - b.y);
-    Normal3 n = Cross(p1 - p0, p2 - p0);
-    Float len = n.length();
-    it.n = len > 0 ? n / len : Normal3(0, 0, 1);
-    const int *v = &mesh_->indices[3 * tri_];
-    if (!mesh_->n.empty()) {
-        Normal3 ns = mesh_->n[v[0]] * b.x + mesh_->n[v[1]] * b.y + mesh_->n[v[2]] * (1 - b.x - b.y);
-        it.n = FaceForward(it.n, ns);
-    } else if (mesh_->reverseOrientation ^ mesh_->transformSwapsHandedness) {
-        it.n = -it.n;
-    }
-    Float a = 0.5 * len;
-    *pdf = a > 0 ? 1 / a : 0;
+    it.p = p_[0] * b.x + p_[1] * b.y + p_[2] * (1 - b.x - b.y);
+    it.n = orientedNormal(b.x, b.y);
+    *pdf = area_ > 0 ? 1 / area_ : 0;
     return it;
 }
 
 // Moeller-Trumbore in double precision.
 bool Triangle::intersectP(const Ray &r, Float *tHit, Interaction *hit) const {
-    Point3 p0, p1, p2;
-    vertices(&p0, &p1, &p2);
+    const Point3 &p0 = p_[0], &p1 = p_[1], &p2 = p_[2];
     Vec3 e1 = p1 - p0, e2 = p2 - p0;
     Vec3 pv = Cross(r.d, e2);
     Float det = Dot(e1, pv);
@@ -219,15 +221,7 @@ bool Triangle::intersectP(const Ray &r, Float *tHit, Interaction *hit) const {
     if (t <= 0 || t >= r.tMax) return false;
     *tHit = t;
     hit->p = r(t);
-    Normal3 n = Normalize(Cross(e1, e2));
-    const int *v = &mesh_->indices[3 * tri_];
-    if (!mesh_->n.empty()) {
-        Float b0 = 1 - b1 - b2;
-        n = FaceForward(n, mesh_->n[v[0]] * b0 + mesh_->n[v[1]] * b1 + mesh_->n[v[2]] * b2);
-    } else if (mesh_->reverseOrientation ^ mesh_->transformSwapsHandedness) {
-        n = -n;
-    }
-    hit->n = n;
+    hit->n = orientedNormal(1 - b1 - b2, b1);
     hit->wo = -r.d;
     return true;
 }

@@ -52,18 +52,27 @@ struct TriangleMesh {
                      const MeshPlacement *placement = nullptr) const;
 };
 
+// One triangle of a world mesh as a Shape (area lights). Its corners, unit
+// normal (oriented as the mesh's interaction orients it, where that does not
+// vary over the triangle) and area are kept with it: light sampling reads no
+// mesh arrays and computes no cross product per sample.
 class Triangle : public Shape {
   public:
-    Triangle(std::shared_ptr<const TriangleMesh> mesh, int tri) : mesh_(std::move(mesh)), tri_(tri) {}
+    Triangle(std::shared_ptr<const TriangleMesh> mesh, int tri);
     Float area() const override;
     Bounds3 worldBound() const override;
     Interaction sampleArea(Point2 u, Float *pdf) const override;
     bool intersectP(const Ray &r, Float *tHit, Interaction *hit) const override;
 
   private:
-    void vertices(Point3 *p0, Point3 *p1, Point3 *p2) const;
+    // The unit normal at barycentrics (b0, b1, 1 - b0 - b1), oriented.
+    Normal3 orientedNormal(Float b0, Float b1) const;
     std::shared_ptr<const TriangleMesh> mesh_;
     int tri_;
+    Point3 p_[3];
+    Normal3 n_;           // unit geometric normal, oriented when !varies_
+    Float area_ = 0;
+    bool varies_ = false;  // shading normals that do not all face one side of n_
 };
 
 }  // namespace gradus

@@ -100,11 +100,30 @@ inline uint32_t SobolDim0(uint32_t i) { return ReverseBits32(i); }
 
 // Sobol' dimension 1: generator matrix columns v_0 = 2^31, v_{k+1} = v_k ^ (v_k >> 1)
 // (Pascal's triangle mod 2). With dimension 0 it forms a (0,2)-sequence in base 2.
+// The matrix is linear over GF(2): the image of i is the XOR of the images of
+// its four bytes, looked up in tables of the columns' 256 combinations per
+// byte (no loop over the index's bits and its unpredictable branches).
+struct SobolDim1Tables {
+    uint32_t byte[4][256];
+};
+constexpr SobolDim1Tables MakeSobolDim1Tables() {
+    SobolDim1Tables t{};
+    uint32_t col[32] = {};
+    uint32_t v = 0x80000000U;
+    for (int k = 0; k < 32; ++k, v ^= v >> 1) col[k] = v;
+    for (int b = 0; b < 4; ++b)
+        for (int x = 0; x < 256; ++x) {
+            uint32_t r = 0;
+            for (int m = 0; m < 8; ++m)
+                if (x & (1 << m)) r ^= col[8 * b + m];
+            t.byte[b][x] = r;
+        }
+    return t;
+}
+inline constexpr SobolDim1Tables kSobolDim1 = MakeSobolDim1Tables();
 inline uint32_t SobolDim1(uint32_t i) {
-    uint32_t v = 0x80000000U, r = 0;
-    for (; i != 0; i >>= 1, v ^= v >> 1)
-        if (i & 1) r ^= v;
-    return r;
+    return kSobolDim1.byte[0][i & 255] ^ kSobolDim1.byte[1][(i >> 8) & 255] ^ kSobolDim1.byte[2][(i >> 16) & 255] ^
+           kSobolDim1.byte[3][i >> 24];
 }
 
 // Hash-based Owen scrambling of 32-bit binary fractions (Burley 2020,

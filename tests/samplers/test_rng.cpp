@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include <cmath>
 #include <set>
 #include <vector>
@@ -127,6 +129,16 @@ TEST(LowDiscrepancy, SobolGeneratorsAndPrimes) {
             }
             for (uint32_t c = 0; c < n; ++c) ASSERT_EQ(cell[c], 1) << "m=" << m << " k=" << k;
         }
+    }
+    // The byte tables against the generator matrix column by column, over all
+    // four bytes (v_0 = 2^31, v_{k+1} = v_k ^ (v_k >> 1)).
+    std::mt19937 rng(11);
+    for (int n = 0; n < 100000; ++n) {
+        const uint32_t i = n < 32 ? (1u << n) : n == 32 ? 0xffffffffu : uint32_t(rng());
+        uint32_t v = 0x80000000U, r = 0;
+        for (uint32_t j = i; j != 0; j >>= 1, v ^= v >> 1)
+            if (j & 1) r ^= v;
+        ASSERT_EQ(SobolDim1(i), r) << i;
     }
     EXPECT_EQ(Prime(0), 2u);
     EXPECT_EQ(Prime(1), 3u);

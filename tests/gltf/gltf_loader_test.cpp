@@ -11,6 +11,7 @@
 #include <regex>
 
 #include "gltf_test_util.h"
+#include "render/scene_builder.h"
 #include "textures/textures.h"
 
 namespace gradus::gltftest {
@@ -170,6 +171,10 @@ TEST(GltfLoader, CornellBoxStructure) {
         ExpectMatrix(d.instanceUses[i].worldFromInstance, e, "box " + std::to_string(i));
         EXPECT_TRUE(d.instanceUses[i].worldFromInstance.swapsHandedness());
     }
+    // The builder places the cube's one stored mesh twice (Embree instances).
+    auto scene = BuildScene(d, Point2i{16, 16});
+    EXPECT_EQ(scene->features.numInstances, 2);
+    EXPECT_EQ(scene->features.numInstancedTriangles, 2 * 12);
     int emitters = 0;
     for (const auto &s : d.shapes) {
         ExpectMatrix(s.worldFromObject, mirror, "wall/light");

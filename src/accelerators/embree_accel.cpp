@@ -155,13 +155,15 @@ RTCGeometry NewTriangleGeometry(RTCDevice device, const TriangleMesh &mesh) {
 
 }  // namespace
 
-void EmbreeAccel::attachTop(void *geometry, int firstRecord, int records) {
+int EmbreeAccel::attachTop(void *geometry, int records) {
     RTCGeometry g = static_cast<RTCGeometry>(geometry);
     rtcCommitGeometry(g);
     rtcAttachGeometryByID(scene_, g, unsigned(nextId_++));
     rtcReleaseGeometry(g);
-    recordOfTop_.push_back(firstRecord);
+    const int first = nextRecord_;
+    recordOfTop_.push_back(first);
     nextRecord_ += records;
+    return first;
 }
 
 int EmbreeAccel::addMesh(std::shared_ptr<const TriangleMesh> mesh) {
@@ -172,9 +174,7 @@ int EmbreeAccel::addMesh(std::shared_ptr<const TriangleMesh> mesh) {
         rtcSetGeometryOccludedFilterFunction(g, AlphaOccludedFilter);
         alphaMeshes_.push_back(mesh);
     }
-    const int record = nextRecord_;
-    attachTop(g, record, 1);
-    return record;
+    return attachTop(g, 1);
 }
 
 int EmbreeAccel::addAnalytic(std::shared_ptr<const AnalyticShape> shape) {
@@ -185,9 +185,7 @@ int EmbreeAccel::addAnalytic(std::shared_ptr<const AnalyticShape> shape) {
     rtcSetGeometryIntersectFunction(g, AnalyticIntersect);
     rtcSetGeometryOccludedFunction(g, AnalyticOccluded);
     analytic_.push_back(std::move(shape));
-    const int record = nextRecord_;
-    attachTop(g, record, 1);
-    return record;
+    return attachTop(g, 1);
 }
 
 int EmbreeAccel::newObject() {
@@ -229,9 +227,7 @@ int EmbreeAccel::addInstance(int object, const Transform &worldFromObject) {
     for (int c = 0; c < 4; ++c)
         for (int r = 0; r < 3; ++r) xfm[3 * c + r] = float(m.m[r][c]);
     rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, xfm);
-    const int record = nextRecord_;
-    attachTop(g, record, int(o.meshes.size()));
-    return record;
+    return attachTop(g, int(o.meshes.size()));
 }
 
 void EmbreeAccel::commit() { rtcCommitScene(scene_); }

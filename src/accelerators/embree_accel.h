@@ -54,7 +54,8 @@ class EmbreeAccel {
     bool occluded(const Ray &r) const;
 
   private:
-    void attachTop(void *geometry, int firstRecord, int records);
+    // Attaches a top-level geometry holding `records` records; returns the first record id.
+    int attachTop(void *geometry, int records);
     RTCDeviceTy *device_ = nullptr;
     RTCSceneTy *scene_ = nullptr;
     int nextId_ = 0;      // top-level Embree geometry ids

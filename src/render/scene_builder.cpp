@@ -252,18 +252,21 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
     };
     std::map<std::string, ObjectBuild> objects;
     std::vector<std::pair<const InstanceUseDesc *, const ObjectBuild *>> instanced;
+    auto flatten = [&](const std::vector<ShapeDesc> &objectShapes, const Transform &worldFromInstance) {
+        for (ShapeDesc s : objectShapes) {
+            s.worldFromObject = worldFromInstance * s.worldFromObject;
+            shapes.push_back(std::move(s));
+        }
+    };
     for (const auto &use : desc.instanceUses) {
         const InstanceDesc &inst = desc.instances.at(use.name);
-        if (uses[use.name] == 1) {  // nothing to share: flatten
-            for (ShapeDesc s : inst.shapes) {
-                s.worldFromObject = use.worldFromInstance * s.worldFromObject;
-                shapes.push_back(std::move(s));
-            }
+        if (uses[use.name] == 1) {  // nothing to share
+            flatten(inst.shapes, use.worldFromInstance);
             continue;
         }
-        auto found = objects.find(use.name);
-        if (found == objects.end()) {
-            ObjectBuild &ob = objects[use.name];
+        auto [found, isNew] = objects.try_emplace(use.name);
+        if (isNew) {
+            ObjectBuild &ob = found->second;
             for (const ShapeDesc &sd : inst.shapes) {
                 ShapeBuild b = CreateShape(sd, desc, textures);
                 if (!b.mesh || b.mesh->alpha || b.mesh->shadowAlpha) {
@@ -279,14 +282,10 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
                 scene->accel.addObjectMesh(ob.embreeObject, b.mesh);
             }
             feat.numStoredTriangles += ob.triangles;
-            found = objects.find(use.name);
         }
         const ObjectBuild &ob = found->second;
         if (ob.embreeObject >= 0) CheckTraceableBounds(use.worldFromInstance.applyBounds(ob.bounds), use.loc);
-        for (ShapeDesc s : ob.flattened) {
-            s.worldFromObject = use.worldFromInstance * s.worldFromObject;
-            shapes.push_back(std::move(s));
-        }
+        flatten(ob.flattened, use.worldFromInstance);
         if (ob.embreeObject >= 0) instanced.emplace_back(&use, &ob);
     }
     for (const auto &sd : shapes) {

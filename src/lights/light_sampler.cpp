@@ -8,17 +8,26 @@
 namespace gradus {
 
 namespace {
-// Plain radical inverse in the prime base of dimension dim (Halton points).
-Float RadicalInverse(int dim, uint64_t a) {
-    static const int primes[] = {2, 3, 5, 7, 11};
-    const int base = primes[dim];
-    Float inv = Float(1) / base, f = inv, r = 0;
-    while (a) {
-        r += Float(a % base) * f;
-        a /= base;
-        f *= inv;
+// Points at which a voxel's distribution is estimated (see light_sampler.h): the first kVoxelSamples
+// Halton points in 5 dimensions (3 for the position in the voxel, 2 for the
+// light sample), the same for every voxel, so computed once.
+constexpr int kVoxelSamples = 32;
+struct HaltonTable {
+    Float v[kVoxelSamples][5];
+    HaltonTable() {
+        static const int primes[] = {2, 3, 5, 7, 11};
+        for (int s = 0; s < kVoxelSamples; ++s)
+            for (int d = 0; d < 5; ++d) {
+                const int base = primes[d];
+                Float inv = Float(1) / base, f = inv, r = 0;
+                for (uint64_t a = uint64_t(s); a; a /= base, f *= inv) r += Float(a % base) * f;
+                v[s][d] = r;
+            }
     }
-    return r;
+};
+const HaltonTable &VoxelPoints() {
+    static const HaltonTable table;
+    return table;
 }
 }  // namespace
 
@@ -100,20 +109,21 @@ const Float *LightSampler::lookup(const Point3 &p) const {
     }
     size_t key = (size_t(vi[2]) * g.res[1] + vi[1]) * g.res[0] + vi[0];
     if (const Float *d = g.voxels[key].load(std::memory_order_acquire)) return d;
-    // Estimate each light's contribution at 128 low-discrepancy points of the voxel.
+    // Estimate each light's contribution at kVoxelSamples low-discrepancy points of the voxel.
     Bounds3 vb;
     for (int i = 0; i < 3; ++i) {
         Float ext = g.bounds.pMax[i] - g.bounds.pMin[i];
         vb.pMin[i] = g.bounds.pMin[i] + ext * vi[i] / g.res[i];
         vb.pMax[i] = g.bounds.pMin[i] + ext * (vi[i] + 1) / g.res[i];
     }
-    const int nSamples = 128;
+    const int nSamples = kVoxelSamples;
+    const HaltonTable &h = VoxelPoints();
     std::vector<Float> contrib(lights_.size(), 0);
     for (int s = 0; s < nSamples; ++s) {
-        Point3 po(Lerp(RadicalInverse(0, s), vb.pMin.x, vb.pMax.x), Lerp(RadicalInverse(1, s), vb.pMin.y, vb.pMax.y),
-                  Lerp(RadicalInverse(2, s), vb.pMin.z, vb.pMax.z));
+        const Float *x = h.v[s];
+        Point3 po(Lerp(x[0], vb.pMin.x, vb.pMax.x), Lerp(x[1], vb.pMin.y, vb.pMax.y), Lerp(x[2], vb.pMin.z, vb.pMax.z));
         Interaction ref(po, Normal3(0, 0, 0), Vec3(0, 0, 0));
-        Point2 u(RadicalInverse(3, s), RadicalInverse(4, s));
+        Point2 u(x[3], x[4]);
         for (size_t j = 0; j < lights_.size(); ++j) {
             LightLiSample ls;
             if (lights_[j]->sampleLi(ref, u, &ls) && ls.pdf > 0) contrib[j] += ls.L.y() / ls.pdf;

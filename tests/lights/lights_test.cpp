@@ -339,15 +339,24 @@ TEST(InfiniteLight, NonFiniteDirectionHasNoRadiance) {
     }
 }
 
+// Two equal point lights at x = -0.5 and 0.5, and the box [-1, 1]^3 around them.
+std::vector<std::shared_ptr<Light>> TwoPointLights() {
+    return {MakeLight(R"(LightSource "point" "point from" [-0.5 0 0])"),
+            MakeLight(R"(LightSource "point" "point from" [0.5 0 0])")};
+}
+Bounds3 UnitBox() {
+    Bounds3 b;
+    b.expand(Point3(-1, -1, -1));
+    b.expand(Point3(1, 1, 1));
+    return b;
+}
+
 // The spatial light choice at points far outside its grid (1e73 and NaN in a
 // fuzzed scene: the voxel index conversion was undefined behaviour) uses the
 // nearest boundary voxel, or voxel 0 for NaN, and returns a valid choice.
 TEST(LightSampler, SpatialChoiceFarOutsideTheBounds) {
-    std::vector<std::shared_ptr<Light>> lights = {MakeLight(R"(LightSource "point" "point from" [-0.5 0 0])"),
-                                                  MakeLight(R"(LightSource "point" "point from" [0.5 0 0])")};
-    Bounds3 b;
-    b.expand(Point3(-1, -1, -1));
-    b.expand(Point3(1, 1, 1));
+    std::vector<std::shared_ptr<Light>> lights = TwoPointLights();
+    const Bounds3 b = UnitBox();
     LightSampler ls(lights, "spatial", FileLoc(), b);
     for (Point3 p : {Point3(1e73, 0, 0), Point3(-1e300, 3e40, -2e19), Point3(std::nan(""), 0, 0)}) {
         Float pmf = 0;
@@ -364,11 +373,8 @@ TEST(LightSampler, SpatialChoiceFarOutsideTheBounds) {
 // unoccluded contribution, so its pmf must exceed 0.95; the power and uniform
 // strategies give 0.5. The pmf matches the sampled frequencies.
 TEST(LightSampler, SpatialChoiceFavoursTheNearLight) {
-    std::vector<std::shared_ptr<Light>> lights = {MakeLight(R"(LightSource "point" "point from" [-0.5 0 0])"),
-                                                  MakeLight(R"(LightSource "point" "point from" [0.5 0 0])")};
-    Bounds3 b;
-    b.expand(Point3(-1, -1, -1));
-    b.expand(Point3(1, 1, 1));
+    std::vector<std::shared_ptr<Light>> lights = TwoPointLights();
+    const Bounds3 b = UnitBox();
     LightSampler ls(lights, "spatial", FileLoc(), b);
     for (int side : {0, 1}) {
         const Point3 p(side ? 0.45 : -0.45, 0.01, 0.01);

@@ -1,8 +1,8 @@
 #include "core/provenance.h"
 
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <mutex>
 #include <vector>
 
@@ -27,9 +27,26 @@ void RecordInputFile(const std::string &, const void *data, size_t n) {
     gBytes += n;
 }
 
+FileRead ReadFileBytes(const std::string &path, std::string *out) {
+    out->clear();
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) return FileRead::ReadError;  // opens, but has no size to read
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
+    if (!in) return FileRead::CannotOpen;
+    const std::streamoff size = in.tellg();
+    if (size < 0) return FileRead::ReadError;
+    out->resize(size_t(size));
+    in.seekg(0);
+    if (size > 0 && !in.read(&(*out)[0], size)) {
+        out->clear();
+        return FileRead::ReadError;
+    }
+    return FileRead::Ok;
+}
+
 void RecordInputFile(const std::string &path) {
-    std::ifstream in(path, std::ios::binary);
-    std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::string bytes;
+    ReadFileBytes(path, &bytes);  // an unreadable file records as empty, as before
     RecordInputFile(path, bytes.data(), bytes.size());
 }
 

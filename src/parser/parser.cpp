@@ -4,7 +4,6 @@
 #include <array>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <map>
 #include <memory>
 #include <set>
@@ -22,12 +21,7 @@ namespace {
 // ---------------------------------------------------------------- files
 
 bool ReadWholeFile(const std::string &path, std::string *out) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return false;
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    if (in.bad()) return false;
-    *out = ss.str();
+    if (ReadFileBytes(path, out) != FileRead::Ok) return false;
     RecordInputFile(path, out->data(), out->size());  // every scene file read is part of the provenance
     return true;
 }

@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <fstream>
 #include <sstream>
 
 #include "core/error.h"
@@ -316,11 +315,13 @@ PlyMesh ReadPlyFromMemory(const char *data, size_t size, const std::string &name
 }
 
 PlyMesh ReadPly(const std::string &filename) {
-    RecordInputFile(filename);  // provenance: meshes are scene inputs
-    std::ifstream f(filename, std::ios::binary);
-    if (!f) throw Error(filename + ": cannot open PLY file");
-    std::string data((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-    if (f.bad()) throw Error(filename + ": error reading PLY file");
+    std::string data;
+    switch (ReadFileBytes(filename, &data)) {
+    case FileRead::CannotOpen: throw Error(filename + ": cannot open PLY file");
+    case FileRead::ReadError: throw Error(filename + ": error reading PLY file");
+    case FileRead::Ok: break;
+    }
+    RecordInputFile(filename, data.data(), data.size());  // provenance: meshes are scene inputs
     return ReadPlyFromMemory(data.data(), data.size(), filename);
 }
 

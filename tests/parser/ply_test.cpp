@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "core/provenance.h"
 #include "parser/ply.h"
 #include "parser/scene_desc.h"
 
@@ -215,6 +216,41 @@ TEST(Ply, ReadFromTempFileAndPlymeshScene) {
     } catch (const Error &e) {
         EXPECT_NE(std::string(e.what()).find((dir / "t.ply").string()), std::string::npos);
     }
+    fs::remove_all(dir);
+}
+
+// ReadFileBytes, the loader's one-read file reader: every byte back (NULs and
+// all byte values, a size beyond one stream buffer), an empty file, a missing
+// file and a directory; the provenance record of a PLY file hashes the bytes
+// read (one record per ReadPly, with the file's size).
+TEST(Ply, ReadFileBytesAndItsProvenanceRecord) {
+    namespace fs = std::filesystem;
+    fs::path dir = fs::temp_directory_path() / ("gradus_readbytes_test_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    std::string bytes(200003, '\0');
+    for (size_t i = 0; i < bytes.size(); ++i) bytes[i] = char((i * 131 + i / 7) & 0xff);
+    std::ofstream(dir / "b.bin", std::ios::binary) << bytes;
+    std::ofstream(dir / "e.bin", std::ios::binary).flush();
+    std::string out = "stale";
+    EXPECT_EQ(ReadFileBytes((dir / "b.bin").string(), &out), FileRead::Ok);
+    EXPECT_TRUE(out == bytes);
+    EXPECT_EQ(ReadFileBytes((dir / "e.bin").string(), &out), FileRead::Ok);
+    EXPECT_TRUE(out.empty());
+    EXPECT_EQ(ReadFileBytes((dir / "none.bin").string(), &out), FileRead::CannotOpen);
+    EXPECT_EQ(ReadFileBytes(dir.string(), &out), FileRead::ReadError);
+    EXPECT_TRUE(out.empty());
+
+    const std::string ply = BinaryPly(false);
+    std::ofstream(dir / "m.ply", std::ios::binary) << ply;
+    ResetInputFiles();
+    ReadPly((dir / "m.ply").string());
+    const InputFilesSummary s = InputFiles();
+    EXPECT_EQ(s.files, 1);
+    EXPECT_EQ(s.bytes, ply.size());
+    ResetInputFiles();
+    RecordInputFile("m.ply", ply.data(), ply.size());
+    EXPECT_EQ(InputFiles().hash, s.hash);
+    ResetInputFiles();
     fs::remove_all(dir);
 }
 

@@ -22,6 +22,13 @@ class Sampler {
     // Uniform values in [0, 1) (never exactly 1).
     virtual Float get1D() = 0;
     virtual Point2 get2D() = 0;
+    // The dimension the next get1D/get2D takes, and a jump to another one, for
+    // estimators that give each of their parts a fixed block of dimensions
+    // (bdpt: a strategy's connection numbers stay stratified over a pixel's
+    // samples whatever the subpaths' lengths). Samplers without dimensions
+    // (RNGSampler) report -1 and ignore the jump.
+    virtual int dimension() const { return -1; }
+    virtual void setDimension(int) {}
     virtual std::unique_ptr<Sampler> clone() const = 0;
     virtual std::string name() const = 0;
 

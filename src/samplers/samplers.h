@@ -16,7 +16,8 @@ class AddressedSampler : public Sampler {
         index_ = sampleIndex;
         dim_ = dimension;
     }
-    int dimension() const { return dim_; }
+    int dimension() const override { return dim_; }
+    void setDimension(int dimension) override { dim_ = dimension; }
 
   protected:
     AddressedSampler(int spp, uint64_t seed) : Sampler(spp, seed) {}

@@ -1,5 +1,5 @@
 // bdpt gives the camera subpath, the light subpath and every strategy's
-// connection numbers fixed blocks of sampler dimensions (bdpt.cpp), so a
+// connection numbers fixed blocks of sampler dimensions (BidirDimensions), so a
 // strategy's numbers keep the sampler's stratification over a pixel's samples
 // whatever the subpaths' lengths. Consumed one after the other, they started
 // wherever the camera subpath's random walk had ended, which varies from

@@ -33,24 +33,10 @@ void BDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &a
     AllocSubpath(arena, maxCam, &camV, &camB);
     AllocSubpath(arena, maxLight, &lightV, &lightB);
 
-    // Fixed blocks of sampler dimensions: the camera subpath from d0, the
-    // light subpath and each strategy's connection numbers at offsets that do
-    // not depend on the subpaths' lengths, so that every strategy's numbers
-    // keep the sampler's stratification over a pixel's samples (consumed one
-    // after the other they did not: the light subpath and the connections
-    // started wherever the camera subpath's random walk had ended). A vertex
-    // of a random walk takes at most kWalkDims dimensions (BSDF 1D + 2D,
-    // roulette 1D), a light subpath's origin kLightOriginDims.
-    constexpr int kWalkDims = 4, kLightOriginDims = 5, kConnectDims = 3;
-    const int d0 = sampler.dimension();
-    const bool fixedDims = d0 >= 0;
-    const int dLight = d0 + kWalkDims * maxCam, dConnect = dLight + kLightOriginDims + kWalkDims * maxLight;
-
+    BidirDimensions dims(sampler, maxCam, maxLight);  // fixed blocks of dimensions (bidir.h)
     int nC = GenerateCameraSubpath(ctx_, ray, sampler, arena, maxCam, camV, camB);
-    GRADUS_CHECK(!fixedDims || sampler.dimension() <= dLight);
-    if (fixedDims) sampler.setDimension(dLight);
+    dims.startLightSubpath(sampler);
     int nL = scene.lights.empty() ? 0 : GenerateLightSubpath(ctx_, sampler, arena, maxLight, lightV, lightB);
-    GRADUS_CHECK(!fixedDims || sampler.dimension() <= dConnect);
     SubpathView cam{camV, camB, nC}, light{lightV, lightB, nL};
 
     Spectrum L(0);
@@ -59,8 +45,7 @@ void BDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &a
             int depth = s + t - 2;
             if ((s == 1 && t == 1) || depth < 0 || depth > set_.maxDepth) continue;
             ConnectSamples u;
-            // (s, t)'s own dimensions: s = 1 takes 1D + 2D, t = 1 takes 2D (never both).
-            if (fixedDims) sampler.setDimension(dConnect + kConnectDims * ((t - 1) * (maxLight + 1) + s));
+            dims.startConnection(sampler, s, t);
             if (s == 1) {
                 u.uLightSelect = sampler.get1D();
                 u.uLight = sampler.get2D();

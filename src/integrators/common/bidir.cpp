@@ -249,6 +249,27 @@ int GenerateCameraSubpath(const BidirContext &ctx, const Ray &ray, Sampler &samp
                       bsdfs);
 }
 
+BidirDimensions::BidirDimensions(const Sampler &sampler, int maxCameraVertices, int maxLightVertices)
+    : d0_(sampler.dimension()),
+      light_(d0_ + kWalkDims * maxCameraVertices),
+      connect_(light_ + kLightOriginDims + kWalkDims * maxLightVertices),
+      maxLight_(maxLightVertices) {}
+
+void BidirDimensions::startLightSubpath(Sampler &sampler) const {
+    if (d0_ < 0) return;
+    GRADUS_CHECK(sampler.dimension() <= light_);
+    sampler.setDimension(light_);
+}
+
+void BidirDimensions::startConnection(Sampler &sampler, int s, int t) {
+    if (d0_ < 0) return;
+    if (!lightChecked_) {  // the light subpath stayed in its block
+        GRADUS_CHECK(sampler.dimension() <= connect_);
+        lightChecked_ = true;
+    }
+    sampler.setDimension(connect_ + kConnectDims * ((t - 1) * (maxLight_ + 1) + s));
+}
+
 int GenerateLightSubpath(const BidirContext &ctx, Sampler &sampler, Arena &arena, int maxVertices, PathVertex *path,
                          BSDF *bsdfs) {
     Float uSel = sampler.get1D();

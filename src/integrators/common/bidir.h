@@ -99,6 +99,28 @@ struct BidirContext {
 // Sampler use per bounce: 1D (lobe) + 2D (direction).
 int GenerateCameraSubpath(const BidirContext &ctx, const Ray &ray, Sampler &sampler, Arena &arena,
                           int maxVertices, PathVertex *path, BSDF *bsdfs);
+// Fixed blocks of sampler dimensions for one bidirectional sample taken from
+// the pixel sampler (bdpt, gbdpt): the camera subpath from the sampler's
+// dimension d0 at construction, the light subpath and each strategy's
+// connection numbers (s = 1: 1D + 2D, t = 1: 2D) at offsets that do not
+// depend on the subpaths' lengths, so that every strategy's numbers keep the
+// sampler's stratification over a pixel's samples (consumed one after the
+// other, they start wherever the camera subpath's random walk ended, which
+// varies from sample to sample). A random-walk vertex takes at most 4
+// dimensions (BSDF 1D + 2D, roulette 1D), a light subpath's origin 5. Checks
+// that each subpath stayed within its block. No-op for samplers without
+// dimensions (RNGSampler).
+class BidirDimensions {
+  public:
+    BidirDimensions(const Sampler &sampler, int maxCameraVertices, int maxLightVertices);
+    void startLightSubpath(Sampler &sampler) const;         // after the camera subpath
+    void startConnection(Sampler &sampler, int s, int t);  // after the light subpath
+
+  private:
+    static constexpr int kWalkDims = 4, kLightOriginDims = 5, kConnectDims = 3;
+    int d0_, light_, connect_, maxLight_;
+    bool lightChecked_ = false;
+};
 // Light subpath: picks a light (1D), samples emission (2D position + 2D direction),
 // then up to maxVertices - 1 scattering vertices. Returns the number of vertices.
 int GenerateLightSubpath(const BidirContext &ctx, Sampler &sampler, Arena &arena, int maxVertices,

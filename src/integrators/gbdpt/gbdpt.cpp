@@ -127,7 +127,9 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
     AllocSubpath(arena, maxLight, &light.v, &light.b);
     cam.deltaSample = static_cast<uint8_t *>(arena.alloc(maxCam));
     light.deltaSample = static_cast<uint8_t *>(arena.alloc(maxLight));
+    BidirDimensions dims(sampler, maxCam, maxLight);  // fixed blocks of dimensions (bidir.h), as bdpt
     cam.n = GenerateCameraSubpath(bctx_, ray, sampler, arena, maxCam, cam.v, cam.b);
+    dims.startLightSubpath(sampler);
     light.n = scene.lights.empty() || !connections_ ? 0 : GenerateLightSubpath(bctx_, sampler, arena, maxLight, light.v, light.b);
     PrepareSubpath(sctx_, &cam);
     PrepareSubpath(sctx_, &light);
@@ -174,6 +176,7 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
             int depth = s + t - 2;
             if ((s == 1 && t == 1) || depth < 0 || depth > set_.maxDepth) continue;
             ConnectSamples u;
+            dims.startConnection(sampler, s, t);
             if (s == 1) {
                 u.uLightSelect = sampler.get1D();
                 u.uLight = sampler.get2D();

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <sstream>
 #include <vector>
 
 namespace gradus {
@@ -30,17 +31,23 @@ void RecordInputFile(const std::string &, const void *data, size_t n) {
 FileRead ReadFileBytes(const std::string &path, std::string *out) {
     out->clear();
     std::error_code ec;
-    if (std::filesystem::is_directory(path, ec)) return FileRead::ReadError;  // opens, but has no size to read
-    std::ifstream in(path, std::ios::binary | std::ios::ate);
+    if (std::filesystem::is_directory(path, ec)) return FileRead::ReadError;  // opens, but has nothing to read
+    std::ifstream in(path, std::ios::binary);
     if (!in) return FileRead::CannotOpen;
-    const std::streamoff size = in.tellg();
-    if (size < 0) return FileRead::ReadError;
-    out->resize(size_t(size));
-    in.seekg(0);
-    if (size > 0 && !in.read(&(*out)[0], size)) {
-        out->clear();
-        return FileRead::ReadError;
+    const auto size = std::filesystem::is_regular_file(path, ec) ? std::filesystem::file_size(path, ec) : 0;
+    if (size > 0 && !ec) {
+        out->resize(size_t(size));
+        if (!in.read(&(*out)[0], std::streamsize(size))) {
+            out->clear();
+            return FileRead::ReadError;
+        }
+        return FileRead::Ok;
     }
+    // Pipes and devices (a scene on /dev/stdin) have no size: read to the end.
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    if (in.bad()) return FileRead::ReadError;
+    *out = ss.str();
     return FileRead::Ok;
 }
 

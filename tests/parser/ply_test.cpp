@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <sys/stat.h>
+#include <thread>
 #include <unistd.h>
 #include <string>
 #include <vector>
@@ -221,7 +223,7 @@ TEST(Ply, ReadFromTempFileAndPlymeshScene) {
 
 // ReadFileBytes, the loader's one-read file reader: every byte back (NULs and
 // all byte values, a size beyond one stream buffer), an empty file, a missing
-// file and a directory; the provenance record of a PLY file hashes the bytes
+// file, a directory and a named pipe; the provenance record of a PLY file hashes the bytes
 // read (one record per ReadPly, with the file's size).
 TEST(Ply, ReadFileBytesAndItsProvenanceRecord) {
     namespace fs = std::filesystem;
@@ -239,6 +241,13 @@ TEST(Ply, ReadFileBytesAndItsProvenanceRecord) {
     EXPECT_EQ(ReadFileBytes((dir / "none.bin").string(), &out), FileRead::CannotOpen);
     EXPECT_EQ(ReadFileBytes(dir.string(), &out), FileRead::ReadError);
     EXPECT_TRUE(out.empty());
+    // A pipe has no size (a scene given as /dev/stdin): read to its end.
+    const std::string fifo = (dir / "pipe").string();
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    std::thread writer([&] { std::ofstream(fifo, std::ios::binary) << bytes; });
+    EXPECT_EQ(ReadFileBytes(fifo, &out), FileRead::Ok);
+    writer.join();
+    EXPECT_TRUE(out == bytes);
 
     const std::string ply = BinaryPly(false);
     std::ofstream(dir / "m.ply", std::ios::binary) << ply;

@@ -116,10 +116,9 @@ const Float *LightSampler::lookup(const Point3 &p) const {
         vb.pMin[i] = g.bounds.pMin[i] + ext * vi[i] / g.res[i];
         vb.pMax[i] = g.bounds.pMin[i] + ext * (vi[i] + 1) / g.res[i];
     }
-    const int nSamples = kVoxelSamples;
     const HaltonTable &h = VoxelPoints();
     std::vector<Float> contrib(lights_.size(), 0);
-    for (int s = 0; s < nSamples; ++s) {
+    for (int s = 0; s < kVoxelSamples; ++s) {
         const Float *x = h.v[s];
         Point3 po(Lerp(x[0], vb.pMin.x, vb.pMax.x), Lerp(x[1], vb.pMin.y, vb.pMax.y), Lerp(x[2], vb.pMin.z, vb.pMax.z));
         Interaction ref(po, Normal3(0, 0, 0), Vec3(0, 0, 0));
@@ -131,7 +130,7 @@ const Float *LightSampler::lookup(const Point3 &p) const {
     }
     Float sum = 0;
     for (Float c : contrib) sum += c;
-    Float avg = sum / (nSamples * Float(contrib.size()));
+    Float avg = sum / (kVoxelSamples * Float(contrib.size()));
     Float floorC = avg > 0 ? 1e-3 * avg : 1;
     for (Float &c : contrib) c = std::max(c, floorC);
     Float total = 0;

@@ -28,7 +28,9 @@ void RecordInputFile(const std::string &, const void *data, size_t n) {
     gBytes += n;
 }
 
-FileRead ReadFileBytes(const std::string &path, std::string *out) {
+namespace {
+template <class Bytes>
+FileRead ReadInto(const std::string &path, Bytes *out) {
     out->clear();
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec)) return FileRead::ReadError;  // opens, but has nothing to read
@@ -37,7 +39,7 @@ FileRead ReadFileBytes(const std::string &path, std::string *out) {
     const auto size = std::filesystem::is_regular_file(path, ec) ? std::filesystem::file_size(path, ec) : 0;
     if (size > 0 && !ec) {
         out->resize(size_t(size));
-        if (!in.read(&(*out)[0], std::streamsize(size))) {
+        if (!in.read(reinterpret_cast<char *>(&(*out)[0]), std::streamsize(size))) {
             out->clear();
             return FileRead::ReadError;
         }
@@ -47,9 +49,14 @@ FileRead ReadFileBytes(const std::string &path, std::string *out) {
     std::ostringstream ss;
     ss << in.rdbuf();
     if (in.bad()) return FileRead::ReadError;
-    *out = ss.str();
+    const std::string text = ss.str();
+    out->assign(text.begin(), text.end());
     return FileRead::Ok;
 }
+}  // namespace
+
+FileRead ReadFileBytes(const std::string &path, std::string *out) { return ReadInto(path, out); }
+FileRead ReadFileBytes(const std::string &path, std::vector<unsigned char> *out) { return ReadInto(path, out); }
 
 void RecordInputFile(const std::string &path) {
     std::string bytes;

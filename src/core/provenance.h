@@ -4,16 +4,19 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace gradus {
 
 // 64-bit FNV-1a of a byte range, continuing from `h`.
 uint64_t HashBytes(const void *data, size_t n, uint64_t h = 0xcbf29ce484222325ULL);
 
-// A whole file in one sized read (std::istreambuf_iterator reads a byte at a
-// time: veach-ajar's PLY meshes were read twice that way, 0.1 s of its load).
+// The loaders' whole-file reader: one sized read for regular files
+// (std::istreambuf_iterator reads a byte at a time: veach-ajar's PLY meshes
+// were read twice that way, 0.1 s of its load), pipes and devices to their end.
 enum class FileRead { Ok, CannotOpen, ReadError };
 FileRead ReadFileBytes(const std::string &path, std::string *out);
+FileRead ReadFileBytes(const std::string &path, std::vector<unsigned char> *out);
 
 // Records that the renderer read an input file (thread-safe). Readers of
 // scene inputs call it with the file's bytes.

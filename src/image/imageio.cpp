@@ -60,12 +60,13 @@ std::string Extension(const std::string &filename) {
     return Lower(filename.substr(dot + 1));
 }
 
-std::vector<unsigned char> ReadFileBytes(const std::string &filename) {
-    std::ifstream in(filename, std::ios::binary);
-    if (!in) throw Error(filename + ": cannot open file for reading");
-    std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)),
-                                     std::istreambuf_iterator<char>());
-    if (in.bad()) throw Error(filename + ": read error");
+std::vector<unsigned char> ReadWholeFile(const std::string &filename) {
+    std::vector<unsigned char> bytes;
+    switch (ReadFileBytes(filename, &bytes)) {
+    case FileRead::CannotOpen: throw Error(filename + ": cannot open file for reading");
+    case FileRead::ReadError: throw Error(filename + ": read error");
+    case FileRead::Ok: break;
+    }
     return bytes;
 }
 
@@ -519,7 +520,7 @@ Image ReadImage(const std::string &filename) {
             RecordInputFile(filename);
             return img;
         }
-        std::vector<unsigned char> bytes = ReadFileBytes(filename);
+        std::vector<unsigned char> bytes = ReadWholeFile(filename);
         RecordInputFile(filename, bytes.data(), bytes.size());
         if (magic[0] == 'P' && (magic[1] == 'F' || magic[1] == 'f'))
             return ReadPFM(filename, bytes);

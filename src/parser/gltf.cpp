@@ -13,7 +13,6 @@
 #include <cstring>
 #include <fstream>
 #include <functional>
-#include <iterator>
 #include <map>
 #include <set>
 #include <sstream>
@@ -120,13 +119,12 @@ class JsonLocator {
 
 // ---------------------------------------------------------------- file access
 std::vector<unsigned char> ReadBytes(const std::string &path, std::string *err) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) {
-        *err = "cannot open \"" + path + "\": " + std::strerror(errno);
-        return {};
+    std::vector<unsigned char> data;
+    switch (ReadFileBytes(path, &data)) {
+    case FileRead::CannotOpen: *err = "cannot open \"" + path + "\": " + std::strerror(errno); break;
+    case FileRead::ReadError: *err = "cannot read \"" + path + "\""; break;
+    case FileRead::Ok: break;
     }
-    std::vector<unsigned char> data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (in.bad()) *err = "cannot read \"" + path + "\"";
     return data;
 }
 

@@ -5,9 +5,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <numeric>
-#include <sstream>
 
 #include "core/error.h"
 
@@ -115,12 +113,9 @@ Spectrum BlackbodyToRGB(double T, double scale) {
 }
 
 std::vector<double> ReadSpdFile(const std::string &filename) {
-    RecordInputFile(filename);  // provenance: spectra are scene inputs
-    std::ifstream in(filename, std::ios::binary);
-    if (!in) throw Error(filename + ": cannot open spectrum file");
-    std::stringstream ss;
-    ss << in.rdbuf();
-    std::string text = ss.str();
+    std::string text;
+    if (ReadFileBytes(filename, &text) == FileRead::CannotOpen) throw Error(filename + ": cannot open spectrum file");
+    RecordInputFile(filename, text.data(), text.size());  // provenance: spectra are scene inputs
     std::vector<double> out;
     size_t i = 0, n = text.size();
     int line = 1;

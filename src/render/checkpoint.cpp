@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
-#include <iterator>
 #include <numeric>
 #include <sstream>
 
@@ -153,9 +152,9 @@ bool IsCheckpointFile(const std::string &path) {
 }
 
 Checkpoint ReadCheckpoint(const std::string &path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error(path + ": cannot open checkpoint: " + std::strerror(errno));
-    std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::string data;
+    if (ReadFileBytes(path, &data) == FileRead::CannotOpen)
+        throw Error(path + ": cannot open checkpoint: " + std::strerror(errno));
     if (data.size() < 20 || std::memcmp(data.data(), kMagic, 8) != 0)
         throw Error(path + ": not a Gradus checkpoint (no checkpoint header)");
     uint32_t version;

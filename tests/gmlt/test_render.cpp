@@ -153,8 +153,9 @@ TEST(GMLTRender, ParametersLayersAndStatistics) {
     EXPECT_LE(shifts, 16 + 4 * 144);  // the chain starts and the proposals with a contribution
     for (const char *want : {"Gradient-domain MLT", "shifts: ", "reversible", "Reconstruction:", "bidirectional: "})
         EXPECT_NE(r.statistics.find(want), std::string::npos) << want << " in\n" << r.statistics;
-    // Parameters gmlt does not take.
-    for (const char *bad : {"\"float shiftthreshold\" [0.01]", "\"string pixelfilter\" \"film\"", "\"float alpha\" [0]"})
+    // Parameters gmlt does not take, misspelt or out of range.
+    for (const char *bad : {"\"float shiftthresold\" [0.01]", "\"float shiftthreshold\" [-1]",
+                            "\"string pixelfilter\" \"film\"", "\"float alpha\" [0]"})
         EXPECT_THROW(Render(BoxScene(std::string("Integrator \"gmlt\" ") + bad), 1, 1), Error) << bad;
 }
 

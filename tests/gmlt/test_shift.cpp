@@ -3,7 +3,9 @@
 //
 // Scenes: the conformance table's diffuse box, specular box (mirror and glass:
 // eye chains and manifold walks) and outdoor (sky, sun and a point light:
-// emitters at infinity keep their direction).
+// emitters at infinity keep their direction), and the glossy box (both spheres
+// near-specular, treated as specular by the shift: Fig. 5a; the finite
+// differences of its Jacobians are in test_near_specular.cpp).
 // 1. Reversibility: every successful shift T_d(x) = y shifts back, T_-d(y) = x
 //    (same vertices), with |T_-d'(y)| |T_d'(x)| = 1: the bijection behind
 //    n(z) = 1/2 (Sec. 4.2.2).
@@ -17,7 +19,7 @@
 //    sample k and 4 x 4 block of pixels, S_k = sum over the block of
 //    [dx_k(j) - (I_k(j + 1) - I_k(j))] (and the same for dy) has mean 0
 //    exactly when the integrand is unbiased. Student's t over the iid samples,
-//    two-sided, alpha = 1e-3 split over all blocks of both scenes
+//    two-sided, alpha = 1e-3 split over all blocks of all scenes
 //    (Bonferroni). Power: the same samples with n = 1 for every shift (the
 //    reversible pairs counted twice) and with the Jacobian left out (Fig. 4)
 //    must be rejected.
@@ -26,67 +28,33 @@
 #include <cmath>
 
 #include "conformance/conformance_util.h"
-#include "integrators/gmlt/gmlt.h"
-#include "pmlt/pmlt_test_util.h"
+#include "gmlt/gmlt_test_util.h"
 
 namespace gradus::pmlt_test {
 namespace {
 
-using ShiftStatus = pmlt::Mutator::ShiftStatus;
-
-struct GMLTSetup {
-    SceneSetup su;
-    std::unique_ptr<GMLTIntegrator> gm;
-    explicit GMLTSetup(const std::string &text) : su(text) {
-        EntityDesc d;
-        d.type = "gmlt";
-        gm = std::make_unique<GMLTIntegrator>(d);
-        gm->preprocess(*su.job.scene, *su.job.film);
-    }
-    const BidirContext &ctx() const { return gm->bidirContext(); }
-    const pmlt::FilmDomain &film() const { return gm->filmDomain(); }
+// The scenes of the shift tests: the conformance table's three and the
+// glossy box with its near-specular spheres treated as specular (Fig. 5a).
+struct ShiftScene {
+    std::string name, text;
+    double threshold;
 };
-
-// Calls fn(x, C) for every bdpt strategy path x of `samples` bidirectional
-// samples with its MIS-weighted contribution C (the paths in `arena`, reset
-// per sample); sampleDone(k) after sample k.
-template <class Fn, class Done>
-void ForEachStrategyPath(const GMLTSetup &g, int samples, uint64_t seed, Arena &arena, Fn fn, Done sampleDone) {
-    for (int k = 0; k < samples; ++k) {
-        RNG rng(Hash(seed, uint64_t(k)));
-        BidirSample smp;
-        if (smp.make(g.su, rng, arena)) {
-            for (int t = 1; t <= smp.nC; ++t)
-                for (int s = 0; s <= smp.nL; ++s) {
-                    if ((s == 1 && t == 1) || s + t - 2 > g.su.maxDepth) continue;
-                    const ConnectSamples cu = Numbers(rng);
-                    ConnectResult r;
-                    if (!ConnectBDPT(g.ctx(), smp.light(s), smp.camera(t), s, t, cu, &r)) continue;
-                    if (r.splat && !g.film().contains(r.pRaster)) continue;
-                    if (!(r.L.y() > 0)) continue;
-                    pmlt::State x;
-                    if (!pmlt::StrategyPath(g.ctx(), smp.light(s), smp.camera(t), s, t, cu, &x.x)) continue;
-                    pmlt::BuildBSDFs(g.ctx(), x.x, arena, &x.bsdf);
-                    if (!pmlt::Evaluate(g.ctx(), g.film(), x.x, x.bsdf.data(), &x.e)) continue;
-                    fn(x, r.L);
-                }
-        }
-        sampleDone(k);
-        arena.reset();
-    }
-}
-
-Point2 Shifted(const pmlt::State &x, int dir) {
-    return Point2(x.e.pRaster.x + Float(kNeighbourOffsets[dir].x), x.e.pRaster.y + Float(kNeighbourOffsets[dir].y));
+std::vector<ShiftScene> ShiftScenes() {
+    std::vector<ShiftScene> v;
+    for (const char *s : {"diffuse-box", "specular-box", "outdoor"}) v.push_back({s, ConformanceScene(s), -1});
+    v.push_back({"glossy-box", GlossyBox(), kGlossyBoxThreshold});
+    return v;
 }
 
 TEST(GMLTShift, ReversibleWithReciprocalJacobians) {
-    for (const char *scene : {"diffuse-box", "specular-box", "outdoor"}) {
-        GMLTSetup g(ConformanceScene(scene));
+    for (const ShiftScene &sc : ShiftScenes()) {
+        const std::string &scene = sc.name;
+        GMLTSetup g(sc.text, sc.threshold);
+        const Float thr = g.gm->gsettings().shiftThreshold;
         const pmlt::Mutator &mut = g.gm->mutator();
         Arena arena, scratch;
-        int shifted = 0, chains = 0, oneWay = 0;
-        double worstJ = 0, worstP = 0;
+        int shifted = 0, chains = 0, oneWay = 0, nearSpecular = 0, nearTwice = 0, illConditioned = 0;
+        double worstJ = 0, worstP = 0, worstNearJ = 0, worstNearP = 0;
         ForEachStrategyPath(
             g, 3000, 0x5eed, arena,
             [&](const pmlt::State &x, const Spectrum &) {
@@ -95,21 +63,40 @@ TEST(GMLTShift, ReversibleWithReciprocalJacobians) {
                     double J = 0, Jback = 0;
                     if (mut.shift(x, Shifted(x, d), scratch, &y, &J) != ShiftStatus::Shifted) continue;
                     ++shifted;
-                    bool specular = false;
-                    for (const PathVertex &v : x.x.v) specular |= v.delta();
+                    bool specular = false, near = false;
+                    int nearRefractions = 0;
+                    for (int i = 0; i < x.x.size(); ++i) {
+                        const pmlt::ShiftClass c = pmlt::ShiftClassOf(x.x.v[size_t(i)], x.bsdf[size_t(i)], thr);
+                        specular |= c != pmlt::ShiftClass::Rough;
+                        near |= c == pmlt::ShiftClass::NearSpecular;
+                        if (c == pmlt::ShiftClass::NearSpecular) {
+                            const PathVertex &v = x.x.v[size_t(i)];
+                            const Vec3 ng(v.ng);
+                            nearRefractions +=
+                                Dot(ng, x.x.v[size_t(i - 1)].p - v.p) * Dot(ng, x.x.v[size_t(i + 1)].p - v.p) < 0;
+                        }
+                    }
                     chains += specular;
+                    nearSpecular += near;
                     const ShiftStatus back = mut.shift(y, Shifted(y, d ^ 1), scratch, &z, &Jback);
                     if (back != ShiftStatus::Shifted) {
                         ++oneWay;
                         continue;
                     }
                     ASSERT_EQ(z.x.size(), x.x.size());
+                    double errP = 0;
                     for (int i = 0; i < x.x.size(); ++i) {
                         const Vec3 e = z.x.v[size_t(i)].p - x.x.v[size_t(i)].p;
                         const Float scale = std::max<Float>(1, (x.x.v[size_t(i)].p - x.x.v[0].p).length());
-                        worstP = std::max(worstP, double(e.length() / scale));
+                        errP = std::max(errP, double(e.length() / scale));
                     }
-                    worstJ = std::max(worstJ, std::abs(J * Jback - 1));
+                    const double errJ = std::abs(J * Jback - 1);
+                    // Refracted twice or more by the rough sphere: may be ill-conditioned (below).
+                    const bool twice = nearRefractions >= 2;
+                    (twice ? worstNearP : worstP) = std::max(twice ? worstNearP : worstP, errP);
+                    (twice ? worstNearJ : worstJ) = std::max(twice ? worstNearJ : worstJ, errJ);
+                    nearTwice += twice;
+                    illConditioned += twice && (errP > 1e-4 || errJ > 1e-3);
                 }
                 scratch.reset();
             },
@@ -117,14 +104,33 @@ TEST(GMLTShift, ReversibleWithReciprocalJacobians) {
         std::cout << "[ shift ] " << scene << ": " << shifted << " shifts (" << chains
                   << " through specular vertices), " << oneWay << " not shifting back; back-shift vertex error "
                   << worstP << ", |J J' - 1| " << worstJ << "\n";
+        if (nearSpecular > 0)
+            std::cout << "[ shift ] " << scene << ": " << nearSpecular << " through near-specular vertices, "
+                      << nearTwice << " refracted by them twice or more, " << illConditioned
+                      << " of these with a vertex error > 1e-4 or |J J' - 1| > 1e-3 (largest " << worstNearP << ", "
+                      << worstNearJ << ")\n";
         // A re-traced vertex differs from the original by float rounding, so a
         // shadow ray grazing an occluder's edge can decide differently: rare
         // (measured: 2 in 96 000 on specular-box, 0 on diffuse-box).
         EXPECT_LE(oneWay, shifted / 10000) << scene << ": shifts that do not shift back";
         EXPECT_GT(shifted, 1000) << scene;
-        if (std::string(scene) == "specular-box") EXPECT_GT(chains, 50) << "too few shifts through specular chains";
+        if (scene == "specular-box" || scene == "glossy-box") {
+            EXPECT_GT(chains, 50) << scene << ": too few shifts through specular chains";
+        }
         EXPECT_LT(worstP, 1e-3) << scene;
         EXPECT_LT(worstJ, 1e-3) << scene;
+        // Copied half vectors come from the vertices, whose positions are
+        // rounded; a chain refracted twice or more by the rough glass sphere
+        // can pass near its critical angle, where the way back magnifies that
+        // (measured: vertex errors of 1e-12 grow to 4e-6 over one refraction,
+        // |J J' - 1| up to 0.97 where J ~ 1e-5). Such trips are rare (measured:
+        // 14 of 4080 twice-refracted shifts of 97 000); every other shift is
+        // held to the bounds above.
+        if (scene == "glossy-box") {
+            EXPECT_GT(nearSpecular, 5000) << scene;
+            EXPECT_GT(nearTwice, 500) << scene;
+        }
+        EXPECT_LE(illConditioned, nearTwice / 100) << scene << ": twice-refracted shifts that do not shift back closely";
     }
 }
 
@@ -189,18 +195,16 @@ struct BlockStats {
 };
 
 TEST(GMLTGradient, IntegrandIsUnbiased) {
-    struct Case {
-        const char *scene;
-        int samples;
-    };
-    const Case cases[] = {{"diffuse-box", 60000}, {"specular-box", 60000}, {"outdoor", 60000}};
-    double margins[3][BlockStats::kVariants] = {};
-    std::string worst[3][BlockStats::kVariants];
+    const std::vector<ShiftScene> cases = ShiftScenes();
+    const int samples = 60000;
+    const size_t nc = cases.size();
+    std::vector<std::array<double, BlockStats::kVariants>> margins(nc);
+    std::vector<std::array<std::string, BlockStats::kVariants>> worst(nc);
     int totalBlocks = 0;
     std::vector<BlockStats> stats;
     std::vector<int> blocksPerScene;
-    for (const Case &c : cases) {
-        GMLTSetup g(ConformanceScene(c.scene));
+    for (const ShiftScene &c : cases) {
+        GMLTSetup g(c.text, c.threshold);
         const int W = g.film().pixels.width(), H = g.film().pixels.height();
         const int bw = W / 4, bh = H / 4, nb = bw * bh;
         BlockStats bs;
@@ -213,7 +217,7 @@ TEST(GMLTGradient, IntegrandIsUnbiased) {
         Arena arena, scratch;
         auto inside = [&](int x, int y) { return x >= 0 && y >= 0 && x < W && y < H; };
         ForEachStrategyPath(
-            g, c.samples, 0x9d17, arena,
+            g, samples, 0x9d17, arena,
             [&](const pmlt::State &x, const Spectrum &C) {
                 const int px = int(std::floor(x.e.pRaster.x)), py = int(std::floor(x.e.pRaster.y));
                 if (!inside(px, py)) return;
@@ -261,7 +265,7 @@ TEST(GMLTGradient, IntegrandIsUnbiased) {
     }
     const double alpha = 1e-3 / totalBlocks;
     for (size_t i = 0; i < stats.size(); ++i) {
-        const double n = cases[i].samples;
+        const double n = samples;
         for (int v = 0; v < BlockStats::kVariants; ++v)
             for (int a = 0; a < 2; ++a)
                 for (int b = 0; b < blocksPerScene[i]; ++b) {
@@ -276,15 +280,18 @@ TEST(GMLTGradient, IntegrandIsUnbiased) {
                                       std::to_string(t);
                     }
                 }
-        std::cout << "[ gradient ] " << cases[i].scene << ": largest |t|/critical " << margins[i][0] << " ("
+        std::cout << "[ gradient ] " << cases[i].name << ": largest |t|/critical " << margins[i][0] << " ("
                   << worst[i][0] << "); n = 1 always: " << margins[i][1] << " (" << worst[i][1]
                   << "); without the Jacobian: " << margins[i][2] << " (" << worst[i][2] << ")\n";
-        EXPECT_LE(margins[i][0], 1) << cases[i].scene << ": gradient integrand biased, " << worst[i][0];
+        EXPECT_LE(margins[i][0], 1) << cases[i].name << ": gradient integrand biased, " << worst[i][0];
     }
     // Power: both wrong integrands are detected (on at least one scene each).
-    for (int v : {1, 2})
-        EXPECT_GT(std::max({margins[0][v], margins[1][v], margins[2][v]}), 1)
+    for (int v : {1, 2}) {
+        double m = 0;
+        for (size_t i = 0; i < nc; ++i) m = std::max(m, margins[i][size_t(v)]);
+        EXPECT_GT(m, 1)
             << (v == 1 ? "n(z) = 1 for reversible shifts" : "a missing Jacobian") << " not detected";
+    }
 }
 
 }  // namespace

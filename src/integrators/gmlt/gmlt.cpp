@@ -24,7 +24,6 @@ ParamTable<GMLTSettings> Table() {
     t.append(PMLTParamTable());
     GradientParamOptions o;
     o.noFilmFilter = "is not supported by gmlt (a chain's splat lands in the pixel of its raster point, as pmlt's)";
-    o.shiftThreshold = false;
     t.append(GradientParams(o));
     t.boolean("statelayers", &S::stateLayers, false,
               "layers \"density\" (chain states per pixel per mutation per pixel) and \"irreversible\" "
@@ -63,7 +62,9 @@ void GMLTIntegrator::preprocess(const Scene &scene, Film &film) {
         mscene_ = std::make_unique<EmbreeManifoldScene>(scene);
         mset_.mscene = mscene_.get();
     }
-    mut_ = std::make_unique<pmlt::Mutator>(ctx_, film_, mset_);
+    pmlt::MutationSettings ms = mset_;
+    ms.shiftThreshold = gset_.shiftThreshold;  // near-specular vertices of the shift (Fig. 5a)
+    mut_ = std::make_unique<pmlt::Mutator>(ctx_, film_, ms);
     initGradients(film, false, true, false);  // the chains only splat: no per-sample layers
     if (gset_.stateLayers) {
         densityLayer_ = film.addLayer("gmlt.density");

@@ -42,6 +42,8 @@
 //   float multichain 1
 //   float manifold 1
 // (gradient family, gradient_params.h):
+//   float shiftthreshold 0.001       roughness below which a non-Dirac vertex is near-specular for
+//                                    the shift (Fig. 5a; pmlt::ShiftClassOf)
 //   string reconstruction "hybrid"   hybrid | l1 | l2 | weighted: the image in the unprefixed R,G,B
 //   float alpha 0.2                  Eq. 11's and Eq. 16's alpha
 //   string pixelfilter "box"         splats land in the pixel of their raster point (as pmlt's)
@@ -49,9 +51,10 @@
 //   bool statelayers false           layers "density" (chain states per pixel per mutation
 //                                    per pixel, Fig. 8b) and "irreversible" (those whose
 //                                    shift has n = 1, Fig. 8f)
-// Specular for the shift: vertices that scatter through a Dirac lobe (pmlt's
-// VERTEX_DELTA). Near-specular glossy vertices are shifted as non-specular
-// (reconnected): correct, but not Fig. 5a's treatment (no "shiftthreshold").
+// Specular for the shift (Fig. 5a): vertices that scatter through a Dirac lobe
+// (pmlt's VERTEX_DELTA) and near-specular ones (a BSDF roughness in
+// (0, shiftthreshold)); the eye chain copies the latter's half vectors and the
+// manifold walk keeps them in second chains (pmlt::Mutator::shift).
 #pragma once
 #include <atomic>
 #include <memory>

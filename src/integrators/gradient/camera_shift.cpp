@@ -76,24 +76,13 @@ bool PropagateHalfVector(const BSDF &bx, const Vec3 &woX, const Vec3 &wiX, bool 
         *ratio = sy.pdf / sx.pdf;
     } else {
         // Glossy refraction keeps the generalised half vector (Walter et al. 2007;
-        // shift.h) with eta = eta on wi's side / wo's side; an interface whose
-        // index the BSDF does not report (eta 1) cannot be copied.
-        Float eta = 1;
-        const Vec3 woL = bx.toLocal(woX);
-        if (Transmits(woX, wiX, Vec3(bx.ns()))) {
-            const Float e = bx.eta();
-            if (e == 1) {
-                st->fail(ShiftFailure::Geometry);
-                return false;
-            }
-            eta = woL.z > 0 ? e : 1 / e;
-        }
+        // shift.h); an interface whose index the BSDF does not report cannot be copied.
         HalfVectorShift hv;
-        if (!ShiftHalfVector(woL, bx.toLocal(wiX), by.toLocal(woY), eta, &hv)) {
+        if (!ShiftHalfVectorWorld(bx, woX, wiX, by, woY, &hv)) {
             st->fail(ShiftFailure::Geometry);
             return false;
         }
-        *wiY = Normalize(by.toWorld(hv.wi));
+        *wiY = hv.wi;
         Spectrum fy = by.f(woY, *wiY);
         Float py = by.pdf(woY, *wiY), px = bx.pdf(woX, wiX);
         if (fy.isBlack() || !(py > 0) || !(px > 0)) {

@@ -1,4 +1,4 @@
-// Parameters of the gradient family (gpt, gbdpt): shift threshold,
+// Parameters of the gradient family (gpt, gbdpt, gmlt): shift threshold,
 // reconstruction and pixel filter of the gradient film.
 #pragma once
 #include <string>
@@ -18,7 +18,6 @@ struct GradientSettings {
 
 struct GradientParamOptions {
     std::string noFilmFilter;  // non-empty: pixelfilter "film" rejected with this reason (default box)
-    bool shiftThreshold = true;  // false: no "shiftthreshold" (an integrator whose shift has no such class)
 };
 
 // shiftthreshold, reconstruction, alpha, pixelfilter.

@@ -74,6 +74,21 @@ bool ShiftHalfVector(const Vec3 &woX, const Vec3 &wiX, const Vec3 &woY, Float et
     return out->jacobian > 0 && std::isfinite(out->jacobian);
 }
 
+bool ShiftHalfVectorWorld(const BSDF &bx, const Vec3 &woX, const Vec3 &wiX, const BSDF &by, const Vec3 &woY,
+                          HalfVectorShift *out) {
+    const Vec3 woL = bx.toLocal(woX), wiL = bx.toLocal(wiX);
+    Float eta = 1;
+    if (woL.z * wiL.z < 0) {
+        // Walter et al. 2007: eta = index on wi's side over wo's side.
+        const Float e = bx.eta();
+        if (e == 1) return false;
+        eta = woL.z > 0 ? e : 1 / e;
+    }
+    if (!ShiftHalfVector(woL, wiL, by.toLocal(woY), eta, out)) return false;
+    out->wi = Normalize(by.toWorld(out->wi));
+    return true;
+}
+
 bool ShiftReplay(const BSDF &offsetBsdf, const Vec3 &woY, Float uc, Point2 u, Float basePdf, TransportMode mode,
                  ReplayShift *out) {
     if (!offsetBsdf.sample(woY, uc, u, mode, &out->sample) || !out->sample.valid()) return false;

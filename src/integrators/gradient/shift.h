@@ -75,6 +75,12 @@ struct HalfVectorShift {
     bool refraction = false;
 };
 bool ShiftHalfVector(const Vec3 &woX, const Vec3 &wiX, const Vec3 &woY, Float eta, HalfVectorShift *out);
+// The same on world directions at a base vertex with BSDF bx and an offset
+// vertex with BSDF by: eta from bx (BSDF::eta: inside over outside, taken
+// on wo's side). False also for a refraction whose index bx does not report
+// (eta 1: no half vector to copy). out->wi is in world space.
+bool ShiftHalfVectorWorld(const BSDF &bx, const Vec3 &woX, const Vec3 &wiX, const BSDF &by, const Vec3 &woY,
+                          HalfVectorShift *out);
 
 // ---- Random-number replay -------------------------------------------------
 // The offset samples its BSDF with the base's random numbers. In primary

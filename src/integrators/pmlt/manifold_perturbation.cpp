@@ -32,26 +32,43 @@
 
 namespace gradus::pmlt {
 
+namespace {
+
+// Density of x_j traced from x_{j-1}: through a Dirac vertex p_E / P_lobe
+// (the delta-free conversion of path.h), through a non-Dirac one (G-MLT's
+// near-specular vertices, whose half vector is the variable) a unit
+// solid-angle density at x_{j-1}.
+double TracedVertexDensity(const State &s, int j) {
+    const PathVertex &prev = s.x.v[size_t(j - 1)];
+    return prev.delta() ? s.e.pE[size_t(j)] / s.e.lobeE[size_t(j - 1)] : ConvertDensity(1, prev, s.x.v[size_t(j)]);
+}
+
+}  // namespace
+
 double TraceDensity(const State &s, int b, int c) {
     double d = ConvertDensity(1, s.x.v[size_t(b)], s.x.v[size_t(b + 1)]);
-    for (int j = b + 2; j <= c; ++j) d *= s.e.pE[size_t(j)] / s.e.lobeE[size_t(j - 1)];
+    for (int j = b + 2; j <= c; ++j) d *= TracedVertexDensity(s, j);
     return d;
 }
 
 double EyeDensity(const State &s, int b) {
     double d = s.e.pE[1];
-    for (int j = 2; j <= b; ++j) d *= s.e.pE[size_t(j)] / s.e.lobeE[size_t(j - 1)];
+    for (int j = 2; j <= b; ++j) d *= TracedVertexDensity(s, j);
     return d;
 }
 
-bool ManifoldPattern(const Path &x, const EmbreeManifoldScene *mscene, int *bOut, int *cOut, int *endGeom) {
+namespace {
+
+template <class IsSpecular>
+bool PatternOf(const Path &x, const EmbreeManifoldScene *mscene, IsSpecular specular, int *bOut, int *cOut,
+               int *endGeom) {
     const int n = x.size();
     if (!mscene) return false;
     int b = 1;
-    while (b < n - 1 && x.v[size_t(b)].delta()) ++b;
-    if (b >= n - 1 || !x.v[size_t(b + 1)].delta()) return false;
+    while (b < n - 1 && specular(b)) ++b;
+    if (b >= n - 1 || !specular(b + 1)) return false;
     int c = b + 1;
-    while (c < n - 1 && x.v[size_t(c)].delta()) ++c;
+    while (c < n - 1 && specular(c)) ++c;
     const PathVertex &xc = x.v[size_t(c)];
     *endGeom = xc.type == VertexType::Surface ? xc.geomId
                : xc.type == VertexType::Light  ? mscene->geomOfLight(xc.light)
@@ -60,6 +77,17 @@ bool ManifoldPattern(const Path &x, const EmbreeManifoldScene *mscene, int *bOut
     *cOut = c;
     // Point and infinite emitters have no surface for the chain to end on.
     return !xc.isInfiniteLight() && *endGeom >= 0 && c - b + 1 <= kMaxManifoldVertices;
+}
+
+}  // namespace
+
+bool ManifoldPattern(const Path &x, const EmbreeManifoldScene *mscene, int *bOut, int *cOut, int *endGeom) {
+    return PatternOf(x, mscene, [&](int j) { return x.v[size_t(j)].delta(); }, bOut, cOut, endGeom);
+}
+
+bool ManifoldPattern(const Path &x, const EmbreeManifoldScene *mscene, const ShiftClass *cls, int *bOut, int *cOut,
+                     int *endGeom) {
+    return PatternOf(x, mscene, [&](int j) { return cls[j] != ShiftClass::Rough; }, bOut, cOut, endGeom);
 }
 
 ProposalResult Mutator::manifold(const State &xs, Sampler &u, Arena &arena, State *ys, double *ratioOut,
@@ -88,6 +116,7 @@ ProposalResult Mutator::manifoldMove(const State &xs, int b, int c, int endGeom,
     SubpathShiftContext sc;
     sc.bidir = &ctx_;
     sc.mscene = set_.mscene;
+    sc.threshold = set_.shiftThreshold;
     const Scene &scene = *ctx_.scene;
     const int k = c - b - 1;
     ChainInterior in;
@@ -99,7 +128,7 @@ ProposalResult Mutator::manifoldMove(const State &xs, int b, int c, int endGeom,
         in.wo[j] = Dir(v, x.v[size_t(i - 1)]);
         in.wi[j] = Dir(v, x.v[size_t(i + 1)]);
         in.transmit[j] = Transmits(in.wo[j], in.wi[j], Vec3(xs.bsdf[size_t(i)].ns()));
-        in.specular[j] = true;
+        in.specular[j] = v.delta();  // else near-specular (G-MLT's shift): its half vector is kept
         in.geomId[j] = v.geomId;
     }
     SurfaceInteraction siXb;
@@ -110,7 +139,8 @@ ProposalResult Mutator::manifoldMove(const State &xs, int b, int c, int endGeom,
 
     // The eye chain along the ray, then the walk of the second chain to x_c.
     SurfaceInteraction siYb;
-    if (!traceEyeChain(xs, b, ray, arena, ys, &siYb)) return ProposalResult::Zero;
+    double hvJacobian = 1;
+    if (!traceEyeChain(xs, b, ray, arena, ys, &siYb, &hvJacobian)) return ProposalResult::Zero;
     if (ys->x.v.back().type != VertexType::Surface) return ProposalResult::Zero;
     SubpathShiftStats sst;
     ManifoldChain offset;
@@ -127,7 +157,7 @@ ProposalResult Mutator::manifoldMove(const State &xs, int b, int c, int endGeom,
     for (int j = 0; j < k; ++j) {
         PathVertex v;
         MakeSurfaceVertex(ctx_, walked.si[j], walked.bsdf[j], &v);
-        v.flags |= VERTEX_DELTA;
+        if (in.specular[j]) v.flags |= VERTEX_DELTA;
         y.v.push_back(v);
         yb.push_back(walked.bsdf[j]);
     }
@@ -135,9 +165,15 @@ ProposalResult Mutator::manifoldMove(const State &xs, int b, int c, int endGeom,
     yb.insert(yb.end(), xs.bsdf.begin() + c, xs.bsdf.end());
     for (int i = 1; i < n; ++i) y.v[size_t(i)].wo = PackedVec3(Dir(y.v[size_t(i)], y.v[size_t(i - 1)]));
     if (!Evaluate(ctx_, film_, y, yb.data(), &ys->e)) return ProposalResult::Zero;
-    // K(y) / D_b(y) over K(x) / D_b(x) with K = (d omega_b / dA_c) / P_trace;
-    // J = (d omega_b / dA_c)(y) / (d omega_b / dA_c)(x) from the walk (G-MLT Eq. 14's chain factor).
-    *jacobian = J * (TraceDensity(xs, b, c) / TraceDensity(*ys, b, c)) * (EyeDensity(xs, b) / EyeDensity(*ys, b));
+    // K(y) / D_b(y) over K(x) / D_b(x) with K = Phi / P_trace: Phi the chain's
+    // sampled directions (at x_b and at each near-specular vertex g) per unit
+    // area at x_c and per unit of the kept half vectors O_g
+    // (ChainDirectionsPerArea; J = Phi(y) / Phi(x) from the walk, G-MLT Eq. 14's
+    // chain factor), P_trace their density traced from x_b (TraceDensity).
+    // D_b per unit of the eye chain's copied half vectors: EyeDensity times
+    // |d h / d omega| at each copy, whose ratio is hvJacobian (Eq. 14's eye factor).
+    *jacobian = J * (TraceDensity(xs, b, c) / TraceDensity(*ys, b, c)) * (EyeDensity(xs, b) / EyeDensity(*ys, b)) *
+                hvJacobian;
     return ProposalResult::Proposed;
 }
 

@@ -62,6 +62,13 @@ bool FollowSpecular(const Path &x, int j, PathVertex *v, const BSDF &b, const Ve
     return true;
 }
 
+ShiftClass ShiftClassOf(const PathVertex &v, const BSDF &b, Float threshold) {
+    if (v.delta()) return ShiftClass::Dirac;
+    if (v.type != VertexType::Surface || !b) return ShiftClass::Rough;
+    const Float r = b.roughness();  // the lowest of its lobes: 0 with a Dirac lobe among them
+    return r > 0 && r < threshold ? ShiftClass::NearSpecular : ShiftClass::Rough;
+}
+
 namespace {
 
 // A film offset (density ~ 1/r on [r1, r2], uniform angle; symmetric).
@@ -424,8 +431,8 @@ bool Mutator::perturbedRay(const State &xs, Sampler &u, Ray *ray) const {
     return ctx_.camera->generateRay(cs, ray) != 0;
 }
 
-bool Mutator::traceEyeChain(const State &xs, int b, const Ray &ray, Arena &arena, State *ys,
-                            SurfaceInteraction *siB) const {
+bool Mutator::traceEyeChain(const State &xs, int b, const Ray &ray, Arena &arena, State *ys, SurfaceInteraction *siB,
+                            double *hvJacobian) const {
     Path &y = ys->x;
     std::vector<BSDF> &yb = ys->bsdf;
     y.v.assign(1, LensVertex(ctx_, ray));
@@ -436,7 +443,24 @@ bool Mutator::traceEyeChain(const State &xs, int b, const Ray &ray, Arena &arena
         BSDF bsdf;
         if (!Trace(ctx_, y.v.back(), dir, arena, j == xs.x.size() - 1, &v, &bsdf, j == b ? siB : nullptr))
             return false;
-        if (j < b && !FollowSpecular(xs.x, j, &v, bsdf, -dir, TransportMode::Radiance, &dir)) return false;
+        if (j < b) {
+            const Path &x = xs.x;
+            if (x.v[size_t(j)].delta()) {
+                if (!FollowSpecular(x, j, &v, bsdf, -dir, TransportMode::Radiance, &dir)) return false;
+            } else {
+                // A near-specular vertex of G-MLT's shift (Fig. 5a): x's half vector, in the
+                // local frames of both vertices (shift.h). Both paths' directions come
+                // from their vertices (not the traced ray's, whose origin was offset), as
+                // the shift back computes them.
+                HalfVectorShift hv;
+                const PathVertex &xj = x.v[size_t(j)];
+                if (!bsdf || !ShiftHalfVectorWorld(xs.bsdf[size_t(j)], Dir(xj, x.v[size_t(j - 1)]),
+                                                   Dir(xj, x.v[size_t(j + 1)]), bsdf, Dir(v, y.v.back()), &hv))
+                    return false;
+                dir = hv.wi;
+                if (hvJacobian) *hvJacobian *= hv.jacobian;
+            }
+        }
         y.v.push_back(v);
         yb.push_back(bsdf);
     }
@@ -501,13 +525,26 @@ Mutator::ShiftStatus Mutator::shift(const State &xs, Point2 pFilm, Arena &arena,
     // x_0 and the lens point held, the film point moved (G-MLT Sec. 5.1).
     Ray ray;
     if (!ctx_.camera->rayThrough(x.v[0].p, pFilm, &ray)) return ShiftStatus::Mismatch;
+    // Specular for the shift: Dirac and near-specular vertices (Fig. 5a).
+    thread_local std::vector<ShiftClass> cls;
+    cls.resize(size_t(n));
+    for (int j = 0; j < n; ++j) cls[size_t(j)] = ShiftClassOf(x.v[size_t(j)], xs.bsdf[size_t(j)], set_.shiftThreshold);
+    auto specular = [&](int j) { return cls[size_t(j)] != ShiftClass::Rough; };
+    // The offset must have x's classes where it moved (x_1 .. x_last), or the
+    // shift back would take another plan: not a bijection (Sec. 4.2.2).
+    auto sameClasses = [&](int last) {
+        for (int j = 1; j <= last; ++j)
+            if (ShiftClassOf(ys->x.v[size_t(j)], ys->bsdf[size_t(j)], set_.shiftThreshold) != cls[size_t(j)])
+                return false;
+        return true;
+    };
     int b = 1;
-    while (b < n - 1 && x.v[size_t(b)].delta()) ++b;
-    if (b < n - 1 && x.v[size_t(b + 1)].delta()) {
+    while (b < n - 1 && specular(b)) ++b;
+    if (b < n - 1 && specular(b + 1)) {
         // A second chain S_m = x_{b+1} .. x_{c-1}: the manifold perturbation's
         // move for this film point; its Jacobian is the walk's (Eqs. 13-15).
         int bm, c, endGeom;
-        if (!ManifoldPattern(x, set_.mscene, &bm, &c, &endGeom)) return ShiftStatus::Unsupported;
+        if (!ManifoldPattern(x, set_.mscene, cls.data(), &bm, &c, &endGeom)) return ShiftStatus::Unsupported;
         MutationStats local;
         const ProposalResult r = manifoldMove(xs, b, c, endGeom, ray, arena, ys, jacobian, &local);
         if (stats) {
@@ -515,10 +552,13 @@ Mutator::ShiftStatus Mutator::shift(const State &xs, Point2 pFilm, Arena &arena,
             stats->walkFailures += local.walkFailures;
         }
         if (r != ProposalResult::Proposed) return local.walkFailures > 0 ? ShiftStatus::WalkFailed : ShiftStatus::Blocked;
+        if (!sameClasses(c - 1)) return ShiftStatus::Mismatch;
         return std::isfinite(*jacobian) && *jacobian > 0 ? ShiftStatus::Shifted : ShiftStatus::Blocked;
     }
     // S_e then x_b' joined to the unchanged x_{b+1} (or x_b' the emitter).
-    if (!traceEyeChain(xs, b, ray, arena, ys, nullptr)) return ShiftStatus::Mismatch;
+    double hvJacobian = 1;
+    if (!traceEyeChain(xs, b, ray, arena, ys, nullptr, &hvJacobian)) return ShiftStatus::Mismatch;
+    if (!sameClasses(b)) return ShiftStatus::Mismatch;
     Path &y = ys->x;
     std::vector<BSDF> &yb = ys->bsdf;
     if (b < n - 1) {
@@ -544,9 +584,11 @@ Mutator::ShiftStatus Mutator::shift(const State &xs, Point2 pFilm, Arena &arena,
     for (int i = 1; i < n; ++i) y.v[size_t(i)].wo = PackedVec3(Dir(y.v[size_t(i)], y.v[size_t(i - 1)]));
     if (!Evaluate(ctx_, film_, y, yb.data(), &ys->e)) return ShiftStatus::Blocked;
     // |d mu(y) / d mu(x)| = D_b(x) / D_b(y): x_1 .. x_b as functions of the
-    // film point (whose shift has unit Jacobian) and x_{b+1} on held; the
-    // delta-free form of G-MLT Eq. 15 with the eye chain's specular vertices.
-    *jacobian = EyeDensity(xs, b) / EyeDensity(*ys, b);
+    // film point (whose shift has unit Jacobian) and of the copied half vectors
+    // of near-specular vertices, x_{b+1} on held; the delta-free form of G-MLT
+    // Eqs. 14-15 with the eye chain's specular vertices. D_b per unit half
+    // vector is EyeDensity times |d h / d omega| at each copy: hvJacobian.
+    *jacobian = EyeDensity(xs, b) / EyeDensity(*ys, b) * hvJacobian;
     return std::isfinite(*jacobian) && *jacobian > 0 ? ShiftStatus::Shifted : ShiftStatus::Blocked;
 }
 

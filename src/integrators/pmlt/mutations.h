@@ -49,7 +49,18 @@ struct MutationSettings {
     Float lensR1 = 0.1, lensR2 = 0;      // film offsets in pixels (r2 0: 10% of the film's larger side)
     Float theta1 = 1e-4, theta2 = 0.1;  // direction offsets in radians
     const EmbreeManifoldScene *mscene = nullptr;  // manifold perturbation (none: not applicable)
+    // G-MLT's shift: a non-Dirac vertex whose BSDF's roughness is below this is
+    // near-specular (gradient-domain-mlt.md Sec. 5, Fig. 5a; ShiftClassOf).
+    Float shiftThreshold = 0.001;
 };
+
+// How G-MLT's shift treats a vertex (gradient-domain-mlt.md Sec. 5, Fig. 5a):
+// Dirac (scatters through a Dirac lobe: VERTEX_DELTA), NearSpecular (a non-Dirac
+// surface vertex whose BSDF has a roughness in (0, threshold): treated as
+// specular, its half vector kept) or Rough (everything else, also camera and
+// emitter vertices and BSDFs that mix a Dirac lobe with rough ones).
+enum class ShiftClass { Rough, Dirac, NearSpecular };
+ShiftClass ShiftClassOf(const PathVertex &v, const BSDF &b, Float threshold);
 
 // Counters a proposal adds to (manifold walks).
 struct MutationStats {
@@ -79,12 +90,16 @@ class Mutator {
     // G-MLT's shift (gradient-domain-mlt.md Sec. 5.1): the path moved to film
     // position pFilm with x_0 held: the eye chain S_e re-traced to x_b', then
     // x_b' joined to x_{b+1} (no second chain) or the second chain S_m walked
-    // so that x_c onward stays (manifold perturbation). On Shifted, y is the
-    // evaluated offset (I(y) > 0) and *jacobian = |d mu(y) / d mu(x)| in the
-    // delta-free measure of path.h: D(x) / D(y), D the density of the moved
-    // vertices per film area (G-MLT Eqs. 12-15). Failures
-    // depend on the path's pattern and a reversible walk only, so a pair that
-    // fails from one side fails from the other (Sec. 4.2.2).
+    // so that x_c onward stays (manifold perturbation). S_e and S_m are the
+    // vertices of class Dirac or NearSpecular (ShiftClassOf, Fig. 5a): the eye
+    // chain follows x's lobe at a Dirac vertex and copies x's half vector at a
+    // near-specular one; the walk keeps every half vector of S_m. On Shifted,
+    // y is the evaluated offset (I(y) > 0) and *jacobian = |d mu(y) / d mu(x)|
+    // in the delta-free measure of path.h: D(x) / D(y), D the density of the
+    // moved vertices per film area and per unit of the kept half vectors
+    // (G-MLT Eqs. 12-15). Failures depend on the path's pattern, an offset
+    // with x's vertex classes and a reversible walk only, so a pair that fails
+    // from one side fails from the other (Sec. 4.2.2).
     enum class ShiftStatus { Shifted, Blocked, Mismatch, WalkFailed, Unsupported, OffFilm };
     ShiftStatus shift(const State &x, Point2 pFilm, Arena &arena, State *y, double *jacobian,
                       MutationStats *stats = nullptr) const;
@@ -111,15 +126,19 @@ class Mutator {
     ProposalResult manifold(const State &x, Sampler &u, Arena &arena, State *y, double *ratioOut,
                             MutationStats *stats) const;
     // The eye chain x_1 .. x_b re-traced along `ray` with x's specular lobes
-    // (lens, multi-chain and manifold perturbations, the G-MLT shift).
-    bool traceEyeChain(const State &x, int b, const Ray &ray, Arena &arena, State *y,
-                       SurfaceInteraction *siB) const;
+    // (lens, multi-chain and manifold perturbations, the G-MLT shift); a
+    // non-Dirac vertex before x_b (G-MLT's near-specular ones) gets x's half
+    // vector, and *hvJacobian (when given) the product of those copies'
+    // |d omega_y / d omega_x| (shift.h).
+    bool traceEyeChain(const State &x, int b, const Ray &ray, Arena &arena, State *y, SurfaceInteraction *siB,
+                       double *hvJacobian = nullptr) const;
     // A camera ray through a perturbed film position (lens perturbation's
     // kernel) and a uniform lens point.
     bool perturbedRay(const State &x, Sampler &u, Ray *ray) const;
     // The manifold move of a path of ManifoldPattern (b, c): the eye chain
-    // re-traced along `ray`, the second chain walked to x_c. *jacobian =
-    // [K(y) / D_b(y)] / [K(x) / D_b(x)] (manifold_perturbation.cpp).
+    // re-traced along `ray`, the second chain walked to x_c (its non-Dirac
+    // vertices, G-MLT's near-specular ones, keep their half vectors).
+    // *jacobian = [K(y) / D_b(y)] / [K(x) / D_b(x)] (manifold_perturbation.cpp).
     ProposalResult manifoldMove(const State &x, int b, int c, int endGeom, const Ray &ray, Arena &arena, State *y,
                                 double *jacobian, MutationStats *stats) const;
     Float bidirDensity(const State &s, int a, int nd, int na, int n) const;
@@ -147,11 +166,16 @@ bool FollowSpecular(const Path &x, int j, PathVertex *v, const BSDF &b, const Ve
 bool LensPattern(const Path &x, int *c, int *m);
 bool CausticPattern(const Path &x, int *c);
 bool ManifoldPattern(const Path &x, const EmbreeManifoldScene *mscene, int *b, int *c, int *endGeom);
+// The same pattern with the vertices of class Dirac or NearSpecular
+// specular (G-MLT's shift; the above: VERTEX_DELTA alone).
+bool ManifoldPattern(const Path &x, const EmbreeManifoldScene *mscene, const ShiftClass *cls, int *b, int *c,
+                     int *endGeom);
 
 // Densities of a state's vertices per film area (x_1 .. x_b, the eye chain
 // and its end: p_E(x_1), then p_E / P_lobe through each specular vertex) and
 // of x_{b+1} .. x_c traced from x_b with a unit solid-angle density
-// (manifold_perturbation.cpp).
+// (manifold_perturbation.cpp). Through a non-Dirac vertex of either chain
+// (G-MLT's near-specular ones) the next vertex has a unit solid-angle density.
 double EyeDensity(const State &s, int b);
 double TraceDensity(const State &s, int b, int c);
 

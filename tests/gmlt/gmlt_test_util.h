@@ -1,0 +1,87 @@
+// Helpers of the G-MLT tests: an integrator set up on a scene of the
+// conformance table and the bdpt strategy paths of bidirectional samples.
+#pragma once
+#include <stdexcept>
+#include <string>
+
+#include "integrators/gmlt/gmlt.h"
+#include "pmlt/pmlt_test_util.h"
+
+namespace gradus::pmlt_test {
+
+using ShiftStatus = pmlt::Mutator::ShiftStatus;
+
+struct GMLTSetup {
+    SceneSetup su;
+    std::unique_ptr<GMLTIntegrator> gm;
+    // threshold: the shift's "shiftthreshold" (negative: the default).
+    explicit GMLTSetup(const std::string &text, double threshold = -1) : su(text) {
+        EntityDesc d;
+        d.type = "gmlt";
+        if (threshold >= 0) {
+            Param p;
+            p.type = "float";
+            p.name = "shiftthreshold";
+            p.numbers = {threshold};
+            d.params.add(p);
+        }
+        gm = std::make_unique<GMLTIntegrator>(d);
+        gm->preprocess(*su.job.scene, *su.job.film);
+    }
+    const BidirContext &ctx() const { return gm->bidirContext(); }
+    const pmlt::FilmDomain &film() const { return gm->filmDomain(); }
+};
+
+// Calls fn(x, C) for every bdpt strategy path x of `samples` bidirectional
+// samples with its MIS-weighted contribution C (the paths in `arena`, reset
+// per sample); sampleDone(k) after sample k.
+template <class Fn, class Done>
+void ForEachStrategyPath(const GMLTSetup &g, int samples, uint64_t seed, Arena &arena, Fn fn, Done sampleDone) {
+    for (int k = 0; k < samples; ++k) {
+        RNG rng(Hash(seed, uint64_t(k)));
+        BidirSample smp;
+        if (smp.make(g.su, rng, arena)) {
+            for (int t = 1; t <= smp.nC; ++t)
+                for (int s = 0; s <= smp.nL; ++s) {
+                    if ((s == 1 && t == 1) || s + t - 2 > g.su.maxDepth) continue;
+                    const ConnectSamples cu = Numbers(rng);
+                    ConnectResult r;
+                    if (!ConnectBDPT(g.ctx(), smp.light(s), smp.camera(t), s, t, cu, &r)) continue;
+                    if (r.splat && !g.film().contains(r.pRaster)) continue;
+                    if (!(r.L.y() > 0)) continue;
+                    pmlt::State x;
+                    if (!pmlt::StrategyPath(g.ctx(), smp.light(s), smp.camera(t), s, t, cu, &x.x)) continue;
+                    pmlt::BuildBSDFs(g.ctx(), x.x, arena, &x.bsdf);
+                    if (!pmlt::Evaluate(g.ctx(), g.film(), x.x, x.bsdf.data(), &x.e)) continue;
+                    fn(x, r.L);
+                }
+        }
+        sampleDone(k);
+        arena.reset();
+    }
+}
+
+inline Point2 Shifted(const pmlt::State &x, int dir) {
+    return Point2(x.e.pRaster.x + Float(kNeighbourOffsets[dir].x), x.e.pRaster.y + Float(kNeighbourOffsets[dir].y));
+}
+
+// The conformance table's specular box with near-specular glossy spheres
+// (G-MLT Fig. 5a): the glass sphere rough and the metal sphere, both of
+// microfacet alpha 0.05; the mirror stays ideal. With shiftthreshold 0.1 the
+// shift treats both spheres as specular.
+inline std::string GlossyBox() {
+    std::string s = ConformanceScene("specular-box");
+    const auto replace = [&](const std::string &from, const std::string &to) {
+        const size_t at = s.find(from);
+        if (at == std::string::npos) throw std::runtime_error("GlossyBox: \"" + from + "\" not in specular-box");
+        s.replace(at, from.size(), to);
+    };
+    replace("Material \"glass\"", "Material \"glass\" \"float uroughness\" [0.05] \"float vroughness\" [0.05] "
+                                  "\"bool remaproughness\" \"false\"");
+    replace("Material \"metal\" \"float roughness\" [ 0.05 ]",
+            "Material \"metal\" \"float roughness\" [ 0.05 ] \"bool remaproughness\" \"false\"");
+    return s;
+}
+constexpr double kGlossyBoxThreshold = 0.1;
+
+}  // namespace gradus::pmlt_test

@@ -1,10 +1,12 @@
 // Helpers of the G-MLT tests: an integrator set up on a scene of the
-// conformance table and the bdpt strategy paths of bidirectional samples.
+// conformance table, the bdpt strategy paths of bidirectional samples, the
+// glossy box and render helpers.
 #pragma once
 #include <stdexcept>
 #include <string>
 
 #include "integrators/gmlt/gmlt.h"
+#include "mlt/unbiased_util.h"
 #include "pmlt/pmlt_test_util.h"
 
 namespace gradus::pmlt_test {
@@ -83,5 +85,23 @@ inline std::string GlossyBox() {
     return s;
 }
 constexpr double kGlossyBoxThreshold = 0.1;
+
+inline const GMLTIntegrator &G(const mlt_test::Rendered &r) {
+    return dynamic_cast<const GMLTIntegrator &>(*r.integrator);
+}
+
+// A scene's text with another Integrator directive.
+inline std::string WithIntegrator(const std::string &text, const std::string &integrator) {
+    const size_t at = text.find("Integrator ");
+    return text.substr(0, at) + integrator + text.substr(text.find('\n', at));
+}
+
+// Mean luminance of the whole image and of its 4 x 4 blocks.
+inline std::vector<double> Blocks(const Image &img) {
+    std::vector<double> v = {mlt_test::MeanLum(img)};
+    for (int y = 0; y + 4 <= img.height(); y += 4)
+        for (int x = 0; x + 4 <= img.width(); x += 4) v.push_back(mlt_test::MeanLum(img, x, y, x + 4, y + 4));
+    return v;
+}
 
 }  // namespace gradus::pmlt_test

@@ -1,17 +1,13 @@
 // gmlt renders: the gradient bookkeeping on a known gradient, agreement with
 // bdpt over long chains (pmlt too: its stationary distribution, which short
 // chains started from the bootstrap cannot test), parameters and statistics.
-#include "integrators/gmlt/gmlt.h"
-#include "mlt/unbiased_util.h"
-#include "pmlt/pmlt_test_util.h"
+#include "gmlt/gmlt_test_util.h"
 
 namespace gradus::pmlt_test {
 namespace {
 
 using mlt_test::BoxScene;
 using mlt_test::Render;
-
-const GMLTIntegrator &G(const mlt_test::Rendered &r) { return dynamic_cast<const GMLTIntegrator &>(*r.integrator); }
 
 // An emitter (L = 1, luminance 1) covering exactly one half of a 16 x 8 film
 // (world x >= 0 at z = -1, fov 90 on the 8-pixel axis), nothing else: I = 1
@@ -72,17 +68,7 @@ TEST(GMLTRender, EmitterEdgeGradient) {
 // The conformance table's diffuse box (24 x 24, its ceiling light in view)
 // with another Integrator directive.
 std::string DiffuseBox(const std::string &integrator) {
-    std::string text = ConformanceScene("diffuse-box");
-    const size_t at = text.find("Integrator ");
-    return text.substr(0, at) + integrator + text.substr(text.find('\n', at));
-}
-
-// Mean luminance of the whole image and of its 4 x 4 blocks.
-std::vector<double> Blocks(const Image &img) {
-    std::vector<double> v = {mlt_test::MeanLum(img)};
-    for (int y = 0; y + 4 <= img.height(); y += 4)
-        for (int x = 0; x + 4 <= img.width(); x += 4) v.push_back(mlt_test::MeanLum(img, x, y, x + 4, y + 4));
-    return v;
+    return WithIntegrator(ConformanceScene("diffuse-box"), integrator);
 }
 
 // Long chains (8 chains, 256 mutations per pixel of the 24 x 24 diffuse box:

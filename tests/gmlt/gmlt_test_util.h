@@ -104,4 +104,20 @@ inline std::vector<double> Blocks(const Image &img) {
     return v;
 }
 
+// Runs (per-run block means) against bdpt's by Welch's t at `alpha`: no
+// rejection as they are, rejection when scaled by 1.1 or 1 / 1.1 (power).
+inline void ExpectAgreesWithBdpt(const std::string &tag, const std::string &name,
+                                 const std::vector<std::vector<double>> &runs,
+                                 const std::vector<std::vector<double>> &bdpt, double alpha) {
+    const mlt_test::Comparison c = mlt_test::Compare(runs, bdpt, 1, alpha);
+    std::cout << "[ " << tag << " ] " << name << " vs bdpt: |t|/crit " << c.maxMargin << " ("
+              << c.describe.substr(0, c.describe.find(';')) << ")\n";
+    EXPECT_LE(c.maxMargin, 1) << name << ": " << c.describe;
+    for (double scale : {1.1, 1 / 1.1}) {
+        const mlt_test::Comparison p = mlt_test::Compare(runs, bdpt, scale, alpha);
+        std::cout << "[ " << tag << " ] " << name << " power x" << scale << ": " << p.maxMargin << "\n";
+        EXPECT_GT(p.maxMargin, 1) << name << ": a " << scale << " bias is not detected";
+    }
+}
+
 }  // namespace gradus::pmlt_test

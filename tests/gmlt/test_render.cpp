@@ -127,7 +127,8 @@ TEST(GMLTRender, ParametersLayersAndStatistics) {
     for (int s = 0; s < 6; ++s) shifts += g.shiftCount(pmlt::Mutator::ShiftStatus(s));
     EXPECT_GT(g.shiftCount(pmlt::Mutator::ShiftStatus::Shifted), 0);
     EXPECT_LE(shifts, 16 + 4 * 144);  // the chain starts and the proposals with a contribution
-    for (const char *want : {"Gradient-domain MLT", "shifts: ", "reversible", "Reconstruction:", "bidirectional: "})
+    for (const char *want : {"Gradient-domain MLT", "shifts: ", "reversible", "near-specular", "Reconstruction:",
+                             "bidirectional: "})
         EXPECT_NE(r.statistics.find(want), std::string::npos) << want << " in\n" << r.statistics;
     // Parameters gmlt does not take, misspelt or out of range.
     for (const char *bad : {"\"float shiftthresold\" [0.01]", "\"float shiftthreshold\" [-1]",

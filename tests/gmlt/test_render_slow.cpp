@@ -23,7 +23,7 @@ TEST(GMLTRenderSlow, NearSpecularShiftAgreesWithBdpt) {
                                         "[20000] \"integer chains\" [8] \"float shiftthreshold\" [0.1]"),
             S, uint64_t(75001 + k));
         EXPECT_EQ(G(g).gsettings().shiftThreshold, Float(0.1));
-        nearShifts += G(g).shiftCount(pmlt::Mutator::ShiftStatus::Shifted);
+        nearShifts += G(g).nearSpecularShifts();
         rg.push_back(Blocks(g.image.layerRGB("primal")));
         rl.push_back(Blocks(g.image.layerRGB("reconstructed_l2")));
     }

@@ -207,6 +207,7 @@ void GMLTIntegrator::runPass(PassContext &ctx) {
         ch.dir = int8_t(dx);
         flushCounts(cnt, mst, count);
         for (int s = 0; s < kShiftStatuses; ++s) shiftCounts_[s] += shifts[s];
+        nNearSpecular_ += mst.nearSpecularShifts;
     });
 }
 
@@ -251,6 +252,8 @@ std::string GMLTIntegrator::statistics() const {
             if (shiftCounts_[s].load() > 0) o << "; " << ShiftStatusName(s) << " " << shiftCounts_[s].load();
     }
     o << "\n";
+    o << "  shifts through near-specular vertices (roughness below shiftthreshold " << gset_.shiftThreshold
+      << ", treated as specular: Fig. 5a): " << nNearSpecular_.load() << "\n";
     o << "  bootstrap: " << nBootstrapShifted_.load() << " candidates re-weighted to f, " << nRouletteDropped_.load()
       << " left out by Russian roulette below the pilot's mean luminance " << tau_ << "\n";
     if (nBootstrapDropped_ > 0)

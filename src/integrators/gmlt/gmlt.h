@@ -96,6 +96,7 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
     const pmlt::FilmDomain &filmDomain() const { return film_; }
     const GMLTSettings &gsettings() const { return gset_; }
     int64_t shiftCount(pmlt::Mutator::ShiftStatus s) const { return shiftCounts_[int(s)].load(); }
+    int64_t nearSpecularShifts() const { return nNearSpecular_.load(); }
 
   protected:
     double candidateWeight(const Sample &smp, int64_t k, int s, int t, const ConnectSamples &cu, double lum,
@@ -109,6 +110,7 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
     static constexpr int kShiftStatuses = 6;
     mutable std::atomic<int64_t> shiftCounts_[kShiftStatuses] = {};
     mutable std::atomic<int64_t> nBootstrapDropped_{0}, nBootstrapShifted_{0}, nRouletteDropped_{0};
+    std::atomic<int64_t> nNearSpecular_{0};  // chain shifts that moved a near-specular vertex
     double tau_ = 0;  // candidate roulette threshold (prepareBootstrap)
     int densityLayer_ = -1, irreversibleLayer_ = -1;
 };

@@ -538,6 +538,12 @@ Mutator::ShiftStatus Mutator::shift(const State &xs, Point2 pFilm, Arena &arena,
                 return false;
         return true;
     };
+    auto shifted = [&](int last) {
+        if (!std::isfinite(*jacobian) || !(*jacobian > 0)) return ShiftStatus::Blocked;
+        const auto end = cls.begin() + last + 1;
+        if (stats && std::find(cls.begin() + 1, end, ShiftClass::NearSpecular) != end) ++stats->nearSpecularShifts;
+        return ShiftStatus::Shifted;
+    };
     int b = 1;
     while (b < n - 1 && specular(b)) ++b;
     if (b < n - 1 && specular(b + 1)) {
@@ -553,7 +559,7 @@ Mutator::ShiftStatus Mutator::shift(const State &xs, Point2 pFilm, Arena &arena,
         }
         if (r != ProposalResult::Proposed) return local.walkFailures > 0 ? ShiftStatus::WalkFailed : ShiftStatus::Blocked;
         if (!sameClasses(c - 1)) return ShiftStatus::Mismatch;
-        return std::isfinite(*jacobian) && *jacobian > 0 ? ShiftStatus::Shifted : ShiftStatus::Blocked;
+        return shifted(c - 1);
     }
     // S_e then x_b' joined to the unchanged x_{b+1} (or x_b' the emitter).
     double hvJacobian = 1;
@@ -589,7 +595,7 @@ Mutator::ShiftStatus Mutator::shift(const State &xs, Point2 pFilm, Arena &arena,
     // Eqs. 14-15 with the eye chain's specular vertices. D_b per unit half
     // vector is EyeDensity times |d h / d omega| at each copy: hvJacobian.
     *jacobian = EyeDensity(xs, b) / EyeDensity(*ys, b) * hvJacobian;
-    return std::isfinite(*jacobian) && *jacobian > 0 ? ShiftStatus::Shifted : ShiftStatus::Blocked;
+    return shifted(b);
 }
 
 ProposalResult Mutator::caustic(const State &xs, Sampler &u, Arena &arena, State *ys, double *ratioOut) const {

@@ -65,6 +65,7 @@ ShiftClass ShiftClassOf(const PathVertex &v, const BSDF &b, Float threshold);
 // Counters a proposal adds to (manifold walks).
 struct MutationStats {
     int64_t walks = 0, walkFailures = 0;
+    int64_t nearSpecularShifts = 0;  // G-MLT shifts that moved a near-specular vertex (Fig. 5a)
 };
 
 // A state of a chain: the path, its evaluation and its BSDFs (which point

@@ -30,6 +30,7 @@ struct LightLiSample {
 struct LightLeSample {
     Spectrum L;
     Ray ray;             // unit direction
+    Point3 p;            // the emitter point: on the surface (area lights offset ray.o from it), else ray.o
     Normal3 nLight;      // surface normal at the origin (zero for point lights)
     Float pdfPos = 0;    // area measure (delta position: 1; infinite: disk area measure)
     Float pdfDir = 0;    // solid angle (delta direction: 1)

@@ -43,6 +43,7 @@ bool AreaLight::sampleLe(Point2 u1, Point2 u2, LightLeSample *s) const {
     Frame f(p.n);
     Vec3 w = f.toWorld(wLocal);
     s->ray = p.spawnRay(w);
+    s->p = p.p;
     s->nLight = p.n;
     s->pdfPos = pdfPos;
     s->pdfDir = pdfDir;
@@ -77,6 +78,7 @@ class PointLight : public Light {
     Float pdfLi(const Interaction &, const Vec3 &) const override { return 0; }
     bool sampleLe(Point2 u1, Point2, LightLeSample *s) const override {
         s->ray = Ray(pos_, SampleUniformSphere(u1));
+        s->p = pos_;
         s->nLight = Normal3(0, 0, 0);
         s->pdfPos = 1;
         s->pdfDir = UniformSpherePdf();
@@ -134,6 +136,7 @@ class SpotLight : public Light {
         Vec3 wl = SampleUniformCone(u1, cosTotal_);
         Vec3 w = frame_.toWorld(wl);
         s->ray = Ray(pos_, w);
+        s->p = pos_;
         s->nLight = Normal3(0, 0, 0);
         s->pdfPos = 1;
         s->pdfDir = UniformConePdf(cosTotal_);
@@ -174,6 +177,7 @@ class DistantLight : public Light {
         Point2 cd = SampleUniformDiskConcentric(u1);
         Point3 pDisk = center_ + (f.s * cd.x + f.t * cd.y) * radius_;
         s->ray = Ray(pDisk + w_ * radius_, -w_);
+        s->p = s->ray.o;
         s->nLight = Normal3(0, 0, 0);
         s->pdfPos = 1 / (Pi * radius_ * radius_);
         s->pdfDir = 1;
@@ -288,6 +292,7 @@ class InfiniteLight : public Light {
         Point2 cd = SampleUniformDiskConcentric(u2);
         Point3 pDisk = center_ + (f.s * cd.x + f.t * cd.y) * radius_;
         s->ray = Ray(pDisk - d * radius_, d);
+        s->p = s->ray.o;
         s->nLight = d;
         s->pdfPos = 1 / (Pi * radius_ * radius_);
         s->pdfDir = pdfDir;

@@ -16,16 +16,22 @@ using ShiftStatus = pmlt::Mutator::ShiftStatus;
 struct GMLTSetup {
     SceneSetup su;
     std::unique_ptr<GMLTIntegrator> gm;
-    // threshold: the shift's "shiftthreshold" (negative: the default).
-    explicit GMLTSetup(const std::string &text, double threshold = -1) : su(text) {
+    // threshold: the shift's "shiftthreshold", maxDepth: "maxdepth" of the
+    // integrator and of the bdpt samples (negative: the defaults).
+    explicit GMLTSetup(const std::string &text, double threshold = -1, int maxDepth = -1) : su(text) {
         EntityDesc d;
         d.type = "gmlt";
-        if (threshold >= 0) {
+        auto add = [&](const char *type, const char *name, double v) {
             Param p;
-            p.type = "float";
-            p.name = "shiftthreshold";
-            p.numbers = {threshold};
+            p.type = type;
+            p.name = name;
+            p.numbers = {v};
             d.params.add(p);
+        };
+        if (threshold >= 0) add("float", "shiftthreshold", threshold);
+        if (maxDepth >= 0) {
+            add("integer", "maxdepth", maxDepth);
+            su.maxDepth = maxDepth;
         }
         gm = std::make_unique<GMLTIntegrator>(d);
         gm->preprocess(*su.job.scene, *su.job.film);

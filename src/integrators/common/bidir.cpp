@@ -287,7 +287,7 @@ int GenerateLightSubpath(const BidirContext &ctx, Sampler &sampler, Arena &arena
     if (IsDeltaLight(light->flags)) v.flags |= VERTEX_DELTA_LIGHT;
     bool infinite = light->flags & (LIGHT_INFINITE | LIGHT_DELTA_DIRECTION);
     if (infinite) v.flags |= VERTEX_INFINITE;
-    v.p = les.ray.o;
+    v.p = les.p;  // on the emitter's surface (the ray's origin is offset from it)
     v.ng = les.nLight;
     v.ns = les.nLight;
     v.setThroughput(les.L);

@@ -313,7 +313,7 @@ ProposalResult Mutator::bidirectional(const State &xs, Sampler &u, Arena &arena,
             if (IsDeltaLight(light->flags)) e.flags |= VERTEX_DELTA_LIGHT;
             // Infinite and distant lights: a vertex on the scene's bounding disk (bidir.cpp).
             if (light->flags & (LIGHT_INFINITE | LIGHT_DELTA_DIRECTION)) e.flags |= VERTEX_INFINITE;
-            e.p = les.ray.o;
+            e.p = les.p;
             e.ng = e.ns = les.nLight;
             lv.push_back(e);
             lb.push_back(BSDF());

@@ -1,6 +1,7 @@
 // G-MLT's shift with near-specular glossy vertices treated as specular
-// (gradient-domain-mlt.md Sec. 5, Fig. 5a), on the glossy box (specular box
-// with both spheres microfacet alpha 0.05, shiftthreshold 0.1).
+// (gradient-domain-mlt.md Sec. 5, Fig. 5a). Tests 1 and 2 on the glossy box
+// of gmlt_test_util.h (specular box with both spheres microfacet alpha 0.05,
+// shiftthreshold 0.1), test 3 on the shipped scenes/glossy-box.pbrt.
 // 1. Classes: the spheres' vertices are NearSpecular, the mirror's Dirac, the
 //    walls' Rough; with the default threshold the spheres are Rough.
 // 2. Jacobian against finite differences, in the measure the shift's
@@ -21,7 +22,6 @@
 #include <cmath>
 
 #include "conformance/conformance_util.h"
-
 #include "gmlt/gmlt_test_util.h"
 
 namespace gradus::pmlt_test {

@@ -62,7 +62,14 @@ struct SurfaceInteraction : Interaction {
     struct {
         Normal3 n;  // shading normal, same hemisphere as n
         Vec3 dpdu, dpdv;
+        // pbrt-v3's convention, which bump mapping uses: for triangle meshes the
+        // derivative of the interpolated (unnormalised) vertex normal, for analytic
+        // shapes the object-space Weingarten derivative carried as a normal.
         Normal3 dndu, dndv;
+        // Derivatives of the unit shading normal n itself, (I - n n^T) dm/du / |m| for
+        // n = m / |m|, in n's orientation: what manifold walks need (manifold.h).
+        // Zero where the shape does not provide them.
+        Normal3 dnhatdu, dnhatdv;
     } shading;
     const Material *material = nullptr;
     const AreaLight *areaLight = nullptr;

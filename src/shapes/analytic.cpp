@@ -106,6 +106,18 @@ void AnalyticShape::interaction(const Ray &worldRay, Float tHit, SurfaceInteract
     si->shading.dpdv = dpdvW;
     si->shading.dndu = si->dndu;
     si->shading.dndv = si->dndv;
+    // World unit normal n = +-m/|m| with m = M^-T n_obj: its derivative is
+    // +-(I - n n^T) M^-T dn_obj/du / |m|. (si->dndu above, pbrt-v3's, lacks the
+    // 1/|m| factor, e.g. 1/scale under a uniform scale, and the orientation flip.)
+    Float mLen = worldFromObject_.applyNormal(nObj).length();
+    if (nObj.lengthSquared() > 0 && mLen > 0) {
+        const Float sign = flip_ ? -1 : 1;
+        auto unit = [&](const Normal3 &dm) { return (dm - n * Dot(n, dm)) * (sign / mLen); };
+        si->shading.dnhatdu = unit(si->dndu);
+        si->shading.dnhatdv = unit(si->dndv);
+    } else {
+        si->shading.dnhatdu = si->shading.dnhatdv = Normal3(0, 0, 0);
+    }
 }
 
 }  // namespace gradus

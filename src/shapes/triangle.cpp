@@ -126,11 +126,13 @@ void TriangleMesh::interaction(int tri, Float b1, Float b2, const Vec3 &wo, Surf
     si->shading.dpdu = dpdu;
     si->shading.dpdv = dpdv;
     si->shading.dndu = si->shading.dndv = Normal3(0, 0, 0);
+    si->shading.dnhatdu = si->shading.dnhatdv = Normal3(0, 0, 0);
 
     if (!n.empty()) {
         const Normal3 n0 = normalAt(i0), n1 = normalAt(i1), n2 = normalAt(i2);
-        Normal3 ns = n0 * b0 + n1 * b1 + n2 * b2;
-        ns = ns.lengthSquared() > 0 ? Normalize(ns) : si->n;
+        const Normal3 m = n0 * b0 + n1 * b1 + n2 * b2;  // interpolated, not unit (scaled meshes: far from it)
+        const Float mLen = m.length();
+        Normal3 ns = mLen > 0 ? m / mLen : si->n;
         si->n = FaceForward(si->n, ns);
         Vec3 ss = s.empty() ? si->dpdu : tangentAt(i0) * b0 + tangentAt(i1) * b1 + tangentAt(i2) * b2;
         if (ss.lengthSquared() == 0) ss = si->dpdu;
@@ -150,6 +152,28 @@ void TriangleMesh::interaction(int tri, Float b1, Float b2, const Vec3 &wo, Surf
             dndv = (dn2 * duv02.x - dn1 * duv12.x) * inv;
         }
         si->setShadingGeometry(ss, ts, dndu, dndv, true);
+        // d(m/|m|)/du = (I - n n^T) dm/du / |m|: the unit normal's derivative.
+        if (mLen > 0) {
+            Normal3 dmdu = dndu, dmdv = dndv;
+            if (degenerateUV) {
+                // No uv parameterisation: dpdu, dpdv are a basis of the triangle's
+                // plane; write each as a (p1 - p0) + b (p2 - p0) and take the same
+                // combination of n1 - n0 and n2 - n0.
+                Vec3 e1 = p1 - p0, e2 = p2 - p0;
+                Float a11 = Dot(e1, e1), a12 = Dot(e1, e2), a22 = Dot(e2, e2), d = a11 * a22 - a12 * a12;
+                auto along = [&](const Vec3 &e) {
+                    if (!(d > 0)) return Normal3(0, 0, 0);
+                    Float r1 = Dot(e1, e), r2 = Dot(e2, e);
+                    Float a = (a22 * r1 - a12 * r2) / d, b = (a11 * r2 - a12 * r1) / d;
+                    return (n1 - n0) * a + (n2 - n0) * b;
+                };
+                dmdu = along(dpdu);
+                dmdv = along(dpdv);
+            }
+            auto unit = [&](const Normal3 &dm) { return (dm - ns * Dot(ns, dm)) / mLen; };
+            si->shading.dnhatdu = unit(dmdu);
+            si->shading.dnhatdv = unit(dmdv);
+        }
     } else if (flip) {
         si->n = -si->n;
         si->shading.n = si->n;

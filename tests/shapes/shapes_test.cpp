@@ -324,6 +324,59 @@ TEST(AnalyticShapes, NormalDerivativesMatchFiniteDifferences) {
     }
 }
 
+// The derivatives of the unit shading normal (shading.dnhatdu/dv, what manifold
+// walks use) against central differences of si.shading.n along dp/du and dp/dv,
+// for every analytic shape under a uniform scale of 0.09, a non-uniform scale
+// (1, 1.5, 1) after a rotation, a mirror, and with ReverseOrientation. pbrt-v3's
+// si.dndu (the object-space derivative carried as a normal, which the walk got
+// before) fails here: by 1/0.09 - 1 = 10.1 relative under the uniform scale, and
+// with the wrong sign where the normal is flipped (checked below).
+TEST(AnalyticShapes, UnitNormalDerivativesUnderTransforms) {
+    const Transform xfs[] = {Scale(0.09, 0.09, 0.09), Scale(1, 1.5, 1) * Rotate(37, Vec3(1, 2, 0.5)),
+                             Scale(-1, 1, 1) * Rotate(20, Vec3(0, 1, 1))};
+    for (const AnalyticCase &c : AnalyticCases())
+        for (const Transform &xf : xfs)
+            for (bool ro : {false, true}) {
+                auto shape = c.make(xf, ro);
+                RNG rng(29);
+                double worst = 0, worstLegacy = 0;
+                int used = 0;
+                for (int i = 0; i < 40; ++i) {
+                    Float pdf;
+                    Interaction s = shape->sampleArea(Point2(0.1 + 0.8 * rng.uniform(), 0.1 + 0.8 * rng.uniform()), &pdf);
+                    Float size = std::max<Float>(1e-3, shape->worldBound().diagonal().length());
+                    auto at = [&](const Point3 &p, SurfaceInteraction *si) {
+                        Ray r(p + Vec3(s.n) * (1e-2 * size), -Vec3(s.n));
+                        Float t;
+                        Interaction h;
+                        if (!shape->intersectP(r, &t, &h)) return false;
+                        shape->interaction(r, t, si);
+                        return true;
+                    };
+                    SurfaceInteraction si;
+                    if (!at(s.p, &si)) continue;
+                    for (int axis = 0; axis < 2; ++axis) {
+                        Vec3 dp = axis == 0 ? si.dpdu : si.dpdv;
+                        Float e = 1e-6 * size / std::max<Float>(dp.length(), 1e-12);
+                        SurfaceInteraction sp, sm;
+                        if (!at(si.p + dp * e, &sp) || !at(si.p - dp * e, &sm)) continue;
+                        // Differences of points that the projection back onto the surface moved by O(e^2).
+                        Vec3 fd = (Vec3(sp.shading.n) - Vec3(sm.shading.n)) / (2 * e);
+                        Vec3 an(axis == 0 ? si.shading.dnhatdu : si.shading.dnhatdv);
+                        Vec3 legacy(axis == 0 ? si.dndu : si.dndv);
+                        Float scale = std::max<Float>(fd.length(), 1e-3 * dp.length() / size);
+                        worst = std::max(worst, double((an - fd).length() / scale));
+                        worstLegacy = std::max(worstLegacy, double((legacy - fd).length() / scale));
+                        ++used;
+                    }
+                }
+                ASSERT_GT(used, 20) << c.name;
+                EXPECT_LT(worst, 1e-4) << c.name << " ro " << ro;
+                // pbrt-v3's derivative misses 1/|M^-T n| (Disks have no curvature: 0 under any convention.)
+                if (&xf == &xfs[0] && c.name.rfind("disk", 0) != 0) EXPECT_GT(worstLegacy, 5) << c.name << " ro " << ro;
+            }
+}
+
 // Triangles follow pbrt-v3: n = normalize(Cross(p1 - p0, p2 - p0)) of the world
 // vertices, flipped by ReverseOrientation XOR handedness swap; with shading
 // normals the geometric normal faces them instead.

@@ -166,13 +166,43 @@ TEST_P(WalkTest, TotalInternalReflection) {
     EXPECT_EQ(r.status, ManifoldStatus::TotalInternalReflection) << ToString(r.status);
 }
 
-TEST_P(WalkTest, IterationCapGivesNotConverged) {
+TEST_P(WalkTest, IterationCapIsItsOwnStatus) {
     ChainConfig cfg = SphereConfig();
     ManifoldWalkOptions o = opts();
     o.maxIterations = 1;
     ManifoldWalkResult r = ManifoldWalk(cfg.scene, cfg.base, cfg.base.front().sp, cfg.target, o);
-    EXPECT_EQ(r.status, ManifoldStatus::NotConverged) << ToString(r.status);
+    EXPECT_EQ(r.status, ManifoldStatus::IterationCap) << ToString(r.status);
     EXPECT_GT(r.relativeError, 1e-7);
+}
+
+// A walk whose start did not move begins at the base chain itself: walking to
+// the base's own end costs no trace at all, and a walk elsewhere one per iteration.
+TEST_P(WalkTest, UnmovedStartIsNotRetraced) {
+    ChainConfig cfg = SlabConfig();
+    ManifoldWalkResult same = ManifoldWalk(cfg.scene, cfg.base, cfg.base.front().sp, cfg.base.back().sp, opts());
+    ASSERT_TRUE(same.ok()) << ToString(same.status);
+    EXPECT_EQ(same.traces, 0);
+    EXPECT_EQ(same.iterations, 0);
+    if (GetParam() == ManifoldSolver::Newton) {
+        ManifoldWalkResult r = ManifoldWalk(cfg.scene, cfg.base, cfg.base.front().sp, cfg.target, opts());
+        ASSERT_TRUE(r.ok()) << ToString(r.status);
+        EXPECT_EQ(r.traces, r.iterations);
+    }
+}
+
+// An unreachable target (the end plane behind the start, seen only through the
+// mirror's back side) fails within a few iterations, not at the cap, and not as
+// "iteration cap".
+TEST(ManifoldWalkFastFailure, InfeasibleTargetFailsBeforeTheCap) {
+    ChainConfig cfg = SphereConfig();
+    // Far outside the caustic the sphere can focus onto the end plane.
+    ManifoldSurfacePoint target = cfg.scene.moveOn(cfg.base.back().sp, Vec3(0, 40, 25));
+    ManifoldWalkOptions o;
+    o.maxIterations = 200;
+    ManifoldWalkResult r = ManifoldWalk(cfg.scene, cfg.base, cfg.base.front().sp, target, o);
+    EXPECT_FALSE(r.ok());
+    EXPECT_NE(r.status, ManifoldStatus::IterationCap) << ToString(r.status);
+    EXPECT_LT(r.iterations, 30) << ToString(r.status);
 }
 
 TEST_P(WalkTest, TargetOnOtherPrimitiveIsInvalid) {

@@ -69,6 +69,7 @@ GBDPTIntegrator::GBDPTIntegrator(const EntityDesc &desc, const GBDPTSettings &se
     : set_(set), loc_(desc.loc), store_(new Store) {}
 
 void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
+    ResetManifoldStats();
     scene_ = &scene;
     lightSampler_ = LightSampler(scene.lights, set_.lightStrategy, loc_);
     bctx_.init(scene, lightSampler_, MISHeuristic::Balance);  // Eq. 8 uses the balance heuristic
@@ -354,6 +355,7 @@ std::string GBDPTIntegrator::statistics() const {
         s += buf;
     }
     s += tot.formatWalks(sctx_.trySpecular);
+    s += FormatManifoldStats(GetManifoldStats(), "  ");  // every walk of the render (process-wide counters)
     if (!set_.lightTracing) s += "  light-tracing paths not shifted (lighttracing false)\n";
     return withReconstructionReport(s);
 }

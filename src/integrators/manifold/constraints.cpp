@@ -130,7 +130,15 @@ void SetupManifoldVertex(ManifoldVertex *v, const ManifoldSurfacePoint &sp, cons
         CoordinateSystem(sp.n, &v->s, &v->t);
         v->frameRef = v->s;
     }
-    // Normal derivatives along s and t: write e = alpha dpdu + beta dpdv.
+    // Motion axes: s projected onto the geometric tangent plane (ng on n's side,
+    // so (ps, pt) has the handedness of (s, t)). Equal to (s, t) where ng = n.
+    Vec3 ng = GeometricNormal(sp);
+    if (!(ng.lengthSquared() > 0) || !FrameFromRef(ng, v->s, &v->ps, &v->pt)) {
+        v->ps = v->s;
+        v->pt = v->t;
+    }
+    // Normal derivatives along ps and pt (in the span of dpdu, dpdv): write
+    // e = alpha dpdu + beta dpdv.
     Float a11 = Dot(sp.dpdu, sp.dpdu), a12 = Dot(sp.dpdu, sp.dpdv), a22 = Dot(sp.dpdv, sp.dpdv);
     Float det = a11 * a22 - a12 * a12;
     auto along = [&](const Vec3 &e) {
@@ -139,8 +147,8 @@ void SetupManifoldVertex(ManifoldVertex *v, const ManifoldSurfacePoint &sp, cons
         Float alpha = (a22 * b1 - a12 * b2) / det, beta = (a11 * b2 - a12 * b1) / det;
         return sp.dndu * alpha + sp.dndv * beta;
     };
-    v->dnds = along(v->s);
-    v->dndt = along(v->t);
+    v->dnds = along(v->ps);
+    v->dndt = along(v->pt);
 }
 
 bool MakeChain(const ManifoldSurfacePoint *points, int count, const bool *reflect,
@@ -187,14 +195,14 @@ bool ConstraintDerivatives(const ManifoldChain &c, int i, Vec2 *value, Mat2 *dPr
         if (col == 0) { m->a = r0; m->c = r1; } else { m->b = r0; m->d = r1; }
     };
     const Vec3 zero(0, 0, 0);
-    // x_{i-1} moves: dw_i = (I - w_i w_i^T) e / l_i.
-    column(ProjectPerp(hv.wi, prev.s) * ai, dPrev, 0, zero, zero);
-    column(ProjectPerp(hv.wi, prev.t) * ai, dPrev, 1, zero, zero);
-    column(ProjectPerp(hv.wo, next.s) * ao, dNext, 0, zero, zero);
-    column(ProjectPerp(hv.wo, next.t) * ao, dNext, 1, zero, zero);
-    // x_i moves: both directions change and so does the frame (through n).
+    // x_{i-1} moves (along its motion axes): dw_i = (I - w_i w_i^T) e / l_i.
+    column(ProjectPerp(hv.wi, prev.ps) * ai, dPrev, 0, zero, zero);
+    column(ProjectPerp(hv.wi, prev.pt) * ai, dPrev, 1, zero, zero);
+    column(ProjectPerp(hv.wo, next.ps) * ao, dNext, 0, zero, zero);
+    column(ProjectPerp(hv.wo, next.pt) * ao, dNext, 1, zero, zero);
+    // x_i moves: both directions change and so does the shading frame (through n).
     for (int col = 0; col < 2; ++col) {
-        const Vec3 &e = col == 0 ? cur.s : cur.t;
+        const Vec3 &e = col == 0 ? cur.ps : cur.pt;
         const Vec3 &dn = col == 0 ? cur.dnds : cur.dndt;
         Vec3 dh = -(ProjectPerp(hv.wi, e) * ai + ProjectPerp(hv.wo, e) * ao);
         Vec3 ds, dt;
@@ -269,7 +277,9 @@ Float GeneralizedGeometryTerm(const ManifoldChain &c) {
     Float r2 = d.lengthSquared();
     if (!(r2 > 0)) return 0;
     Vec3 w = d / std::sqrt(r2);
-    Float g = AbsDot(c.v[0].sp.n, w) * AbsDot(c.v[1].sp.n, w) / r2;
+    // Solid angle at x_0 per area of x_1's surface: the geometric normal's cosine
+    // (det P below is per unit area of the motion planes).
+    Float g = AbsDot(c.v[0].sp.n, w) * AbsDot(GeometricNormal(c.v[1].sp), w) / r2;
     Mat2 P;
     if (!FirstVertexDerivative(c, &P)) return 0;
     return g * std::abs(P.det());
@@ -295,7 +305,10 @@ const char *ToString(ManifoldStatus s) {
     case ManifoldStatus::TotalInternalReflection: return "total internal reflection";
     case ManifoldStatus::WrongSide: return "wrong side";
     case ManifoldStatus::Degenerate: return "degenerate";
-    case ManifoldStatus::NotConverged: return "not converged";
+    case ManifoldStatus::IterationCap: return "iteration cap";
+    case ManifoldStatus::Fold: return "fold";
+    case ManifoldStatus::StepFloor: return "step floor";
+    case ManifoldStatus::StepLeavesSurface: return "step leaves surface";
     case ManifoldStatus::NotReversible: return "not reversible";
     case ManifoldStatus::InvalidInput: return "invalid input";
     default: return "?";

@@ -12,7 +12,9 @@
 // shading normal's side. o_i = 0 for an ideal specular configuration; for a glossy
 // vertex o_i is the half-vector offset that a manifold walk keeps fixed.
 //
-// How each integrator uses this library (all quantities in double):
+// The integrators reach the walk through manifold/chain_shift.h (ManifoldSettings,
+// BuildChain, ShiftChain: build -> walk -> reversibility -> evaluation). What
+// each computes with it (all quantities in double):
 //   G-BDPT (camera-subpath shift between diffuse vertices b and c): build the base
 //     chain x_b .. x_c with MakeChain, then ManifoldWalk(scene, base, offset x_b,
 //     target = base x_c). Jacobian of the shift: ShiftJacobianFactor on the base and
@@ -30,25 +32,44 @@
 // vertex lies on real geometry and the half-vector constraints hold exactly; the
 // only unknown is the position of x_1, adjusted until x_{k+1} reaches the target.
 // Failure is always explicit (ManifoldStatus), never a silently wrong vertex.
+//
+// Two tangent frames per vertex. The constraint measures H in the shading frame
+// (s, t) around the shading normal n. A vertex moves in its geometric tangent
+// plane (ps, pt: orthonormal, around the geometric normal ng), where the surface
+// really is: on a triangle with interpolated normals the two planes differ (a
+// few degrees on typical meshes), and a step in the shading plane leaves the
+// triangle. Derivatives with respect to a vertex position are per unit length
+// along ps and pt, so 2x2 determinants of them are area ratios.
 #pragma once
 #include <array>
 #include <cstdint>
+#include <string>
 
 #include "core/geometry.h"
 
 namespace gradus {
 
-// Differential geometry at a chain vertex. dpdu/dpdv: any (not necessarily
-// orthonormal) tangent basis; dndu/dndv: derivatives of the unit shading normal
-// along the same parameters. eta*: index of refraction on each side of n.
+// Differential geometry at a chain vertex. n: unit shading normal; ng: unit
+// geometric normal (zero: the same as n); dpdu/dpdv: any (not necessarily
+// orthonormal) basis of the geometric tangent plane; dndu/dndv: derivatives of
+// the unit shading normal n along the same parameters (SurfaceInteraction's
+// shading.dnhatdu, not pbrt-v3's dndu). eta*: index of refraction on each side of n.
 struct ManifoldSurfacePoint {
     Point3 p;
     Normal3 n;
+    Normal3 ng;
     Vec3 dpdu, dpdv;
     Vec3 dndu, dndv;
     Float etaInterior = 1, etaExterior = 1;
     int primitiveId = -1;  // a different id on re-trace means the vertex left its surface
 };
+
+// Unit geometric normal of a surface point, on the shading normal's side.
+inline Vec3 GeometricNormal(const ManifoldSurfacePoint &sp) {
+    Vec3 ng(sp.ng), n(sp.n);
+    if (!(ng.lengthSquared() > 0)) return n;
+    return Dot(ng, n) < 0 ? -ng : ng;
+}
 
 // Implemented by the renderer (Embree, hits refined in double) and by the tests
 // (analytic shapes). intersect() must ignore the surface the ray starts on at
@@ -58,6 +79,9 @@ class ManifoldScene {
     virtual ~ManifoldScene() = default;
     virtual bool intersect(const Ray &r, ManifoldSurfacePoint *hit) const = 0;
     virtual bool visible(const Point3 &a, const Point3 &b) const = 0;
+    // Diagonal of the bounds of a surface (primitiveId): a predicted step longer
+    // than this leaves it. Infinity when unknown.
+    virtual Float extent(int /*primitiveId*/) const { return Infinity; }
 };
 
 // 2x2 matrix [a b; c d]; columns are motion along a vertex's (s, t) tangent axes.
@@ -90,8 +114,9 @@ struct ManifoldVertex {
     // base and offset measure half-vectors in the same frame field (this makes
     // walks exactly reversible also for glossy vertices).
     Vec3 frameRef;
-    Vec3 s, t;          // derived: orthonormal tangent frame
-    Vec3 dnds, dndt;    // derived: normal derivative along s and t
+    Vec3 s, t;          // derived: orthonormal shading tangent frame (measures H)
+    Vec3 ps, pt;        // derived: orthonormal axes of the geometric tangent plane (vertex motion)
+    Vec3 dnds, dndt;    // derived: derivative of the unit shading normal along ps and pt
     Vec2 o;             // interior vertices: half-vector offset (constraint target)
 };
 
@@ -122,12 +147,12 @@ bool MakeChain(const ManifoldSurfacePoint *points, int count, const bool *reflec
 Vec2 ProjectedHalfVector(const ManifoldChain &c, int i, bool *ok = nullptr);
 
 // Analytic derivative blocks of the projected half-vector at vertex i with
-// respect to x_{i-1}, x_i, x_{i+1}, each moving along its (s, t) frame (JM12
-// Sec. 4.2, the rows of the block-tridiagonal matrix).
+// respect to x_{i-1}, x_i, x_{i+1}, each moving along its motion axes (ps, pt)
+// (JM12 Sec. 4.2, the rows of the block-tridiagonal matrix).
 bool ConstraintDerivatives(const ManifoldChain &c, int i, Vec2 *value, Mat2 *dPrev, Mat2 *dSelf,
                            Mat2 *dNext);
 
-// dx_1/dx_{k+1} (2x2, tangent frames) with x_0 fixed and all constraints held,
+// dx_1/dx_{k+1} (2x2, motion axes) with x_0 fixed and all constraints held,
 // by a block-tridiagonal (block Thomas) solve. Identity for k = 0.
 bool FirstVertexDerivative(const ManifoldChain &c, Mat2 *dx1dxEnd);
 
@@ -142,8 +167,9 @@ Float HalfVectorJacobian(const ManifoldChain &c);
 
 // Generalised geometry term G(x_0 <-> ... <-> x_{k+1}) (JM12): the projected
 // solid angle at x_0 per unit area at x_{k+1}, with all half-vectors held:
-// |cos th_0| |cos th_1| / |x_1 - x_0|^2 * |det dx_1/dx_{k+1}|. For a camera
-// endpoint, x_0's normal is the camera axis.
+// |cos th_0| |cos th_1| / |x_1 - x_0|^2 * |det dx_1/dx_{k+1}|, th_1 against x_1's
+// geometric normal (area measure). For a camera endpoint, x_0's normal is the
+// camera axis.
 Float GeneralizedGeometryTerm(const ManifoldChain &c);
 
 // G-MLT Eqs. 14-15 (G-BDPT Eq. 5): per-path factor
@@ -153,6 +179,8 @@ Float GeneralizedGeometryTerm(const ManifoldChain &c);
 // The shift Jacobian |d y / d x| is F(offset) / F(base).
 Float ShiftJacobianFactor(const ManifoldChain &eyeChain, const ManifoldChain *secondChain);
 
+// Why a walk ended. A walk that fails reports the reason that ended it: the
+// cap, or the trial failure that drove the step below its floor.
 enum class ManifoldStatus : uint8_t {
     Success = 0,
     LeftSurface,              // a ray missed all geometry
@@ -160,7 +188,10 @@ enum class ManifoldStatus : uint8_t {
     TotalInternalReflection,  // refraction impossible with the fixed half-vector
     WrongSide,                // reconstructed direction on the wrong side of the surface
     Degenerate,               // singular derivatives, coincident vertices, eta ratio 1
-    NotConverged,             // iteration cap reached
+    IterationCap,             // maxIterations trial steps without converging
+    Fold,                     // the trials crossed a fold (det dx_1/dx_end changed sign)
+    StepFloor,                // trials traced but did not approach the target down to minStep
+    StepLeavesSurface,        // the predicted step of x_1 is longer than its surface (ManifoldScene::extent)
     NotReversible,            // walking back did not return the base chain
     InvalidInput,             // too long, or endpoints not usable
     Count
@@ -176,6 +207,7 @@ struct ManifoldWalkOptions {
     ManifoldSolver solver = ManifoldSolver::Newton;  // the faster one (see bench/manifold)
     int maxIterations = 20;          // Newton iterations (trial steps)
     Float relativeTolerance = 1e-7;  // |x_end - target| / scale
+    Float minStep = 1.0 / 64;        // Newton: fail when the step factor falls below this
 };
 
 struct ManifoldWalkResult {
@@ -195,15 +227,16 @@ ManifoldStatus TraceChain(const ManifoldScene &scene, const ManifoldSurfacePoint
                           const Vec3 &dir, const ManifoldChain &tmpl, ManifoldChain *out);
 
 // Manifold walk: keep every interior half-vector of `base`, start at `newStart`
-// (may equal base.front()), and move the end vertex to `target` (same primitive
-// as base.back()). Converged when |x_end - target| / scale < relativeTolerance,
-// scale = max(|start|_inf, |target|_inf, |target - start|). Newton: a trial step
-// that fails or moves away halves the step, a successful one doubles it (cap 1).
-// On failure the status is the reason of the last failed trial re-trace (e.g.
-// TotalInternalReflection when the target needs an exit past the critical
-// angle), or NotConverged if no trial failed.
-// Measured (bench/manifold, CPU time, shared machine): Newton 2.1 / 2.3 / 3.4 us
-// for k = 1 / 2 / 4, CeresTiny 6-19% slower with the same number of traces.
+// (may equal base.front(): then base is the first iterate, not re-traced), and
+// move the end vertex to `target` (same primitive as base.back()). Converged
+// when |x_end - target| / scale < relativeTolerance, scale = max(|start|_inf,
+// |target|_inf, |target - start|). Newton: x_1 steps in its geometric tangent
+// plane and the re-trace projects it onto the surface; a trial that fails,
+// moves away or crosses a fold halves the step, an accepted one doubles it (cap
+// 1) and its derivative is the next iteration's (one assembly per trace). It
+// fails fast: at the step floor (the last rejection's reason: Fold, StepFloor
+// when the trials traced but did not approach, or the trace's failure), on a
+// predicted step longer than x_1's surface, and at the iteration cap (IterationCap).
 ManifoldWalkResult ManifoldWalk(const ManifoldScene &scene, const ManifoldChain &base,
                                 const ManifoldSurfacePoint &newStart,
                                 const ManifoldSurfacePoint &target,
@@ -215,13 +248,24 @@ ManifoldStatus CheckReversible(const ManifoldScene &scene, const ManifoldChain &
                                const ManifoldChain &offset, const ManifoldWalkOptions &opts = {},
                                Float relTolerance = 1e-5);
 
-// Counters (relaxed atomics, a handful of increments per walk).
-struct ManifoldStatsSnapshot {
-    uint64_t walks = 0, successes = 0, iterations = 0, traces = 0;
+// Counters (relaxed atomics, a handful of increments per walk). Walks that
+// CheckReversible makes are counted apart (reverse); the rest are forward.
+constexpr int kManifoldIterationBins = 33;  // iterations of successful walks, the last bin >= 32
+struct ManifoldWalkCounts {
+    uint64_t walks = 0, successes = 0, iterations = 0, traces = 0, nanoseconds = 0;
     std::array<uint64_t, size_t(ManifoldStatus::Count)> byStatus{};
+    std::array<uint64_t, kManifoldIterationBins> successIterations{};
     uint64_t failures() const { return walks - successes; }
+    // q-quantile (0..1) of the iterations of successful walks (-1 without any).
+    int iterationQuantile(double q) const;
+};
+struct ManifoldStatsSnapshot : ManifoldWalkCounts {
+    ManifoldWalkCounts reverse;
 };
 ManifoldStatsSnapshot GetManifoldStats();
 void ResetManifoldStats();
+// Multi-line report of forward (and reverse) walks: success rate, iterations of
+// successes (median, 90th percentile, share within 3), failure reasons, time.
+std::string FormatManifoldStats(const ManifoldStatsSnapshot &s, const std::string &indent = "  ");
 
 }  // namespace gradus

@@ -8,8 +8,18 @@ EmbreeManifoldScene::EmbreeManifoldScene(const Scene &scene) : scene_(scene), nG
     scene.bounds.boundingSphere(&c, &r);
     eps_ = std::isfinite(r) && r > 0 ? 1e-6 * r : 1e-6;
     eta_.reset(new std::atomic<float>[nGeom_ ? nGeom_ : 1]);
+    extent_.assign(nGeom_, Infinity);
     for (size_t i = 0; i < nGeom_; ++i) {
         eta_[i] = 1.f;
+        const GeometryRecord &g = scene.geometry[i];
+        if (g.mesh && !g.placement) {
+            Bounds3 b;
+            for (const Point3 &p : g.mesh->p) b.expand(p);
+            if (!b.empty()) extent_[i] = b.diagonal().length();
+        } else if (g.analytic) {
+            Bounds3 b = g.analytic->worldBound();
+            if (!b.empty()) extent_[i] = b.diagonal().length();
+        }
         for (const AreaLight *l : scene.geometry[i].areaLights)
             if (l) lightGeom_.emplace(static_cast<const Light *>(l), int(i));
     }
@@ -24,10 +34,11 @@ ManifoldSurfacePoint EmbreeManifoldScene::fromInteraction(const SurfaceInteracti
     ManifoldSurfacePoint sp;
     sp.p = si.p;
     sp.n = si.shading.n;
+    sp.ng = si.n;
     sp.dpdu = si.dpdu;
     sp.dpdv = si.dpdv;
-    sp.dndu = Vec3(si.shading.dndu);
-    sp.dndv = Vec3(si.shading.dndv);
+    sp.dndu = Vec3(si.shading.dnhatdu);
+    sp.dndv = Vec3(si.shading.dnhatdv);
     sp.etaExterior = 1;
     sp.etaInterior = eta(si.geomId);
     sp.primitiveId = si.geomId;
@@ -49,6 +60,10 @@ bool EmbreeManifoldScene::visible(const Point3 &a, const Point3 &b) const {
     if (!(len > 2 * eps_)) return true;
     d = d / len;
     return !scene_.occluded(Ray(a + d * eps_, d, len - 2 * eps_));
+}
+
+Float EmbreeManifoldScene::extent(int geomId) const {
+    return geomId >= 0 && size_t(geomId) < nGeom_ ? extent_[size_t(geomId)] : Infinity;
 }
 
 Float EmbreeManifoldScene::eta(int geomId) const {

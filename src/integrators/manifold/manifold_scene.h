@@ -11,6 +11,7 @@
 #include <atomic>
 #include <memory>
 #include <unordered_map>
+#include <vector>
 
 #include "integrators/manifold/manifold.h"
 #include "core/interaction.h"
@@ -23,8 +24,10 @@ class EmbreeManifoldScene : public ManifoldScene {
     explicit EmbreeManifoldScene(const Scene &scene);
     bool intersect(const Ray &r, ManifoldSurfacePoint *hit) const override;
     bool visible(const Point3 &a, const Point3 &b) const override;
+    Float extent(int primitiveId) const override;
 
-    // Surface point of a renderer hit (shading normal and its derivatives).
+    // Surface point of a renderer hit: shading normal, the derivatives of the unit
+    // shading normal (SurfaceInteraction::shading.dnhatdu), geometric normal.
     ManifoldSurfacePoint fromInteraction(const SurfaceInteraction &si) const;
     // Index of refraction inside geometry `geomId` (1 = unknown/not refractive).
     Float eta(int geomId) const;
@@ -37,6 +40,7 @@ class EmbreeManifoldScene : public ManifoldScene {
     const Scene &scene_;
     Float eps_;
     std::unique_ptr<std::atomic<float>[]> eta_;
+    std::vector<Float> extent_;  // per geometry: diagonal of its world bounds
     size_t nGeom_;
     std::unordered_map<const Light *, int> lightGeom_;
 };

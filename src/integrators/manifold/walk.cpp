@@ -3,6 +3,10 @@
 // residual and its derivatives: a direct Newton iteration with JM12-style step
 // control and ceres::TinySolver (Levenberg-Marquardt).
 #include <atomic>
+#include <string>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
 
 #include <ceres/tiny_solver.h>
 
@@ -11,24 +15,75 @@
 namespace gradus {
 
 namespace {
+// "not reversible" -> "not_reversible" (one token per status in WALKSTATS lines).
+std::string Underscored(std::string s) {
+    for (char &ch : s)
+        if (ch == ' ') ch = '_';
+    return s;
+}
+}  // namespace
 
-struct Stats {
-    std::atomic<uint64_t> walks{0}, successes{0}, iterations{0}, traces{0};
+namespace {
+
+struct Counters {
+    std::atomic<uint64_t> walks{0}, successes{0}, iterations{0}, traces{0}, nanoseconds{0};
     std::array<std::atomic<uint64_t>, size_t(ManifoldStatus::Count)> byStatus{};
+    std::array<std::atomic<uint64_t>, kManifoldIterationBins> successIterations{};
+
+    void record(const ManifoldWalkResult &r, uint64_t ns) {
+        constexpr auto relaxed = std::memory_order_relaxed;
+        walks.fetch_add(1, relaxed);
+        if (r.ok()) {
+            successes.fetch_add(1, relaxed);
+            successIterations[size_t(std::min(r.iterations, kManifoldIterationBins - 1))].fetch_add(1, relaxed);
+        }
+        iterations.fetch_add(uint64_t(r.iterations), relaxed);
+        traces.fetch_add(uint64_t(r.traces), relaxed);
+        nanoseconds.fetch_add(ns, relaxed);
+        byStatus[size_t(r.status)].fetch_add(1, relaxed);
+    }
+    void snapshot(ManifoldWalkCounts *o) const {
+        constexpr auto relaxed = std::memory_order_relaxed;
+        o->walks = walks.load(relaxed);
+        o->successes = successes.load(relaxed);
+        o->iterations = iterations.load(relaxed);
+        o->traces = traces.load(relaxed);
+        o->nanoseconds = nanoseconds.load(relaxed);
+        for (size_t i = 0; i < byStatus.size(); ++i) o->byStatus[i] = byStatus[i].load(relaxed);
+        for (size_t i = 0; i < successIterations.size(); ++i) o->successIterations[i] = successIterations[i].load(relaxed);
+    }
+    void reset() {
+        walks = successes = iterations = traces = nanoseconds = 0;
+        for (auto &c : byStatus) c = 0;
+        for (auto &c : successIterations) c = 0;
+    }
+};
+// GRADUS_WALK_STATS set: the process's walk counters on stderr at exit, one
+// machine-readable line per direction (bench/manifold/walk_stats.py reads them).
+struct Stats {
+    Counters forward, reverse;
+    ~Stats() {
+        if (!std::getenv("GRADUS_WALK_STATS")) return;
+        ManifoldStatsSnapshot s;
+        forward.snapshot(&s);
+        reverse.snapshot(&s.reverse);
+        for (int k = 0; k < 2; ++k) {
+            const ManifoldWalkCounts &c = k ? s.reverse : s;
+            if (!c.walks) continue;
+            std::fprintf(stderr, "WALKSTATS %s walks %llu success %llu traces %llu ns %llu hist", k ? "reverse" : "forward",
+                         (unsigned long long)c.walks, (unsigned long long)c.successes, (unsigned long long)c.traces,
+                         (unsigned long long)c.nanoseconds);
+            for (uint64_t h : c.successIterations) std::fprintf(stderr, " %llu", (unsigned long long)h);
+            std::fprintf(stderr, " status");
+            for (size_t i = 0; i < c.byStatus.size(); ++i)
+                if (c.byStatus[i]) std::fprintf(stderr, " %s=%llu", Underscored(ToString(ManifoldStatus(i))).c_str(), (unsigned long long)c.byStatus[i]);
+            std::fprintf(stderr, "\n");
+        }
+    }
 };
 Stats &GlobalStats() {
     static Stats s;
     return s;
-}
-
-void Record(const ManifoldWalkResult &r) {
-    Stats &s = GlobalStats();
-    constexpr auto relaxed = std::memory_order_relaxed;
-    s.walks.fetch_add(1, relaxed);
-    if (r.ok()) s.successes.fetch_add(1, relaxed);
-    s.iterations.fetch_add(uint64_t(r.iterations), relaxed);
-    s.traces.fetch_add(uint64_t(r.traces), relaxed);
-    s.byStatus[size_t(r.status)].fetch_add(1, relaxed);
 }
 
 Float MaxAbs(const Vec3 &p) { return MaxComponent(Abs(p)); }
@@ -82,6 +137,15 @@ struct WalkContext {
     Float scale;
     int traces = 0;
 
+    // The first iterate: the base itself when the start did not move (no
+    // re-trace of a chain we have), else the trace towards the base's x_1.
+    ManifoldStatus initial(ManifoldChain *out) {
+        if (start.p == base->front().sp.p && start.n == base->front().sp.n) {
+            *out = *base;
+            return ManifoldStatus::Success;
+        }
+        return trace(base->v[1].sp.p, out);
+    }
     ManifoldStatus trace(const Point3 &aim, ManifoldChain *out) {
         ++traces;
         Vec3 d = aim - start.p;
@@ -90,29 +154,32 @@ struct WalkContext {
         return TraceChain(*scene, start, d / l, *base, out);
     }
     Float distance(const ManifoldChain &c) const { return Distance(c.back().sp.p, target.p); }
-    // d(end position, end frame)/d(x_1, x_1 frame).
-    bool endDerivative(const ManifoldChain &c, Mat2 *dEnd_dx1) const {
-        Mat2 P;
-        if (!FirstVertexDerivative(c, &P)) return false;
-        Float det = P.det();
-        if (!(std::abs(det) > 1e-300) || !std::isfinite(det)) return false;
-        *dEnd_dx1 = P.inverse();
-        return true;
-    }
 };
 
-// ---- Direct Newton with step control (JM12 / Mitsuba 0.5 numbers) ----------
+// ---- Direct Newton with step control (JM12 Sec. 4.3) ------------------------
 ManifoldWalkResult NewtonWalk(WalkContext &ctx, const ManifoldWalkOptions &opts) {
     ManifoldWalkResult res;
     ManifoldChain &cur = res.chain;
-    ManifoldStatus st = ctx.trace(ctx.base->v[1].sp.p, &cur);
+    ManifoldStatus st = ctx.initial(&cur);
     if (st != ManifoldStatus::Success) {
         res.status = st;
         return res;
     }
+    // P = dx_1/dx_end of the current chain (motion axes), kept until cur changes:
+    // a rejected trial reuses it, an accepted one brings its own.
+    Mat2 P, trialP;
+    if (!FirstVertexDerivative(cur, &P) || !std::isfinite(P.det())) {
+        res.status = ManifoldStatus::Degenerate;
+        return res;
+    }
+    // The walk stays on the sheet of the solution manifold it starts on: the sign
+    // of det P changes only across a fold (a caustic of the chain), where the
+    // chain's end stops being a local function of x_1.
+    const bool startSign = P.det() > 0;
+    const Float extent = ctx.scene->extent(ctx.base->v[1].sp.primitiveId);
     Float dist = ctx.distance(cur);
     Float step = 1;
-    ManifoldStatus lastFailure = ManifoldStatus::NotConverged;
+    ManifoldStatus lastRejection = ManifoldStatus::StepFloor;
     ManifoldChain trial;
     for (;;) {
         res.relativeError = dist / ctx.scale;
@@ -120,35 +187,50 @@ ManifoldWalkResult NewtonWalk(WalkContext &ctx, const ManifoldWalkOptions &opts)
             res.status = ManifoldStatus::Success;
             return res;
         }
-        if (res.iterations >= opts.maxIterations) break;
+        if (res.iterations >= opts.maxIterations) {
+            res.status = ManifoldStatus::IterationCap;
+            return res;
+        }
         ++res.iterations;
         const ManifoldVertex &end = cur.back(), &x1 = cur.v[1];
         if (Distance(end.sp.p, cur.v[cur.size - 2].sp.p) < 1e-12 * ctx.scale) {
             res.status = ManifoldStatus::Degenerate;  // last two vertices coincide
             return res;
         }
-        Mat2 P;
-        if (!FirstVertexDerivative(cur, &P)) {
-            res.status = ManifoldStatus::Degenerate;
+        // Newton step: the end's offset in its motion axes, mapped to x_1's.
+        Vec3 delta = ctx.target.p - end.sp.p;
+        Vec2 d1 = P * Vec2(Dot(delta, end.ps), Dot(delta, end.pt));
+        Vec3 move = x1.ps * d1.x + x1.pt * d1.y;
+        if (step == 1 && move.length() > extent) {
+            res.status = ManifoldStatus::StepLeavesSurface;
             return res;
         }
-        Vec3 delta = ctx.target.p - end.sp.p;
-        Vec2 dEnd(Dot(delta, end.s), Dot(delta, end.t));
-        Vec2 d1 = P * dEnd;
-        Point3 aim = x1.sp.p + (x1.s * d1.x + x1.t * d1.y) * step;
-        st = ctx.trace(aim, &trial);
-        Float trialDist = st == ManifoldStatus::Success ? ctx.distance(trial) : Infinity;
+        // x_1's trial point on its geometric tangent plane; the trace from the start
+        // through it re-projects it onto the surface.
+        st = ctx.trace(x1.sp.p + move * step, &trial);
+        Float trialDist = Infinity;
+        if (st == ManifoldStatus::Success) {
+            if (!FirstVertexDerivative(trial, &trialP) || !std::isfinite(trialP.det()))
+                st = ManifoldStatus::Degenerate;
+            else if ((trialP.det() > 0) != startSign)
+                st = ManifoldStatus::Fold;
+            else
+                trialDist = ctx.distance(trial);
+        }
         if (trialDist < dist) {
             std::swap(cur, trial);
+            P = trialP;
             dist = trialDist;
             step = std::min<Float>(1, 2 * step);
         } else {
-            lastFailure = st == ManifoldStatus::Success ? ManifoldStatus::NotConverged : st;
+            lastRejection = st == ManifoldStatus::Success ? ManifoldStatus::StepFloor : st;
             step *= 0.5;
+            if (step < opts.minStep) {
+                res.status = lastRejection;
+                return res;
+            }
         }
     }
-    res.status = lastFailure;
-    return res;
 }
 
 // ---- ceres::TinySolver on the same residual ---------------------------------
@@ -162,13 +244,38 @@ struct WalkFunction {
     Vec3 T1, T2;
     Float L;
     mutable ManifoldChain chain;
-    mutable ManifoldStatus lastFailure = ManifoldStatus::NotConverged;
+    mutable ManifoldStatus lastFailure = ManifoldStatus::StepFloor;
     mutable int evaluations = 0;
     // TinySolver evaluates a trial point without J and, if accepted, again with
-    // J: keep the last successful trace so the second call does not re-trace.
+    // J: keep the last successful trace (and its derivative) so the second call
+    // does not re-trace.
     mutable Float cachedX[2] = {Infinity, Infinity};
+    mutable Mat2 cachedP;
+    // Fast failure, as Newton's step floor: a rejected trial (failed, or not
+    // lowering the cost) raises `rejects`, an accepted one lowers it (Newton's
+    // step factor 2^-rejects); at maxRejects a trial returns the accepted point's
+    // residual, whose cost change of 0 ends TinySolver (function_tolerance).
+    int maxRejects = 7;
+    bool startSign = true;
+    mutable int rejects = 0;
+    mutable Float acceptedR[2] = {0, 0};
+    mutable bool stopped = false;
 
     Point3 aim(const Float *x) const { return p1 + (T1 * x[0] + T2 * x[1]) * L; }
+
+    bool reject(ManifoldStatus why, Float *r) const {
+        lastFailure = why;
+        if (++rejects >= maxRejects) {
+            stopped = true;
+            r[0] = acceptedR[0];
+            r[1] = acceptedR[1];
+        } else {
+            // TinySolver ignores the return value of trial evaluations: a huge
+            // residual makes it reject the step and shrink the trust region.
+            r[0] = r[1] = 1e6;
+        }
+        return true;
+    }
 
     bool operator()(const Float *x, Float *r, Float *J) const {
         ++evaluations;
@@ -177,39 +284,58 @@ struct WalkFunction {
         if (x[0] != cachedX[0] || x[1] != cachedX[1]) {
             st = ctx->trace(q, &chain);
             cachedX[0] = cachedX[1] = Infinity;
-            if (st == ManifoldStatus::Success) { cachedX[0] = x[0]; cachedX[1] = x[1]; }
+            if (st == ManifoldStatus::Success) {
+                // A trial across a fold (det dx_1/dx_end changes sign) is rejected.
+                if (!FirstVertexDerivative(chain, &cachedP) || !std::isfinite(cachedP.det()))
+                    st = ManifoldStatus::Degenerate;
+                else if ((cachedP.det() > 0) != startSign)
+                    st = ManifoldStatus::Fold;
+                else {
+                    cachedX[0] = x[0];
+                    cachedX[1] = x[1];
+                }
+            }
         }
         if (st != ManifoldStatus::Success) {
+            if (!J) return reject(st, r);
             lastFailure = st;
-            // TinySolver ignores the return value of trial evaluations: a huge
-            // residual makes it reject the step and shrink the trust region.
             r[0] = r[1] = 1e6;
-            if (J) std::fill(J, J + 4, 0.0);
-            return J == nullptr;
+            std::fill(J, J + 4, 0.0);
+            return false;
         }
         const ManifoldVertex &end = chain.back();
         Vec3 delta = end.sp.p - ctx->target.p;
         r[0] = Dot(delta, ctx->targetS) / ctx->scale;
         r[1] = Dot(delta, ctx->targetT) / ctx->scale;
-        if (!J) return true;
-        Mat2 dEnd;
-        if (!ctx->endDerivative(chain, &dEnd)) {
+        if (!J) {
+            if (Sqr(r[0]) + Sqr(r[1]) >= Sqr(acceptedR[0]) + Sqr(acceptedR[1]))
+                return reject(ManifoldStatus::StepFloor, r);
+            return true;
+        }
+        // An accepted point (or the start).
+        rejects = std::max(0, rejects - 1);
+        acceptedR[0] = r[0];
+        acceptedR[1] = r[1];
+        const Float det = cachedP.det();
+        if (!(std::abs(det) > 1e-300)) {
             lastFailure = ManifoldStatus::Degenerate;
             return false;
         }
-        // dx_1 / dq: the ray from the start through q hits the surface at x_1.
+        const Mat2 dEnd = cachedP.inverse();
+        // dx_1 / dq: the ray from the start through q hits x_1's geometric tangent plane.
         const ManifoldVertex &x1 = chain.v[1];
+        const Vec3 ng1 = GeometricNormal(x1.sp);
         Vec3 dq = q - ctx->start.p;
         Float lambda = (x1.sp.p - ctx->start.p).length() / dq.length();
-        Float nq = Dot(x1.sp.n, dq);
+        Float nq = Dot(ng1, dq);
         auto dx1 = [&](const Vec3 &e) {
-            Vec3 m = (e - dq * (Dot(x1.sp.n, e) / nq)) * lambda;
-            return Vec2(Dot(m, x1.s), Dot(m, x1.t));
+            Vec3 m = (e - dq * (Dot(ng1, e) / nq)) * lambda;
+            return Vec2(Dot(m, x1.ps), Dot(m, x1.pt));
         };
         Vec2 c0 = dx1(T1), c1 = dx1(T2);
         Mat2 M{c0.x, c1.x, c0.y, c1.y};
-        Mat2 F{Dot(end.s, ctx->targetS), Dot(end.t, ctx->targetS), Dot(end.s, ctx->targetT),
-               Dot(end.t, ctx->targetT)};
+        Mat2 F{Dot(end.ps, ctx->targetS), Dot(end.pt, ctx->targetS), Dot(end.ps, ctx->targetT),
+               Dot(end.pt, ctx->targetT)};
         Mat2 Jm = F * dEnd * M;
         Float k = L / ctx->scale;
         // Column-major 2x2.
@@ -221,7 +347,7 @@ struct WalkFunction {
 ManifoldWalkResult CeresWalk(WalkContext &ctx, const ManifoldWalkOptions &opts) {
     ManifoldWalkResult res;
     ManifoldChain init;
-    ManifoldStatus st = ctx.trace(ctx.base->v[1].sp.p, &init);
+    ManifoldStatus st = ctx.initial(&init);
     if (st != ManifoldStatus::Success) {
         res.status = st;
         return res;
@@ -235,20 +361,33 @@ ManifoldWalkResult CeresWalk(WalkContext &ctx, const ManifoldWalkOptions &opts) 
     WalkFunction f;
     f.ctx = &ctx;
     f.p1 = init.v[1].sp.p;
-    f.T1 = init.v[1].s;
-    f.T2 = init.v[1].t;
+    f.T1 = init.v[1].ps;
+    f.T2 = init.v[1].pt;
     f.L = std::max(Distance(f.p1, ctx.start.p), 1e-12 * ctx.scale);
     f.chain = init;  // x = 0 aims exactly at the initial x_1: reuse its trace
     f.cachedX[0] = f.cachedX[1] = 0;
+    if (!FirstVertexDerivative(init, &f.cachedP) || !std::isfinite(f.cachedP.det())) {
+        res.status = ManifoldStatus::Degenerate;
+        return res;
+    }
+    f.startSign = f.cachedP.det() > 0;
+    f.maxRejects = 1 + int(std::ceil(std::log2(1 / std::max(opts.minStep, Float(1e-30)))));
     ceres::TinySolver<WalkFunction> solver;
     solver.options.max_num_iterations = opts.maxIterations;
     solver.options.cost_threshold = 0.5 * Sqr(opts.relativeTolerance);
     solver.options.gradient_tolerance = 0;
-    solver.options.parameter_tolerance = 1e-15;
-    solver.options.function_tolerance = 0;
+    // Fast failure: trials that fail to trace are rejected and shrink the trust
+    // region geometrically; stop once a step is below 1% of the tolerance.
+    solver.options.parameter_tolerance = 1e-2 * opts.relativeTolerance;
+    solver.options.function_tolerance = 1e-300;  // ends the solve on the fast-failure residual
     Eigen::Vector2d x(0, 0);
     const auto &summary = solver.Solve(f, &x);
     res.iterations = summary.iterations;
+    if (f.stopped) {  // fast failure: no chain to return
+        res.relativeError = std::sqrt(Sqr(f.acceptedR[0]) + Sqr(f.acceptedR[1]));
+        res.status = f.lastFailure;
+        return res;
+    }
     if (x[0] == f.cachedX[0] && x[1] == f.cachedX[1]) {
         res.chain = f.chain;
     } else {
@@ -261,8 +400,10 @@ ManifoldWalkResult CeresWalk(WalkContext &ctx, const ManifoldWalkOptions &opts) 
     res.relativeError = ctx.distance(res.chain) / ctx.scale;
     if (res.relativeError < opts.relativeTolerance)
         res.status = ManifoldStatus::Success;
-    else
+    else if (summary.iterations < opts.maxIterations)
         res.status = f.lastFailure;
+    else
+        res.status = ManifoldStatus::IterationCap;
     return res;
 }
 
@@ -297,39 +438,49 @@ ManifoldStatus TraceChain(const ManifoldScene &scene, const ManifoldSurfacePoint
     return ManifoldStatus::Success;
 }
 
-ManifoldWalkResult ManifoldWalk(const ManifoldScene &scene, const ManifoldChain &base,
-                                const ManifoldSurfacePoint &newStart,
-                                const ManifoldSurfacePoint &target,
-                                const ManifoldWalkOptions &opts) {
+namespace {
+
+ManifoldWalkResult Walk(const ManifoldScene &scene, const ManifoldChain &base, const ManifoldSurfacePoint &newStart,
+                        const ManifoldSurfacePoint &target, const ManifoldWalkOptions &opts, Counters *counters) {
+    const auto t0 = std::chrono::steady_clock::now();
     ManifoldWalkResult res;
     if (base.size < 2 || base.size > kMaxManifoldVertices ||
         target.primitiveId != base.back().sp.primitiveId) {
         res.status = ManifoldStatus::InvalidInput;
-        Record(res);
-        return res;
+    } else {
+        WalkContext ctx;
+        ctx.scene = &scene;
+        ctx.base = &base;
+        ctx.start = newStart;
+        ctx.target = target;
+        ManifoldVertex tv;
+        SetupManifoldVertex(&tv, target, &base.back().frameRef);
+        ctx.targetS = tv.ps;
+        ctx.targetT = tv.pt;
+        ctx.scale = std::max({MaxAbs(newStart.p), MaxAbs(target.p), Distance(newStart.p, target.p),
+                              Float(1e-30)});
+        res = opts.solver == ManifoldSolver::CeresTiny ? CeresWalk(ctx, opts) : NewtonWalk(ctx, opts);
+        res.traces = ctx.traces;
     }
-    WalkContext ctx;
-    ctx.scene = &scene;
-    ctx.base = &base;
-    ctx.start = newStart;
-    ctx.target = target;
-    ManifoldVertex tv;
-    SetupManifoldVertex(&tv, target, &base.back().frameRef);
-    ctx.targetS = tv.s;
-    ctx.targetT = tv.t;
-    ctx.scale = std::max({MaxAbs(newStart.p), MaxAbs(target.p), Distance(newStart.p, target.p),
-                          Float(1e-30)});
-    res = opts.solver == ManifoldSolver::CeresTiny ? CeresWalk(ctx, opts) : NewtonWalk(ctx, opts);
-    res.traces = ctx.traces;
-    Record(res);
+    const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0);
+    counters->record(res, uint64_t(ns.count()));
     return res;
+}
+
+}  // namespace
+
+ManifoldWalkResult ManifoldWalk(const ManifoldScene &scene, const ManifoldChain &base,
+                                const ManifoldSurfacePoint &newStart,
+                                const ManifoldSurfacePoint &target,
+                                const ManifoldWalkOptions &opts) {
+    return Walk(scene, base, newStart, target, opts, &GlobalStats().forward);
 }
 
 ManifoldStatus CheckReversible(const ManifoldScene &scene, const ManifoldChain &base,
                                const ManifoldChain &offset, const ManifoldWalkOptions &opts,
                                Float relTolerance) {
     if (base.size != offset.size) return ManifoldStatus::InvalidInput;
-    ManifoldWalkResult back = ManifoldWalk(scene, offset, base.front().sp, base.back().sp, opts);
+    ManifoldWalkResult back = Walk(scene, offset, base.front().sp, base.back().sp, opts, &GlobalStats().reverse);
     if (!back.ok()) return back.status;
     Float scale = 0;
     for (int i = 0; i < base.size; ++i) scale = std::max(scale, MaxAbs(base.v[i].sp.p));
@@ -340,25 +491,56 @@ ManifoldStatus CheckReversible(const ManifoldScene &scene, const ManifoldChain &
     return ManifoldStatus::Success;
 }
 
+int ManifoldWalkCounts::iterationQuantile(double q) const {
+    if (successes == 0) return -1;
+    const double want = q * double(successes);
+    uint64_t below = 0;
+    for (int i = 0; i < kManifoldIterationBins; ++i) {
+        below += successIterations[size_t(i)];
+        if (double(below) >= want && below > 0) return i;
+    }
+    return kManifoldIterationBins - 1;
+}
+
 ManifoldStatsSnapshot GetManifoldStats() {
-    Stats &s = GlobalStats();
     ManifoldStatsSnapshot r;
-    r.walks = s.walks.load(std::memory_order_relaxed);
-    r.successes = s.successes.load(std::memory_order_relaxed);
-    r.iterations = s.iterations.load(std::memory_order_relaxed);
-    r.traces = s.traces.load(std::memory_order_relaxed);
-    for (size_t i = 0; i < r.byStatus.size(); ++i)
-        r.byStatus[i] = s.byStatus[i].load(std::memory_order_relaxed);
+    GlobalStats().forward.snapshot(&r);
+    GlobalStats().reverse.snapshot(&r.reverse);
     return r;
 }
 
 void ResetManifoldStats() {
-    Stats &s = GlobalStats();
-    s.walks = 0;
-    s.successes = 0;
-    s.iterations = 0;
-    s.traces = 0;
-    for (auto &c : s.byStatus) c = 0;
+    GlobalStats().forward.reset();
+    GlobalStats().reverse.reset();
+}
+
+std::string FormatManifoldStats(const ManifoldStatsSnapshot &s, const std::string &indent) {
+    std::string out;
+    char buf[256];
+    auto block = [&](const char *what, const ManifoldWalkCounts &c) {
+        if (c.walks == 0) return;
+        uint64_t within3 = 0;
+        for (int i = 0; i <= 3; ++i) within3 += c.successIterations[size_t(i)];
+        std::snprintf(buf, sizeof buf,
+                      "%smanifold walks (%s) %llu: success %.1f%%, iterations of successes median %d, p90 %d, "
+                      "<= 3: %.1f%%; %.2f traces and %.2f us per walk\n",
+                      indent.c_str(), what, (unsigned long long)c.walks, 100.0 * double(c.successes) / double(c.walks),
+                      c.iterationQuantile(0.5), c.iterationQuantile(0.9),
+                      c.successes ? 100.0 * double(within3) / double(c.successes) : 0.0,
+                      double(c.traces) / double(c.walks), 1e-3 * double(c.nanoseconds) / double(c.walks));
+        out += buf;
+        const uint64_t fails = c.failures();
+        for (size_t i = 1; i < size_t(ManifoldStatus::Count); ++i)
+            if (c.byStatus[i]) {
+                std::snprintf(buf, sizeof buf, "%s  failure %-26s %llu (%.1f%% of failures)\n", indent.c_str(),
+                              ToString(ManifoldStatus(i)), (unsigned long long)c.byStatus[i],
+                              100.0 * double(c.byStatus[i]) / double(fails));
+                out += buf;
+            }
+    };
+    block("forward", s);
+    block("reverse", s.reverse);
+    return out;
 }
 
 }  // namespace gradus

@@ -83,6 +83,7 @@ PMLTIntegrator::PMLTIntegrator(const EntityDesc &desc, const PMLTSettings &set) 
 }
 
 void PMLTIntegrator::preprocess(const Scene &scene, Film &film) {
+    ResetManifoldStats();
     lights_.clear();
     for (const auto &l : scene.lights) lights_.push_back(l.get());
     lightSampler_ = LightSampler(scene.lights, "power", loc_);
@@ -429,7 +430,7 @@ std::string PMLTIntegrator::statistics() const {
         for (size_t k = 1; k < ms.byStatus.size(); ++k)
             if (ms.byStatus[k] > 0) o << "; " << ToString(ManifoldStatus(k)) << " " << ms.byStatus[k];
     }
-    o << "\n";
+    o << "\n" << FormatManifoldStats(GetManifoldStats(), "  ");
     if (nStartMismatch_ > 0)
         o << "  chain starts that could not be rebuilt (drawn again): " << nStartMismatch_ << "\n";
     if (rescale_ != 1) o << "  interrupted pass: image scaled by " << rescale_ << " (mutations issued / run)\n";

@@ -12,6 +12,11 @@
 
 namespace gradus {
 
+// Default near-specular threshold of every integrator that shifts or walks
+// paths: a glossy vertex whose roughness is below it is treated as specular
+// (G-MLT Sec. 5, Fig. 5a; G-BDPT Sec. 3.1); the scene's feature scan uses it too.
+constexpr Float kDefaultShiftThreshold = 0.001;
+
 enum BxDFFlags : unsigned {
     BSDF_NONE = 0,
     BSDF_REFLECTION = 1,

@@ -15,7 +15,7 @@ namespace gradus {
 // What the scene contains (printed by --stats).
 struct SceneFeatures {
     bool specularSurfaces = false;      // some material has a perfectly specular lobe (roughness 0)
-    bool nearSpecularSurfaces = false;  // some material is glossy below the shift threshold (0.001)...
+    bool nearSpecularSurfaces = false;  // some material is glossy below kDefaultShiftThreshold...
     Float minRoughness = 1;             // lowest roughness over all materials
     bool deltaLights = false;
     bool infiniteLights = false;

@@ -419,7 +419,7 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
     for (auto &l : scene->lights) l->preprocess(lightBounds);
     feat.numLights = int(scene->lights.size());
     feat.specularSurfaces = feat.minRoughness == 0;
-    feat.nearSpecularSurfaces = feat.minRoughness < 1e-3;
+    feat.nearSpecularSurfaces = feat.minRoughness < kDefaultShiftThreshold;
 
     scene->camera = CreateCamera(desc.camera, resolution);
 

@@ -6,7 +6,7 @@ ParamTable<GradientSettings> GradientParams(const GradientParamOptions &o) {
     using S = GradientSettings;
     using N = ReconstructionNorm;
     ParamTable<S> t("gradient family");
-    t.real("shiftthreshold", &S::shiftThreshold, 0.001,
+    t.real("shiftthreshold", &S::shiftThreshold, kDefaultShiftThreshold,
            "roughness below which a vertex is not reconnected (\"specular\")", AtLeast(0));
     t.enumeration<N>("reconstruction", &S::norm, "hybrid",
                      {{"hybrid", N::Hybrid}, {"l1", N::L1}, {"l2", N::L2}, {"weighted", N::Weighted},

@@ -4,13 +4,14 @@
 #include <string>
 
 #include "integrators/params.h"
+#include "materials/bsdf.h"
 #include "reconstruction/reconstruction.h"
 
 namespace gradus {
 
 // Every field is set by GradientParams (defaults there).
 struct GradientSettings {
-    Float shiftThreshold = 0.001;  // roughness below which a vertex is not reconnected ("specular")
+    Float shiftThreshold = kDefaultShiftThreshold;  // roughness below which a vertex is not reconnected ("specular")
     ReconstructionNorm norm;
     Float alpha;           // screened-Poisson primal weight
     bool filmFilter;       // pixelfilter "film" (else "box")

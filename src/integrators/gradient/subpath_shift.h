@@ -46,17 +46,16 @@
 
 #include "integrators/common/bidir.h"
 #include "integrators/gradient/shift.h"
-#include "integrators/manifold/manifold_scene.h"
+#include "integrators/manifold/chain_shift.h"
 
 namespace gradus {
 
-struct SubpathShiftContext {
+// The walk's settings (mscene, threshold, walk options: manifold/chain_shift.h)
+// and the subpath shifts' own switches.
+struct SubpathShiftContext : ManifoldSettings {
     const BidirContext *bidir = nullptr;
-    const EmbreeManifoldScene *mscene = nullptr;
-    Float threshold = 0.001;
     bool manifold = true;        // manifold walk (else half-vector shift)
     bool trySpecular = true;     // scene has specular or near-specular surfaces
-    ManifoldWalkOptions walk;
 };
 
 // Counters of one sample's shifts (flushed into an integrator's totals).
@@ -87,18 +86,6 @@ void PrepareSubpath(const SubpathShiftContext &ctx, ShiftSubpath *p);
 // Rough (diffuse) for shift purposes.
 bool IsDiffuseVertex(const SubpathShiftContext &ctx, const PathVertex &v, const BSDF *b);
 
-// Solid angle at a chain's start per unit area at its end, G / |cos_0| (JM12).
-Float ChainSolidAnglePerArea(const ManifoldChain &c);
-// Phi = |d(omega_0, omega_g..) / d(A_end, O_g..)|: the sampled directions of a
-// chain (at its start and at every near-specular interior vertex g) per unit
-// area at its end and per unit of the glossy half-vectors O_g. The map is block
-// triangular (omega at a segment's start depends on the segment's end only), so
-//   Phi = prod over the segments between glossy vertices of ChainSolidAnglePerArea
-//         * |dx_g / dO_g| (HalfVectorJacobian, both chain ends fixed; G-MLT Eq. 14).
-// Without glossy vertices Phi = ChainSolidAnglePerArea. Base and offset share
-// A_end and O_g, so the ratio offset/base is the Jacobian J_b of the second
-// chain in the camera-side direction measure (Eq. 5).
-Float ChainDirectionsPerArea(const ManifoldChain &c);
 // dA_b/ds of a pinhole camera at `lens` with axis n0 (cos^4 / G of
 // ShiftJacobianFactor for an empty eye chain, up to the focal constant).
 Float EyeAreaFactor(const Point3 &lens, const Vec3 &n0, const Point3 &pb, const Vec3 &ngb);
@@ -119,51 +106,13 @@ Interaction VertexIt(const PathVertex &v);
 Spectrum SafeDiv(const Spectrum &a, const Spectrum &b);
 // Closest hit that skips material-less interfaces (as the subpath random walk does).
 bool TraceSurface(const Scene &scene, Ray ray, SurfaceInteraction *si);
-inline bool Transmits(const Vec3 &wo, const Vec3 &wi, const Vec3 &n) { return Dot(wo, n) * Dot(wi, n) < 0; }
-// The Dirac lobe of an ideal specular BSDF for a known event (reflection or
-// refraction): value f |cos| and discrete probability.
-bool DeltaLobe(const BSDF &bsdf, const Vec3 &wo, bool transmit, TransportMode mode, BSDFSample *s);
 // Surface interaction of a stored vertex (mesh: from barycentrics; else by a ray from `from`).
 bool VertexInteraction(const Scene &scene, const PathVertex &v, const Point3 &from, SurfaceInteraction *si);
-// Endpoint of a chain: geometric normal (area measure), no curvature.
-ManifoldSurfacePoint EndpointSP(const Point3 &p, const Vec3 &ng, int geomId);
-// The interior vertices of a base chain (ideal specular, or near-specular
-// glossy ones that the walk treats as specular: their half-vectors are kept,
-// Sec. 3.1), from its start towards its end: interactions, BSDFs, the
-// directions towards the start (wo) and the end (wi), the event (refraction or
-// reflection), whether the vertex is ideal specular, and the geometry.
-struct ChainInterior {
-    SurfaceInteraction si[kMaxManifoldVertices];
-    const BSDF *bsdf[kMaxManifoldVertices];
-    Vec3 wo[kMaxManifoldVertices], wi[kMaxManifoldVertices];
-    bool transmit[kMaxManifoldVertices];
-    bool specular[kMaxManifoldVertices];
-    int geomId[kMaxManifoldVertices];
-};
-// Builds the base chain start, interior[0..k-1], end; records the index of
-// refraction of refracting interiors (the Dirac lobe's, or BSDF::eta for glossy ones).
-bool BuildChain(const SubpathShiftContext &ctx, const ManifoldSurfacePoint &start, const ChainInterior &interior, int k,
-                const ManifoldSurfacePoint &end, ManifoldChain *chain);
 // Empty second chain: the offset vertex yFrom (base: xFrom) reconnects to the
 // base vertex `target` (ShiftReconnect's Jacobian) if it sees it. Counts the
 // attempt and a failure in `st` (the success is the caller's).
 bool ReconnectToVertex(const Scene &scene, const Point3 &xFrom, const Interaction &yFrom, const PathVertex &target,
                        LocalShiftStats *st, ReconnectionShift *rc);
-// Interactions, BSDFs and the vertex factors of a walked offset interior
-// (re-traced from the chain's start, each vertex with the base's event), in
-// the chain's direction (wo towards its start, wi towards its end).
-struct WalkedInterior {
-    SurfaceInteraction si[kMaxManifoldVertices];
-    BSDF bsdf[kMaxManifoldVertices];
-    Spectrum fcos[kMaxManifoldVertices];  // f |cos wi|: the Dirac coefficient at an ideal specular vertex
-    Float pdf[kMaxManifoldVertices];      // its discrete lobe probability, or the glossy solid-angle density
-    Spectrum factor{1};  // prod of the ideal specular vertices' fcos
-    Float prob = 1;      // prod of their discrete lobe probabilities
-};
-// Re-traces a chain's interior from its start through its positions (ending
-// at `end`) and evaluates each vertex with the event of transmit[] (subpath_shift.cpp).
-bool EvaluateWalked(const Scene &scene, const ManifoldChain &off, const Point3 &end, const bool *transmit,
-                    const int *geomIds, Arena &arena, TransportMode mode, WalkedInterior *w);
 // Second chain of an offset: the manifold walk from `start` to the base
 // chain's end, kept only if it is reversible (JM12 Sec. 5: the walk may
 // converge to another solution of the chain; only reversible walks keep the

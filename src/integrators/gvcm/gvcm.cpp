@@ -201,24 +201,19 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, int m, const CameraShift &sh, 
             count(FallbackWalk);
             return false;
         }
-        ManifoldWalkResult res =
-            ManifoldWalk(*sctx_.mscene, base, base.front().sp, EndpointSP(zo.p, Vec3(zo.ng), zo.geomId), sctx_.walk);
-        // The reversibility test of Sec. 4 (the walk may find another solution).
-        if (res.ok()) res.status = CheckReversible(*sctx_.mscene, base, res.chain, sctx_.walk, 1e-4);
-        walkStatus_[size_t(res.status)].fetch_add(1, std::memory_order_relaxed);
+        // The walk with y_d fixed, the reversibility test of Sec. 4 (the walk may
+        // find another solution), the offset interior evaluated and its classes kept.
+        ManifoldWalkResult res;
         WalkedInterior walked, baseEval;
-        if (!res.ok() ||
-            !EvaluateWalked(scene, res.chain, zo.p, in.transmit, in.geomId, arena, TransportMode::Importance, &walked) ||
+        const ChainShiftFailure failure = ShiftChain(sctx_, scene, base, base.front().sp,
+                                                     EndpointSP(zo.p, Vec3(zo.ng), zo.geomId), in,
+                                                     TransportMode::Importance, arena, &res, &walked);
+        walkStatus_[size_t(res.status)].fetch_add(1, std::memory_order_relaxed);
+        if (failure != ChainShiftFailure::None ||
             !EvaluateWalked(scene, base, ym.p, in.transmit, in.geomId, arena, TransportMode::Importance, &baseEval)) {
             count(FallbackWalk);
             return false;
         }
-        // The offset's interior must keep the base's classes (else no bijection).
-        for (int j = 0; j < k; ++j)
-            if (ClassifyBSDF(&walked.bsdf[j], sctx_.threshold) == ShiftVertexClass::Rough) {
-                count(FallbackWalk);
-                return false;
-            }
         const ManifoldChain &off = res.chain;
         dirX = Normalize(base.v[1].sp.p - yd.p);
         dirY = Normalize(off.v[1].sp.p - yd.p);

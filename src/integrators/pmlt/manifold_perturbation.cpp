@@ -113,8 +113,7 @@ ProposalResult Mutator::manifoldMove(const State &xs, int b, int c, int endGeom,
     const PathVertex &xc = x.v[size_t(c)];
 
     // The base chain x_b .. x_c.
-    SubpathShiftContext sc;
-    sc.bidir = &ctx_;
+    ManifoldSettings sc;
     sc.mscene = set_.mscene;
     sc.threshold = set_.shiftThreshold;
     const Scene &scene = *ctx_.scene;
@@ -142,16 +141,20 @@ ProposalResult Mutator::manifoldMove(const State &xs, int b, int c, int endGeom,
     double hvJacobian = 1;
     if (!traceEyeChain(xs, b, ray, arena, ys, &siYb, &hvJacobian)) return ProposalResult::Zero;
     if (ys->x.v.back().type != VertexType::Surface) return ProposalResult::Zero;
-    SubpathShiftStats sst;
-    ManifoldChain offset;
+    ManifoldWalkResult walk;
     WalkedInterior walked;
-    Float J = 0;
-    const bool ok = WalkSecondChain(sc, base, set_.mscene->fromInteraction(siYb), in, arena, &sst, &offset, &walked, &J);
+    const ChainShiftFailure failure = ShiftChain(sc, scene, base, set_.mscene->fromInteraction(siYb), base.back().sp,
+                                                 in, TransportMode::Radiance, arena, &walk, &walked);
     if (stats) {
-        stats->walks += int64_t(sst.walks);
-        stats->walkFailures += int64_t(sst.walkFailures);
+        stats->walks += 1;
+        stats->walkFailures += walk.ok() ? 0 : 1;
     }
-    if (!ok) return ProposalResult::Zero;  // the walk failed or is not reversible (stats)
+    if (failure != ChainShiftFailure::None) return ProposalResult::Zero;  // the walk failed or is not reversible (stats)
+    const ManifoldChain &offset = walk.chain;
+    // Jacobian of the second chain in the camera-side direction measure (Eq. 5 of G-BDPT).
+    const Float ax = ChainDirectionsPerArea(base), ay = ChainDirectionsPerArea(offset);
+    if (!(ax > 0) || !(ay > 0)) return ProposalResult::Zero;
+    const Float J = ay / ax;
     Path &y = ys->x;
     std::vector<BSDF> &yb = ys->bsdf;
     for (int j = 0; j < k; ++j) {

@@ -51,7 +51,7 @@ struct MutationSettings {
     const EmbreeManifoldScene *mscene = nullptr;  // manifold perturbation (none: not applicable)
     // G-MLT's shift: a non-Dirac vertex whose BSDF's roughness is below this is
     // near-specular (gradient-domain-mlt.md Sec. 5, Fig. 5a; ShiftClassOf).
-    Float shiftThreshold = 0.001;
+    Float shiftThreshold = kDefaultShiftThreshold;
 };
 
 // How G-MLT's shift treats a vertex (gradient-domain-mlt.md Sec. 5, Fig. 5a):

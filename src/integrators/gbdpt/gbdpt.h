@@ -47,8 +47,8 @@
 //                                    neither sampled nor counted in any MIS weight, primal
 //                                    and gradients; Table 1 "w/o LTP")
 //   string mis "combined"            combined (Eq. 8) | simple (Eq. 9)
-//   string manifoldsolver "ceres"    ceres (ceres::TinySolver, Levenberg-Marquardt) | newton
-//                                    (the direct Newton walk): the solver of the manifold walks
+//   string manifoldsolver "newton"   newton (the direct Newton walk) | ceres (ceres::TinySolver,
+//                                    Levenberg-Marquardt): the solver of the manifold walks
 // Output layers: primal, dx, dy, *_var, reconstructed_l1, reconstructed_l2
 // (and reconstructed_weighted).
 #pragma once

@@ -71,7 +71,7 @@
 //   string pixelfilter "film"        film: the scene's PixelFilter; box: own pixel only
 // (gbdpt, gbdpt.h; they apply to the connections):
 //   string shift "manifold"          manifold | halfvector
-//   string manifoldsolver "ceres"    ceres | newton
+//   string manifoldsolver "newton"   newton | ceres
 //   bool lighttracing true           false: no light-tracing paths (in no MIS sum either)
 //   string mis "combined"            combined (Eq. 8) | simple (Eq. 9); merges always use Eq. 23
 // (gvcm):

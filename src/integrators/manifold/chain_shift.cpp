@@ -153,6 +153,10 @@ bool BuildChain(const ManifoldSettings &ctx, const ManifoldSurfacePoint &start, 
     return true;
 }
 
+// A walk back from the offset must return the base within this (relative to the
+// scene scale; walks converge to 1e-7).
+constexpr Float kReverseTolerance = 1e-4;
+
 ChainShiftFailure ShiftChain(const ManifoldSettings &s, const Scene &scene, const ManifoldChain &base,
                              const ManifoldSurfacePoint &start, const ManifoldSurfacePoint &target,
                              const ChainInterior &interior, TransportMode mode, Arena &arena,
@@ -167,8 +171,15 @@ ChainShiftFailure ShiftChain(const ManifoldSettings &s, const Scene &scene, cons
     for (int i = 1; i + 1 < base.size; ++i) glossy |= !base.v[i].specular;
     ManifoldWalkOptions opts = s.walk;
     if (glossy) opts.relativeTolerance = std::min<Float>(opts.relativeTolerance, 1e-11);
+    // An end on another surface cannot be walked to (G-VCM: a photon of the
+    // kernel on another surface than the base's): no walk.
+    if (target.primitiveId != base.back().sp.primitiveId) {
+        *walk = ManifoldWalkResult();
+        walk->status = ManifoldStatus::InvalidInput;
+        return ChainShiftFailure::Walk;
+    }
     *walk = ManifoldWalk(*s.mscene, base, start, target, opts);
-    if (walk->ok()) walk->status = CheckReversible(*s.mscene, base, walk->chain, opts, 1e-4);
+    if (walk->ok()) walk->status = CheckReversible(*s.mscene, base, walk->chain, opts, kReverseTolerance);
     if (!walk->ok()) return ChainShiftFailure::Walk;
     if (!EvaluateWalked(scene, walk->chain, target.p, interior.transmit, interior.geomId, arena, mode, walked))
         return ChainShiftFailure::Evaluation;

@@ -227,6 +227,18 @@ bool FirstVertexDerivative(const ManifoldChain &c, Mat2 *dx1dxEnd) {
     return true;
 }
 
+bool FirstVertexStartDerivative(const ManifoldChain &c, Mat2 *dx1dx0) {
+    int k = c.interiorCount();
+    if (k <= 0) return false;
+    Tridiag T;
+    if (!AssembleTridiag(c, &T)) return false;
+    std::array<Mat2, kMaxManifoldVertices> R{}, X;
+    R[0] = -T.L[0];  // A dx = -dc_1/dx_0 dx_0
+    if (!SolveTridiag(T, R.data(), X.data(), nullptr)) return false;
+    *dx1dx0 = X[0];
+    return true;
+}
+
 Float ConstraintDeterminant(const ManifoldChain &c) {
     int k = c.interiorCount();
     if (k <= 0) return 1;

@@ -156,6 +156,9 @@ bool ConstraintDerivatives(const ManifoldChain &c, int i, Vec2 *value, Mat2 *dPr
 // by a block-tridiagonal (block Thomas) solve. Identity for k = 0.
 bool FirstVertexDerivative(const ManifoldChain &c, Mat2 *dx1dxEnd);
 
+// dx_1/dx_0 (2x2, motion axes) with x_{k+1} fixed and all constraints held.
+bool FirstVertexStartDerivative(const ManifoldChain &c, Mat2 *dx1dx0);
+
 // det of the 2k x 2k constraint matrix dc/dx_{1..k} (endpoints fixed); 1 for k = 0.
 Float ConstraintDeterminant(const ManifoldChain &c);
 
@@ -230,7 +233,8 @@ ManifoldStatus TraceChain(const ManifoldScene &scene, const ManifoldSurfacePoint
 // (may equal base.front(): then base is the first iterate, not re-traced), and
 // move the end vertex to `target` (same primitive as base.back()). Converged
 // when |x_end - target| / scale < relativeTolerance, scale = max(|start|_inf,
-// |target|_inf, |target - start|). Newton: x_1 steps in its geometric tangent
+// |target|_inf, |target - start|), and (Newton) the next correction of x_1 is
+// below it too. Newton: x_1 steps in its geometric tangent
 // plane and the re-trace projects it onto the surface; a trial that fails,
 // moves away or crosses a fold halves the step, an accepted one doubles it (cap
 // 1) and its derivative is the next iteration's (one assembly per trace). It

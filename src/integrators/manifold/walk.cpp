@@ -138,13 +138,29 @@ struct WalkContext {
     int traces = 0;
 
     // The first iterate: the base itself when the start did not move (no
-    // re-trace of a chain we have), else the trace towards the base's x_1.
+    // re-trace of a chain we have). Else a first-order prediction from the base,
+    // x_1 + dx_1/dx_0 dx_0 + dx_1/dx_end dx_end (both endpoints' moves in their
+    // motion axes), traced from the new start; if that trace fails or lands on
+    // another sheet, the trace towards the base's x_1.
     ManifoldStatus initial(ManifoldChain *out) {
-        if (start.p == base->front().sp.p && start.n == base->front().sp.n) {
-            *out = *base;
+        const ManifoldChain &b = *base;
+        if (start.p == b.front().sp.p && start.n == b.front().sp.n) {
+            *out = b;
             return ManifoldStatus::Success;
         }
-        return trace(base->v[1].sp.p, out);
+        Mat2 P0, Pe;
+        if (FirstVertexStartDerivative(b, &P0) && FirstVertexDerivative(b, &Pe)) {
+            const Vec3 d0 = start.p - b.front().sp.p, dE = target.p - b.back().sp.p;
+            const Vec2 m = P0 * Vec2(Dot(d0, b.front().ps), Dot(d0, b.front().pt)) +
+                           Pe * Vec2(Dot(dE, b.back().ps), Dot(dE, b.back().pt));
+            const ManifoldVertex &x1 = b.v[1];
+            Mat2 P;
+            if (std::isfinite(m.x) && std::isfinite(m.y) &&
+                trace(x1.sp.p + x1.ps * m.x + x1.pt * m.y, out) == ManifoldStatus::Success &&
+                FirstVertexDerivative(*out, &P) && (P.det() > 0) == (Pe.det() > 0))
+                return ManifoldStatus::Success;
+        }
+        return trace(b.v[1].sp.p, out);
     }
     ManifoldStatus trace(const Point3 &aim, ManifoldChain *out) {
         ++traces;
@@ -172,17 +188,34 @@ ManifoldWalkResult NewtonWalk(WalkContext &ctx, const ManifoldWalkOptions &opts)
         res.status = ManifoldStatus::Degenerate;
         return res;
     }
-    // The walk stays on the sheet of the solution manifold it starts on: the sign
-    // of det P changes only across a fold (a caustic of the chain), where the
-    // chain's end stops being a local function of x_1.
-    const bool startSign = P.det() > 0;
+    // The walk stays on the base's sheet of the solution manifold: the sign of
+    // det P changes only across a fold (a caustic of the chain), where the chain's
+    // end stops being a local function of x_1.
+    Mat2 baseP;
+    if (!FirstVertexDerivative(*ctx.base, &baseP) || !std::isfinite(baseP.det())) {
+        res.status = ManifoldStatus::Degenerate;
+        return res;
+    }
+    const bool startSign = baseP.det() > 0;
+    if ((P.det() > 0) != startSign) {
+        res.status = ManifoldStatus::Fold;
+        return res;
+    }
     const Float extent = ctx.scene->extent(ctx.base->v[1].sp.primitiveId);
     Float dist = ctx.distance(cur);
     Float step = 1;
     ManifoldStatus lastRejection = ManifoldStatus::StepFloor;
     ManifoldChain trial;
     for (;;) {
-        res.relativeError = dist / ctx.scale;
+        const ManifoldVertex &end = cur.back(), &x1 = cur.v[1];
+        // Newton step: the end's offset in its motion axes, mapped to x_1's.
+        Vec3 delta = ctx.target.p - end.sp.p;
+        Vec2 d1 = P * Vec2(Dot(delta, end.ps), Dot(delta, end.pt));
+        Vec3 move = x1.ps * d1.x + x1.pt * d1.y;
+        // Converged when the end is at the target and x_1 would not move either:
+        // near a fold |dx_1/dx_end| is large, and an end within tolerance can leave
+        // the interior (and the chain's Jacobians) far from the solution.
+        res.relativeError = std::max(dist, move.length()) / ctx.scale;
         if (res.relativeError < opts.relativeTolerance) {
             res.status = ManifoldStatus::Success;
             return res;
@@ -192,15 +225,10 @@ ManifoldWalkResult NewtonWalk(WalkContext &ctx, const ManifoldWalkOptions &opts)
             return res;
         }
         ++res.iterations;
-        const ManifoldVertex &end = cur.back(), &x1 = cur.v[1];
         if (Distance(end.sp.p, cur.v[cur.size - 2].sp.p) < 1e-12 * ctx.scale) {
             res.status = ManifoldStatus::Degenerate;  // last two vertices coincide
             return res;
         }
-        // Newton step: the end's offset in its motion axes, mapped to x_1's.
-        Vec3 delta = ctx.target.p - end.sp.p;
-        Vec2 d1 = P * Vec2(Dot(delta, end.ps), Dot(delta, end.pt));
-        Vec3 move = x1.ps * d1.x + x1.pt * d1.y;
         if (step == 1 && move.length() > extent) {
             res.status = ManifoldStatus::StepLeavesSurface;
             return res;

@@ -153,6 +153,25 @@ TEST(ManifoldMeshDerivatives, UnitNormalOnScaledTessellatedSpheres) {
     }
 }
 
+// Loop subdivision output (OpenSubdiv limit normals, unit before the transform)
+// under both scales: the same mesh path, checked through the scene builder.
+TEST(ManifoldMeshDerivatives, UnitNormalOnScaledLoopSubdivision) {
+    for (const char *scale : kScales) {
+        std::string text = std::string("LookAt 0 0 5 0 0 0 0 1 0\nCamera \"perspective\"\nWorldBegin\nScale ") + scale +
+                           "\nShape \"loopsubdiv\" \"integer levels\" 3 \"point P\" [0 0 1 1 0 0 0 1 0 -1 0 0 0 -1 0 0 0 -1] "
+                           "\"integer indices\" [0 1 2 0 2 3 0 3 4 0 4 1 5 2 1 5 3 2 5 4 3 5 1 4]\nWorldEnd\n";
+        auto scene = BuildScene(ParseString(text, "loop.pbrt"), Point2i{8, 8});
+        std::vector<int> meshes = MeshesWithNormals(*scene);
+        ASSERT_EQ(meshes.size(), 1u) << scale;
+        double now = WorstNormalError(*scene, meshes, 400);
+        double before = WorstNormalError(*scene, meshes, 400, true);
+        EXPECT_LT(now, 1e-4) << scale;
+        EXPECT_GT(before, 0.1) << scale;
+        std::printf("loopsubdiv, scale %s: largest relative error %.3g (unnormalised derivative: %.3g)\n", scale, now,
+                    before);
+    }
+}
+
 // A chain start -> glass interior vertices -> end traced from `start` along d.
 bool TraceGlassChain(const EmbreeManifoldScene &ems, const ManifoldSurfacePoint &start, const Vec3 &d,
                      int glassGeom, int endGeom, int k, ManifoldChain *out) {

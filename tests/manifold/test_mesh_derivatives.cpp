@@ -12,8 +12,8 @@
 // runs that derivative ("legacy") and requires it to fail; largest relative
 // errors measured, old vs new: tessellated sphere normals 10.2 vs 4e-10 (scale
 // 0.09) and 0.46 vs 4e-10 (1, 1.5, 1); its chains 497 vs 5e-9 and 123 vs 1.5e-5;
-// water-caustic's and veach-ajar's mesh normals 0.61 and 1.0 (a mesh without uv:
-// no derivative at all) vs 1.3e-7; water-caustic chains 0.41 vs 3e-9.
+// water-caustic's and veach-ajar's mesh normals 0.61 and 1.0 (triangles with degenerate
+// uv: no derivative at all) vs 1.3e-7; water-caustic chains 0.41 vs 3e-9.
 #include <gtest/gtest.h>
 
 #include <cmath>

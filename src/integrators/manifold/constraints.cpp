@@ -212,6 +212,16 @@ bool ConstraintDerivatives(const ManifoldChain &c, int i, Vec2 *value, Mat2 *dPr
     return true;
 }
 
+// x_1's response to a move of an endpoint: A dx = -(dc/dx_endpoint) dx_endpoint,
+// whose only nonzero block is that of the endpoint's neighbour constraint.
+static bool FirstVertexResponse(const Tridiag &T, int row, const Mat2 &dcdEndpoint, Mat2 *dx1) {
+    std::array<Mat2, kMaxManifoldVertices> R{}, X;
+    R[size_t(row)] = -dcdEndpoint;
+    if (!SolveTridiag(T, R.data(), X.data(), nullptr)) return false;
+    *dx1 = X[0];
+    return true;
+}
+
 bool FirstVertexDerivative(const ManifoldChain &c, Mat2 *dx1dxEnd) {
     int k = c.interiorCount();
     if (k <= 0) {
@@ -219,24 +229,15 @@ bool FirstVertexDerivative(const ManifoldChain &c, Mat2 *dx1dxEnd) {
         return k == 0;
     }
     Tridiag T;
-    if (!AssembleTridiag(c, &T)) return false;
-    std::array<Mat2, kMaxManifoldVertices> R{}, X;
-    R[k - 1] = -T.Uend;  // A dx = -dc/dx_end dx_end
-    if (!SolveTridiag(T, R.data(), X.data(), nullptr)) return false;
-    *dx1dxEnd = X[0];
-    return true;
+    return AssembleTridiag(c, &T) && FirstVertexResponse(T, k - 1, T.Uend, dx1dxEnd);
 }
 
-bool FirstVertexStartDerivative(const ManifoldChain &c, Mat2 *dx1dx0) {
+bool FirstVertexDerivatives(const ManifoldChain &c, Mat2 *dx1dx0, Mat2 *dx1dxEnd) {
     int k = c.interiorCount();
     if (k <= 0) return false;
     Tridiag T;
-    if (!AssembleTridiag(c, &T)) return false;
-    std::array<Mat2, kMaxManifoldVertices> R{}, X;
-    R[0] = -T.L[0];  // A dx = -dc_1/dx_0 dx_0
-    if (!SolveTridiag(T, R.data(), X.data(), nullptr)) return false;
-    *dx1dx0 = X[0];
-    return true;
+    return AssembleTridiag(c, &T) && FirstVertexResponse(T, 0, T.L[0], dx1dx0) &&
+           FirstVertexResponse(T, k - 1, T.Uend, dx1dxEnd);
 }
 
 Float ConstraintDeterminant(const ManifoldChain &c) {

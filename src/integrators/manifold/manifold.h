@@ -156,8 +156,9 @@ bool ConstraintDerivatives(const ManifoldChain &c, int i, Vec2 *value, Mat2 *dPr
 // by a block-tridiagonal (block Thomas) solve. Identity for k = 0.
 bool FirstVertexDerivative(const ManifoldChain &c, Mat2 *dx1dxEnd);
 
-// dx_1/dx_0 (2x2, motion axes) with x_{k+1} fixed and all constraints held.
-bool FirstVertexStartDerivative(const ManifoldChain &c, Mat2 *dx1dx0);
+// dx_1/dx_0 (x_{k+1} fixed) and dx_1/dx_{k+1} (x_0 fixed) from one assembly of
+// the constraint matrix; false for k = 0 or a singular matrix.
+bool FirstVertexDerivatives(const ManifoldChain &c, Mat2 *dx1dx0, Mat2 *dx1dxEnd);
 
 // det of the 2k x 2k constraint matrix dc/dx_{1..k} (endpoints fixed); 1 for k = 0.
 Float ConstraintDeterminant(const ManifoldChain &c);

@@ -136,31 +136,37 @@ struct WalkContext {
     Vec3 targetS, targetT;  // target tangent frame
     Float scale;
     int traces = 0;
+    bool baseSign = true;  // set by initial()
 
-    // The first iterate: the base itself when the start did not move (no
-    // re-trace of a chain we have). Else a first-order prediction from the base,
-    // x_1 + dx_1/dx_0 dx_0 + dx_1/dx_end dx_end (both endpoints' moves in their
-    // motion axes), traced from the new start; if that trace fails or lands on
-    // another sheet, the trace towards the base's x_1.
-    ManifoldStatus initial(ManifoldChain *out) {
+    // The first iterate and its P = dx_1/dx_end (each solver's first derivative):
+    // the base itself when the start did not move (no re-trace of a chain we
+    // have). Else a first-order prediction from the base, x_1 + dx_1/dx_0 dx_0 +
+    // dx_1/dx_end dx_end (both endpoints' moves in their motion axes), traced from
+    // the new start; if that trace fails or lands on another sheet than the
+    // base's, the trace towards the base's x_1. Sets baseSign, the sign of det P
+    // of the base (its sheet of the solution manifold).
+    ManifoldStatus initial(ManifoldChain *out, Mat2 *P) {
         const ManifoldChain &b = *base;
+        Mat2 P0, Pb;
+        if (!FirstVertexDerivatives(b, &P0, &Pb) || !std::isfinite(Pb.det())) return ManifoldStatus::Degenerate;
+        baseSign = Pb.det() > 0;
         if (start.p == b.front().sp.p && start.n == b.front().sp.n) {
             *out = b;
+            *P = Pb;
             return ManifoldStatus::Success;
         }
-        Mat2 P0, Pe;
-        if (FirstVertexStartDerivative(b, &P0) && FirstVertexDerivative(b, &Pe)) {
-            const Vec3 d0 = start.p - b.front().sp.p, dE = target.p - b.back().sp.p;
-            const Vec2 m = P0 * Vec2(Dot(d0, b.front().ps), Dot(d0, b.front().pt)) +
-                           Pe * Vec2(Dot(dE, b.back().ps), Dot(dE, b.back().pt));
-            const ManifoldVertex &x1 = b.v[1];
-            Mat2 P;
-            if (std::isfinite(m.x) && std::isfinite(m.y) &&
-                trace(x1.sp.p + x1.ps * m.x + x1.pt * m.y, out) == ManifoldStatus::Success &&
-                FirstVertexDerivative(*out, &P) && (P.det() > 0) == (Pe.det() > 0))
-                return ManifoldStatus::Success;
-        }
-        return trace(b.v[1].sp.p, out);
+        const Vec3 d0 = start.p - b.front().sp.p, dE = target.p - b.back().sp.p;
+        const Vec2 m = P0 * Vec2(Dot(d0, b.front().ps), Dot(d0, b.front().pt)) +
+                       Pb * Vec2(Dot(dE, b.back().ps), Dot(dE, b.back().pt));
+        const ManifoldVertex &x1 = b.v[1];
+        if (std::isfinite(m.x) && std::isfinite(m.y) &&
+            trace(x1.sp.p + x1.ps * m.x + x1.pt * m.y, out) == ManifoldStatus::Success &&
+            FirstVertexDerivative(*out, P) && (P->det() > 0) == baseSign)
+            return ManifoldStatus::Success;
+        const ManifoldStatus st = trace(x1.sp.p, out);
+        if (st != ManifoldStatus::Success) return st;
+        return FirstVertexDerivative(*out, P) && std::isfinite(P->det()) ? ManifoldStatus::Success
+                                                                          : ManifoldStatus::Degenerate;
     }
     ManifoldStatus trace(const Point3 &aim, ManifoldChain *out) {
         ++traces;
@@ -176,27 +182,18 @@ struct WalkContext {
 ManifoldWalkResult NewtonWalk(WalkContext &ctx, const ManifoldWalkOptions &opts) {
     ManifoldWalkResult res;
     ManifoldChain &cur = res.chain;
-    ManifoldStatus st = ctx.initial(&cur);
-    if (st != ManifoldStatus::Success) {
-        res.status = st;
-        return res;
-    }
     // P = dx_1/dx_end of the current chain (motion axes), kept until cur changes:
     // a rejected trial reuses it, an accepted one brings its own.
     Mat2 P, trialP;
-    if (!FirstVertexDerivative(cur, &P) || !std::isfinite(P.det())) {
-        res.status = ManifoldStatus::Degenerate;
+    ManifoldStatus st = ctx.initial(&cur, &P);
+    if (st != ManifoldStatus::Success) {
+        res.status = st;
         return res;
     }
     // The walk stays on the base's sheet of the solution manifold: the sign of
     // det P changes only across a fold (a caustic of the chain), where the chain's
     // end stops being a local function of x_1.
-    Mat2 baseP;
-    if (!FirstVertexDerivative(*ctx.base, &baseP) || !std::isfinite(baseP.det())) {
-        res.status = ManifoldStatus::Degenerate;
-        return res;
-    }
-    const bool startSign = baseP.det() > 0;
+    const bool startSign = ctx.baseSign;
     if ((P.det() > 0) != startSign) {
         res.status = ManifoldStatus::Fold;
         return res;
@@ -375,7 +372,8 @@ struct WalkFunction {
 ManifoldWalkResult CeresWalk(WalkContext &ctx, const ManifoldWalkOptions &opts) {
     ManifoldWalkResult res;
     ManifoldChain init;
-    ManifoldStatus st = ctx.initial(&init);
+    Mat2 initP;
+    ManifoldStatus st = ctx.initial(&init, &initP);
     if (st != ManifoldStatus::Success) {
         res.status = st;
         return res;
@@ -394,11 +392,8 @@ ManifoldWalkResult CeresWalk(WalkContext &ctx, const ManifoldWalkOptions &opts) 
     f.L = std::max(Distance(f.p1, ctx.start.p), 1e-12 * ctx.scale);
     f.chain = init;  // x = 0 aims exactly at the initial x_1: reuse its trace
     f.cachedX[0] = f.cachedX[1] = 0;
-    if (!FirstVertexDerivative(init, &f.cachedP) || !std::isfinite(f.cachedP.det())) {
-        res.status = ManifoldStatus::Degenerate;
-        return res;
-    }
-    f.startSign = f.cachedP.det() > 0;
+    f.cachedP = initP;
+    f.startSign = initP.det() > 0;
     f.maxRejects = 1 + int(std::ceil(std::log2(1 / std::max(opts.minStep, Float(1e-30)))));
     ceres::TinySolver<WalkFunction> solver;
     solver.options.max_num_iterations = opts.maxIterations;

@@ -79,7 +79,6 @@ bool TraceSurface(const Scene &scene, Ray ray, SurfaceInteraction *si) {
     return scene.intersectSurface(&ray, si) == Scene::SurfaceHit::Hit;
 }
 
-
 bool VertexInteraction(const Scene &scene, const PathVertex &v, const Point3 &from, SurfaceInteraction *si) {
     if (v.type != VertexType::Surface || v.geomId < 0) return false;
     const GeometryRecord &g = scene.geometry[v.geomId];

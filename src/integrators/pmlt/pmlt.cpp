@@ -423,14 +423,9 @@ std::string PMLTIntegrator::statistics() const {
         if (c.proposed > 0) o << " (mean acceptance " << 100.0 * c.acceptSum / double(c.proposed) << "%)";
         o << "\n";
     }
-    o << "  manifold walks: " << nWalks_ << ", failed or not reversible: " << nWalkFailures_;
-    if (nWalks_ > 0) {
-        // Process-wide walk counters (manifold.h): the reasons of the failures.
-        const ManifoldStatsSnapshot ms = GetManifoldStats();
-        for (size_t k = 1; k < ms.byStatus.size(); ++k)
-            if (ms.byStatus[k] > 0) o << "; " << ToString(ManifoldStatus(k)) << " " << ms.byStatus[k];
-    }
-    o << "\n" << FormatManifoldStats(GetManifoldStats(), "  ");
+    o << "  manifold walks: " << nWalks_ << ", failed or not reversible: " << nWalkFailures_ << "\n";
+    // Process-wide walk counters (manifold.h): iterations and the reasons of the failures.
+    o << FormatManifoldStats(GetManifoldStats(), "  ");
     if (nStartMismatch_ > 0)
         o << "  chain starts that could not be rebuilt (drawn again): " << nStartMismatch_ << "\n";
     if (rescale_ != 1) o << "  interrupted pass: image scaled by " << rescale_ << " (mutations issued / run)\n";

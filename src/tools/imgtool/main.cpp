@@ -1,4 +1,4 @@
-// imgtool: compare, convert, inspect, merge and false-colour images.
+// imgtool: compare, convert, inspect, merge and false-colour images; comparison pages.
 // Exit status: 0 success, 1 a tolerance was exceeded (diff --tolerance),
 // 2 an error (printed as "imgtool: error: ..." on stderr).
 #include <algorithm>
@@ -16,6 +16,8 @@
 #include "image/image.h"
 #include "image/metrics.h"
 #include "render/checkpoint.h"
+
+#include "compare_page.h"
 
 using namespace gradus;
 using nlohmann::json;
@@ -66,6 +68,24 @@ const CommandHelp kHelp[] = {
       --max V                 value mapped to white (default: 99th percentile)
       --layer NAME            as for diff
       --ref-layer NAME        as for diff
+)"},
+    {"compare", R"(  compare REF A [B ...] -o DIR   interactive comparison page DIR/index.html (static files,
+                                 opened from disk in a WebGL2 browser; no network, no server):
+                                 exposure, sRGB / false-colour / relative-error views, synchronised
+                                 zoom and pan, keys 1-9 and left/right flip, crops, relMSE, PSNR,
+                                 means (as diff computes them) and every image's metadata
+      -o, --out DIR           folder to write (created; the page's files in it are replaced)
+      --labels R,A,B,...      names shown for REF, A, B, ... (default: the file names)
+      --layer NAME            layer of every test image (default as for diff)
+      --layers LA,LB,...      layer per test image (an empty entry: the default)
+      --ref-layer NAME        layer of REF (default: its default layer)
+      --exposure EV           initial exposure (default 0)
+      --error-max V           initial top of the relative-error ramp (default: the geometric
+                              mean over the images of their 99th percentile)
+      --title TEXT            page title
+      --discard-fraction F, --discard-count N, --epsilon E   as for diff (the figures only)
+    The page embeds the linear RGB as half floats (6 bytes a pixel before compression).
+    Relative-error view: per-pixel relMSE, mean over R,G,B of (X-R)^2/(R^2+E).
 )"},
 };
 
@@ -139,6 +159,16 @@ long long ParseCount(const std::string &what, const std::string &s) {
     } catch (const std::exception &) {
     }
     throw Error("invalid count for " + what + ": \"" + s + "\"");
+}
+
+// "a,b,,c" -> {"a", "b", "", "c"}.
+std::vector<std::string> SplitList(const std::string &s) {
+    std::vector<std::string> out;
+    std::stringstream ss(s);
+    std::string item;
+    while (std::getline(ss, item, ',')) out.push_back(item);
+    if (!s.empty() && s.back() == ',') out.push_back("");
+    return out;
 }
 
 std::string Num(double v) {
@@ -362,9 +392,8 @@ int CmdMerge(const std::vector<std::string> &argv) {
     std::vector<double> weights;
     std::string source;
     if (a.has("weights")) {
-        std::stringstream ss(a.opt.at("weights"));
-        std::string item;
-        while (std::getline(ss, item, ',')) weights.push_back(ParseDouble("--weights", item));
+        for (const std::string &item : SplitList(a.opt.at("weights")))
+            weights.push_back(ParseDouble("--weights", item));
         if (weights.size() != images.size())
             throw Error("merge: " + std::to_string(weights.size()) + " weights given for " +
                         std::to_string(images.size()) + " images");
@@ -412,17 +441,7 @@ int CmdFalsecolor(const std::vector<std::string> &argv) {
     if (a.has("max")) {
         maxValue = ParseDouble("--max", a.opt.at("max"));
     } else {
-        std::vector<float> v;
-        size_t npix = size_t(err.width()) * size_t(err.height());
-        for (size_t i = 0; i < npix; ++i)
-            if (err.data()[i * err.numChannels() + ex] == 0.f)
-                v.push_back(err.data()[i * err.numChannels() + ch]);
-        maxValue = 0;
-        if (!v.empty()) {
-            size_t k = std::min(v.size() - 1, size_t(0.99 * double(v.size())));
-            std::nth_element(v.begin(), v.begin() + k, v.end());
-            maxValue = v[k];
-        }
+        maxValue = ErrorQuantile(err, 0.99);
         if (!(maxValue > 0)) maxValue = 1;
     }
     // Excluded (NaN/Inf) pixels show as the NaN colour.
@@ -432,6 +451,54 @@ int CmdFalsecolor(const std::vector<std::string> &argv) {
             err.data()[i * err.numChannels() + ch] = NAN;
     WriteImage(a.pos[2], FalseColor(err, ch, maxValue));
     std::cout << "wrote " << a.pos[2] << ": per-pixel relMSE, white = " << Num(maxValue) << "\n";
+    return 0;
+}
+
+int CmdCompare(std::vector<std::string> argv) {
+    for (std::string &s : argv)
+        if (s == "-o") s = "--out";
+    Args a = Parse(argv,
+                   {"out", "labels", "layer", "layers", "ref-layer", "exposure", "error-max", "title",
+                    "discard-fraction", "discard-count", "epsilon"},
+                   {});
+    NeedPositionals(a, 2, "compare", true);
+    if (!a.has("out")) throw Error("compare: the output folder is missing (-o DIR)");
+    if (a.has("layer") && a.has("layers")) throw Error("compare: give --layer or --layers, not both");
+    ComparePageOptions po;
+    po.metrics = CompareOpts(a);
+    if (a.has("exposure")) po.exposure = ParseDouble("--exposure", a.opt.at("exposure"));
+    if (a.has("error-max")) {
+        po.errorMax = ParseDouble("--error-max", a.opt.at("error-max"));
+        if (!(po.errorMax > 0)) throw Error("compare: --error-max must be positive");
+    }
+    if (a.has("title")) po.title = a.opt.at("title");
+    size_t n = a.pos.size();
+    std::vector<std::string> labels(n), layers(n);
+    if (a.has("labels")) {
+        labels = SplitList(a.opt.at("labels"));
+        if (labels.size() != n)
+            throw Error("compare: " + std::to_string(labels.size()) + " labels given for " + std::to_string(n) +
+                        " images (the reference included)");
+    }
+    if (a.has("layers")) {
+        std::vector<std::string> l = SplitList(a.opt.at("layers"));
+        if (l.size() != n - 1)
+            throw Error("compare: " + std::to_string(l.size()) + " layers given for " + std::to_string(n - 1) +
+                        " test images");
+        std::copy(l.begin(), l.end(), layers.begin() + 1);
+    }
+    for (size_t k = 1; k < n; ++k)
+        if (po.metrics.layer) layers[k] = *po.metrics.layer;
+    if (po.metrics.refLayer) layers[0] = *po.metrics.refLayer;
+    std::vector<ComparePageInput> inputs;
+    for (size_t k = 0; k < n; ++k) inputs.push_back({a.pos[k], labels[k], layers[k]});
+    const std::string dir = a.opt.at("out");
+    ComparePageSummary s = WriteComparePage(dir, inputs, po);
+    std::cout << "wrote " << dir << "/index.html (" << s.files.size() << " files, " << Num(s.bytes / 1e6)
+              << " MB)\n";
+    for (size_t k = 0; k < s.metrics.size(); ++k)
+        std::cout << "  " << a.pos[k + 1] << ": relMSE " << Num(s.metrics[k].relmse) << ", PSNR "
+                  << Num(s.metrics[k].psnr) << " dB\n";
     return 0;
 }
 
@@ -468,8 +535,9 @@ int main(int argc, char **argv) {
         if (cmd == "info") return CmdInfo(rest);
         if (cmd == "merge") return CmdMerge(rest);
         if (cmd == "falsecolor") return CmdFalsecolor(rest);
+        if (cmd == "compare") return CmdCompare(rest);
         throw Error("unknown command \"" + cmd +
-                    "\" (valid: diff, convert, info, merge, falsecolor; see imgtool --help)");
+                    "\" (valid: diff, convert, info, merge, falsecolor, compare; see imgtool --help)");
     } catch (const std::exception &e) {
         std::cerr << "imgtool: error: " << e.what() << "\n";
         return kExitError;

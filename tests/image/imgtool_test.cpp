@@ -1,11 +1,14 @@
 // End-to-end runs of the imgtool binary: exit codes, text and JSON output, files.
 #include <gtest/gtest.h>
 
+#include <Imath/half.h>
 #include <cstring>
 #include <sys/wait.h>
+#include <zlib.h>
 
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 
 #include "render/checkpoint.h"
@@ -327,4 +330,128 @@ TEST(Imgtool, MergeCheckpoints) {
     r = RunTool(dir, {"merge", dir.file("g.ckpt"), dir.file("a.ckpt"), dir.file("c.ckpt")});
     EXPECT_EQ(r.code, 2);
     EXPECT_NE(r.err.find("gap"), std::string::npos) << r.err;
+}
+
+namespace {
+
+// data.js of a comparison page: "window.GRADUS_COMPARE = {...};".
+nlohmann::json ReadPageData(const std::string &file) {
+    std::string s = ReadBytes(file);
+    size_t a = s.find('{'), b = s.rfind('}');
+    if (a == std::string::npos || b == std::string::npos) return nlohmann::json();
+    return nlohmann::json::parse(s.substr(a, b - a + 1));
+}
+
+// The RGB floats of an img-K.js: base64 of zlib data of half floats, planes
+// R, G, B, low bytes then high bytes.
+std::vector<float> ReadPageImage(const std::string &file, size_t npix) {
+    std::string s = ReadBytes(file);
+    size_t a = s.find("= \""), b = s.rfind('"');
+    std::string b64 = s.substr(a + 3, b - a - 3);
+    std::vector<unsigned char> packed;
+    uint32_t acc = 0;
+    int bits = 0;
+    for (char c : b64) {
+        const char *alpha = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+        const char *p = c == '=' ? nullptr : std::strchr(alpha, c);
+        if (!p) break;
+        acc = (acc << 6) | uint32_t(p - alpha);
+        bits += 6;
+        if (bits >= 8) {
+            bits -= 8;
+            packed.push_back((unsigned char)((acc >> bits) & 0xff));
+        }
+    }
+    size_t n = npix * 3;
+    std::vector<unsigned char> raw(2 * n);
+    uLongf len = uLongf(raw.size());
+    if (uncompress(raw.data(), &len, packed.data(), uLong(packed.size())) != Z_OK || len != raw.size()) return {};
+    std::vector<float> out(n);
+    for (int c = 0; c < 3; ++c)
+        for (size_t i = 0; i < npix; ++i) {
+            size_t k = size_t(c) * npix + i;
+            Imath::half h;
+            h.setBits(uint16_t(raw[k] | (raw[n + k] << 8)));
+            out[i * 3 + c] = float(h);
+        }
+    return out;
+}
+
+}  // namespace
+
+TEST(Imgtool, ComparePageFilesMetricsAndData) {
+    TempDir dir;
+    Pair p = WritePair(dir);
+    Image b = Make(2, 1, {1.5f, 1, 0.75f, 1e-3f, 7e4f, 0.5f});  // 7e4: beyond the half range
+    b.metadata["integrator"] = "bdpt";
+    b.metadata["spp"] = MetaValue::Int(16);
+    b.metadata["render_seconds"] = MetaValue::Double(1.25);
+    std::string fb = dir.file("b.exr"), page = dir.file("page");
+    WriteImage(fb, b);
+    RunResult r = RunTool(dir, {"compare", p.ref, p.img, fb, "-o", page, "--labels", "R,A,B", "--exposure", "1.5"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("index.html"), std::string::npos) << r.out;
+    for (const char *f : {"index.html", "viewer.js", "viewer.css", "data.js", "img-0.js", "img-1.js", "img-2.js"})
+        EXPECT_FALSE(ReadBytes(page + "/" + f).empty()) << f;
+    EXPECT_NE(ReadBytes(page + "/index.html").find("viewer.js"), std::string::npos);
+
+    nlohmann::json d = ReadPageData(page + "/data.js");
+    ASSERT_TRUE(d.is_object());
+    EXPECT_EQ(d["width"].get<int>(), 2);
+    EXPECT_EQ(d["height"].get<int>(), 1);
+    EXPECT_DOUBLE_EQ(d["exposure"].get<double>(), 1.5);
+    ASSERT_EQ(d["images"].size(), 3u);
+    EXPECT_EQ(d["images"][0]["label"], "R");
+    EXPECT_TRUE(d["images"][0]["reference"].get<bool>());
+    EXPECT_EQ(d["images"][2]["metadata"]["integrator"], "bdpt");
+    EXPECT_EQ(d["images"][2]["metadata"]["spp"].get<int>(), 16);
+    EXPECT_DOUBLE_EQ(d["images"][2]["metadata"]["render_seconds"].get<double>(), 1.25);
+    // The figures are imgtool diff's, to the last bit.
+    for (int k : {1, 2}) {
+        RunResult j = RunTool(dir, {"diff", k == 1 ? p.img : fb, p.ref, "--json"});
+        ASSERT_EQ(j.code, 0) << j.err;
+        nlohmann::json dj = nlohmann::json::parse(j.out), m = d["images"][k]["metrics"];
+        EXPECT_EQ(m["relmse"].get<double>(), dj["relmse"].get<double>());
+        EXPECT_EQ(m["psnr"].get<double>(), dj["psnr"].get<double>());
+        EXPECT_EQ(m["mse"].get<double>(), dj["mse"].get<double>());
+        EXPECT_EQ(m["mean"].get<double>(), dj["mean_image"].get<double>());
+    }
+    EXPECT_NEAR(d["images"][1]["metrics"]["relmse"].get<double>(), (5.0 / 1.001 + 250.0 + 0.25 / 1.001) / 6, 1e-5);
+
+    // The embedded pixels: the images as half floats (beyond the range: 65504).
+    std::vector<float> px = ReadPageImage(page + "/img-2.js", 2);
+    ASSERT_EQ(px.size(), 6u);
+    for (int i = 0; i < 6; ++i) {
+        float want = std::min(b.data()[i], 65504.f);
+        EXPECT_NEAR(px[i], want, std::abs(want) * 1e-3f) << i;
+    }
+    EXPECT_EQ(ReadPageImage(page + "/img-0.js", 2), Make(2, 1, {1, 1, 1, 0, 1, 0.5f}).data());
+}
+
+TEST(Imgtool, ComparePageErrors) {
+    TempDir dir;
+    Pair p = WritePair(dir);
+    std::string page = dir.file("page");
+    auto fails = [&](const std::vector<std::string> &args, const std::string &msg) {
+        RunResult r = RunTool(dir, args);
+        EXPECT_EQ(r.code, 2) << r.out;
+        EXPECT_NE(r.err.find(msg), std::string::npos) << r.err;
+    };
+    fails({"compare", p.ref, p.img}, "-o DIR");
+    fails({"compare", p.ref, "-o", page}, "at least 2");
+    fails({"compare", p.ref, dir.file("missing.exr"), "-o", page}, "missing.exr");
+    fails({"compare", p.ref, p.img, "-o", page, "--labels", "a,b,c"}, "3 labels");
+    fails({"compare", p.ref, p.img, "-o", page, "--layer", "primal"}, "primal");
+    fails({"compare", p.ref, p.img, "-o", page, "--exposure", "x"}, "--exposure");
+    fails({"compare", p.ref, p.img, "-o", page, "--error-max", "0"}, "--error-max");
+    std::string big = dir.file("big.exr");
+    WriteImage(big, Image::RGB(3, 1));
+    fails({"compare", p.ref, p.img, big, "-o", page}, "size mismatch");
+    // Nothing is written when an input is refused.
+    EXPECT_FALSE(std::filesystem::exists(page));
+    // A file where the folder should be.
+    fails({"compare", p.ref, p.img, "-o", p.img}, "folder");
+    RunResult h = RunTool(dir, {"compare", "--help"});
+    EXPECT_EQ(h.code, 0);
+    EXPECT_NE(h.out.find("relative-error"), std::string::npos);
 }

@@ -545,9 +545,9 @@
   // image's panel (drawn now, read back from the canvas); null for a pixel
   // that is not visible.
   window.gradusReadPixels = function (points) {
-    const p = panels.find((q) => q.k === state.current);
-    if (!p || !state.ready) return points.map(() => null);
+    if (!state.ready) return points.map(() => null);
     draw();
+    const p = panels.find((q) => q.k === state.current);
     const cw = glCanvas.width, ch = glCanvas.height, buf = new Uint8Array(cw * ch * 4);
     gl.readPixels(0, 0, cw, ch, gl.RGBA, gl.UNSIGNED_BYTE, buf);
     return points.map(([x, y]) => {
@@ -562,6 +562,7 @@
     current: state.current, label: D.images[state.current].label, mode: MODES[state.mode], exposure: state.exposure,
     zoom: state.zoom, cx: state.cx, cy: state.cy, grid: state.grid, crops: state.crops.length, ready: state.ready,
   });
+  window.gradusPanels = () => panels.map((p) => ({ k: p.k, x: p.x / dpr(), y: p.y / dpr(), w: p.w / dpr(), h: p.h / dpr() }));
   window.gradusSetView = (zoom, cx, cy) => { state.zoom = zoom; state.cx = cx; state.cy = cy; draw(); };
 
   async function main() {

@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# ctest imgtool_compare_browser: installs playwright-core (package-lock.json)
+# into WORK_DIR with npm ci when missing or changed, then runs the test.
+# usage: run_browser_test.sh BIN_DIR WORK_DIR
+set -euo pipefail
+bin=$1 work=$2
+src=$(cd "$(dirname "$0")" && pwd)
+if [ ! -x /usr/bin/chromium ] && [ -z "${CHROMIUM:-}" ]; then
+  echo "SKIP: /usr/bin/chromium is missing (scripts/deps installs Debian's chromium)"
+  exit 77
+fi
+mkdir -p "$work"
+if ! cmp -s "$src/package-lock.json" "$work/package-lock.json" || [ ! -d "$work/node_modules/playwright-core" ]; then
+  cp "$src/package.json" "$src/package-lock.json" "$work/"
+  (cd "$work" && npm ci --no-audit --no-fund --loglevel=error)
+fi
+exec node "$src/compare_browser_test.mjs" "$bin" "$work"

@@ -50,6 +50,11 @@ def _rel(path, out):
     return html.escape(os.path.relpath(path, out).replace(os.sep, "/"))
 
 
+def _trim(arg, scene_value):
+    """The run's trimming option, else the scene's."""
+    return arg if arg is not None else scene_value
+
+
 def prepare_scene_assets(tools, scene, summary_rows, rows, integrators, baseline, report_budget,
                          args, crop_count=2):
     """Converts and cuts every image the scene's section shows. Returns a dict of paths."""
@@ -109,6 +114,19 @@ def prepare_scene_assets(tools, scene, summary_rows, rows, integrators, baseline
             assets["errormaps"][integ] = big
     assets["error_max"] = vmax
 
+    # The interactive page (imgtool compare): reference and each equal-time image,
+    # with the report's trimming and error scale.
+    if chosen:
+        integs = [i for i in integrators if i in chosen]
+        page = os.path.join(out, "compare", scene.name)
+        tools.compare(scene.reference, [os.path.join(out, chosen[i]["image"]) for i in integs], page,
+                      ["reference"] + integs, layers=[chosen[i].get("layer") or "" for i in integs],
+                      exposure=scene.exposure, error_max=vmax,
+                      discard_fraction=_trim(args.discard_fraction, scene.discard_fraction),
+                      discard_count=_trim(args.discard_count, scene.discard_count),
+                      title="%s: equal time, %g s budget" % (scene.name, float(report_budget)))
+        assets["compare"] = os.path.join(page, "index.html")
+
     # Crops: the scene list's, else where the baseline's error is highest.
     if scene.crops:
         boxes = [list(map(float, b)) for b in scene.crops]
@@ -160,8 +178,8 @@ def scene_section(scene, summary_rows, assets, integrators, baseline, report_bud
     h = ['<section id="scene-%s">' % html.escape(scene.name),
          "<h2>%s</h2>" % html.escape(scene.name)]
     noise = ("%.3g" % scene.noise) if scene.noise is not None else "unknown"
-    frac = args.discard_fraction if args.discard_fraction is not None else scene.discard_fraction
-    cnt = args.discard_count if args.discard_count is not None else scene.discard_count
+    frac = _trim(args.discard_fraction, scene.discard_fraction)
+    cnt = _trim(args.discard_count, scene.discard_count)
     trim = []
     if frac:
         trim.append("highest %.4g%% of pixel errors" % (100 * float(frac)))
@@ -220,6 +238,10 @@ def scene_section(scene, summary_rows, assets, integrators, baseline, report_bud
 
     # Equal-time images.
     h.append("<h3>Equal time: %s s budget</h3>" % _fmt(float(report_budget)))
+    if assets.get("compare"):
+        h.append('<p><a href="%s">Interactive comparison</a>: flip between the images (keys 1-9, '
+                 'arrows), zoom and pan them together, exposure, false-colour and relative-error '
+                 'views, crops (imgtool compare; needs WebGL2).</p>' % _rel(assets["compare"], out))
     h.append('<div class="row">')
     h.append(_figure(assets["reference"], out, "reference"))
     for integ in integrators:

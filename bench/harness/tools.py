@@ -133,6 +133,21 @@ class Tools:
             argv += ["--layer", layer]
         self._run(argv, "imgtool falsecolor")
 
+    def compare(self, reference, images, out_dir, labels, layers=None, exposure=None,
+                error_max=None, discard_fraction=None, discard_count=None, title=None):
+        """The interactive comparison page (imgtool compare) of images against reference."""
+        argv = [self.imgtool, "compare", reference] + list(images) + ["-o", out_dir,
+                "--labels", ",".join(l.replace(",", ";") for l in labels)]
+        if layers and any(layers):
+            argv += ["--layers", ",".join(layers)]
+        for opt, v in (("--exposure", exposure), ("--error-max", error_max),
+                       ("--discard-fraction", discard_fraction), ("--discard-count", discard_count)):
+            if v:
+                argv += [opt, _num(v)]
+        if title:
+            argv += ["--title", title]
+        self._run(argv, "imgtool compare")
+
 
 def _num(x):
     """Format a number for a command line without a trailing '.0'."""

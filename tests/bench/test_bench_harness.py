@@ -120,6 +120,13 @@ class HarnessTiny(unittest.TestCase):
         self.assertIn('src="convergence-tiny-box.png"', page)
         self.assertIn("tiny-box/reference-framed.png", page)
         self.assertIn("tiny-box/path-error-big.png", page)
+        # The scene's interactive comparison page (imgtool compare).
+        self.assertIn('href="compare/tiny-box/index.html"', page)
+        for name in ("index.html", "viewer.js", "data.js", "img-0.js", "img-1.js"):
+            self.assertTrue(os.path.isfile(os.path.join(self.out, "compare", "tiny-box", name)), name)
+        with open(os.path.join(self.out, "compare", "tiny-box", "data.js")) as f:
+            data = json.loads(f.read().split("=", 1)[1].rstrip().rstrip(";"))
+        self.assertEqual([i["label"] for i in data["images"]], ["reference", "path"])
         # Every image the page refers to exists.
         import re
         for src in re.findall(r'src="([^"]+)"', page):

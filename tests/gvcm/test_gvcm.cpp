@@ -6,11 +6,12 @@
 // so that the kernel's blur, which case-2 offsets do not share, stays below
 // the noise; a third test takes G-VCM Sec. 6's kernel (per-path footprint
 // radius, radiusscale 1/6, shrunk per vertex), where offsets weigh with
-// their own radii. Gradients: z = (dx(p) - (P(p+1) - P(p))) / sqrt(var) on disjoint
-// pixel pairs (gbdpt_test_util.h); S = mean z^2 < 1.8 and |Z| < 4.5 (Gaussian
-// false-positive rates < 1e-9 and 7e-6; fixed seeds). L2 and primal means vs
-// the reference: |z| < 4.5. Power: the same statistics reject gvcm's
-// gradients scaled by 1.25 (a 25% gradient bias).
+// their own radii (a fourth test, at the end, checks the case-2 budget).
+// Gradients: z = (dx(p) - (P(p+1) - P(p))) / sqrt(var) on disjoint pixel pairs
+// (gbdpt_test_util.h); S = mean z^2 < 1.8 and |Z| < 4.5 (Gaussian false-positive
+// rates < 1e-9 and 7e-6; fixed seeds). L2 and primal means vs the reference:
+// |z| < 4.5. Power: the same statistics reject gvcm's gradients scaled by 1.25
+// (a 25% gradient bias).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -94,4 +95,66 @@ TEST(GVCMUnbiased, MergeOnlyMatchesPhotonMapping) {
 
 TEST(GVCMUnbiased, FootprintKernelGradientsMatchVCM) {
     Check("Integrator \"gvcm\"", Reference("vcm", 16, 128, kFootprint), 128, kFootprint);
+}
+
+// The case-2 budget against every photon shifted (both gvcm, the same radius,
+// so the kernel's blur is common to both): radius 0.2, about two pixels'
+// footprints, so that kernels hold many photons and the budget of one shift per
+// merge vertex and offset thins most case-2 differences. Gradient z-scores of
+// one budget render against the mean gradients of 8 unthinned renders (the
+// same thresholds; power: the budget's gradients scaled by 1.25 are rejected).
+TEST(GVCMUnbiased, Case2BudgetMatchesEveryPhotonShifted) {
+    const char *const radius = " \"float radius\" [0.2]";
+    const int runs = 8, spp = 64;
+    Image sum[2], sum2[2];
+    for (int k = 0; k < runs; ++k) {
+        Image g = Render(BoxScene(std::string("Integrator \"gvcm\"") + radius), spp, 5000 + k);
+        for (int l = 0; l < 2; ++l) {
+            Image d = g.layerRGB(l == 0 ? "dx" : "dy");
+            if (k == 0) sum[l] = sum2[l] = Image::RGB(d.width(), d.height());
+            for (size_t i = 0; i < d.data().size(); ++i) {
+                sum[l].data()[i] += d.data()[i];
+                sum2[l].data()[i] += double(d.data()[i]) * d.data()[i];
+            }
+        }
+    }
+    std::string stats;
+    Image g = Render(BoxScene(std::string("Integrator \"gvcm\" \"integer case2budget\" [1]") + radius), spp, 91, "",
+                     &stats);
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(stats, m, std::regex(R"(left out by the budget (\d+))"))) << stats;
+    const long long left = std::stoll(m[1]);
+    ASSERT_TRUE(std::regex_search(stats, m, std::regex(R"(case 2 \(through z'_b\) (\d+))"))) << stats;
+    EXPECT_GT(left, std::stoll(m[1])) << "the budget left out too few case-2 shifts to be tested\n" << stats;
+    auto zstats = [&](double scale, double *meanZ2, double *Z) {
+        double s2 = 0, s1 = 0;
+        int n = 0;
+        for (int l = 0; l < 2; ++l) {
+            Image d = g.layerRGB(l == 0 ? "dx" : "dy"), v = g.layerRGB(l == 0 ? "dx_var" : "dy_var");
+            for (size_t i = 0; i < d.data().size(); ++i) {
+                const double mean = sum[l].data()[i] / runs;
+                const double varMean = std::max(0.0, sum2[l].data()[i] / runs - mean * mean) / (runs - 1);
+                const double var = v.data()[i] * scale * scale + varMean;
+                if (!(var > 1e-12)) continue;
+                const double z = (d.data()[i] * scale - mean) / std::sqrt(var);
+                s2 += z * z;
+                s1 += z;
+                ++n;
+            }
+        }
+        *meanZ2 = s2 / std::max(n, 1);
+        *Z = s1 / std::sqrt(double(std::max(n, 1)));
+        return n;
+    };
+    double meanZ2, Z;
+    const int n = zstats(1, &meanZ2, &Z);
+    ASSERT_GT(n, 300);
+    EXPECT_LT(meanZ2, 1.8) << "mean z^2 over " << n << " gradient terms";
+    EXPECT_LT(std::abs(Z), 4.5) << "summed z over " << n << " gradient terms";
+    std::printf("case2budget 1 vs every photon: %d gradient terms, mean z^2 = %.3f, Z = %.3f; %lld case-2 differences "
+                "left out\n", n, meanZ2, Z, left);
+    double bZ2, bZ;
+    zstats(1.25, &bZ2, &bZ);
+    EXPECT_TRUE(bZ2 >= 1.8 || std::abs(bZ) >= 4.5)
+        << "a 25% gradient bias is not detected (mean z^2 " << bZ2 << ", Z " << bZ << ")";
 }

@@ -27,6 +27,10 @@ ParamTable<GVCMSettings> Table() {
     t.enumeration<bool>("mode", &S::mergeOnly, "vcm", {{"vcm", false}, {"mergeonly", true}},
                         "vcm (G-VCM) | mergeonly (G-PM: merges at the first connectable camera vertex only)");
     t.append(MergeRadiusParams());
+    t.integer("case2budget", &S::case2Budget, 0,
+              "case-2 shifts (through z'_b) per merge vertex and offset: K of the n photons found, chosen by "
+              "systematic sampling, their differences weighted n/K (unbiased); 0: every photon",
+              AtLeast(0));
     return t;
 }
 
@@ -85,11 +89,10 @@ void GVCMIntegrator::runPass(PassContext &ctx) {
     ++passes_;
 }
 
-void GVCMIntegrator::regenerate(uint32_t j, Arena &arena, ShiftSubpath *L) const {
+void GVCMIntegrator::regenerate(uint32_t j, int maxLight, Arena &arena, ShiftSubpath *L) const {
     // The light pass's RNG of item j (PassContext::forEachItem).
     RNG rng(Hash(lightKey_, uint64_t(lightPassIndex_), uint64_t(j)));
     RNGSampler smp(rng);
-    const int maxLight = set_.maxDepth + 1;
     AllocSubpath(arena, maxLight, &L->v, &L->b);
     L->deltaSample = static_cast<uint8_t *>(arena.alloc(maxLight));
     L->n = scene_->lights.empty() ? 0 : GenerateLightSubpath(bctx_, smp, arena, maxLight, L->v, L->b);
@@ -106,7 +109,7 @@ void GVCMIntegrator::lightPass(PassContext &ctx) {
     std::vector<uint32_t> count(static_cast<size_t>(N), 0);
     ctx.forEachItem(N, kLightTag, [&](int64_t item, RNG &, SampleRecorder &, Worker &wk) {
         ShiftSubpath L;
-        regenerate(uint32_t(item), wk.arena, &L);  // the same RNG as forEachItem's (seed ^ tag, pass, item)
+        regenerate(uint32_t(item), set_.maxDepth + 1, wk.arena, &L);  // the same RNG as forEachItem's (seed ^ tag, pass, item)
         count[size_t(item)] =
             uint32_t(VCMLightVertices(bctx_, L.v, L.b, L.n, weights, &out[size_t(item / PassContext::kItemChunk)]));
     });
@@ -121,49 +124,127 @@ struct GVCMIntegrator::Offset {
     Float w = 1, rho = 1;
 };
 
-bool GVCMIntegrator::case2(const ShiftSubpath &L, int m, const CameraShift &sh, int u, const LightVertex &lv,
-                           const VCMCameraTerms *terms, Float etaX, Arena &arena, Offset *o) const {
+// The base's half of a case-2 offset (case2Base).
+struct GVCMIntegrator::Case2Base {
+    int m = 0, d = 0, k = 0;
+    ChainInterior in;      // the chain's interior (k > 0)
+    ManifoldChain chain;   // y_d .. y_m (k > 0)
+    Vec3 dirX;             // direction at y_d
+    Float gX = 0, pX = 0;  // G~ and y_d's directional density
+    Spectrum fcosX{1};     // prod f|cos| of the chain's Dirac vertices
+    Float probX = 1;       // prod of their lobe probabilities
+    Spectrum tX{0};        // T(x) = E(y_d -> dirX) fcosX G~
+    Counter failure = NumCounters;  // NumCounters: none
+};
+
+// E(y_d -> dir): emission (times the emitter's cosine; a point light's
+// intensity) or the BSDF times the shading cosine, and y_d's directional density.
+Spectrum GVCMIntegrator::emitFrom(const ShiftSubpath &L, int d, const Vec3 &dir, Float *pdf) const {
+    const PathVertex &yd = L.v[d];
+    const PathVertex towards = DirectionPoint(yd.p, dir);
+    if (d == 0) {
+        const Light *light = EmitterOf(bctx_, yd);
+        Float pdfPos = 0, pdfDir = 0;
+        if (light) light->pdfLe(Ray(yd.p, dir), yd.ng, &pdfPos, &pdfDir);
+        *pdf = pdfDir;
+        return EmittedRadiance(bctx_, yd, towards) * (yd.isDeltaLight() ? Float(1) : AbsDot(Vec3(yd.ng), dir));
+    }
+    *pdf = L.b[d].pdf(Vec3(yd.wo), dir, TransportMode::Importance);
+    return EvalBSDF(yd, L.b[d], towards, TransportMode::Importance) * AbsDot(Vec3(yd.ns), dir);
+}
+
+// The base's half of a case-2 offset (per photon; the four offsets share it):
+// y_d, the chain y_d .. y_m and T(x) = E(y_d -> chain) G~ prod f|cos| (gvcm.h).
+bool GVCMIntegrator::case2Base(const ShiftSubpath &L, int m, Arena &arena, Case2Base *cb) const {
     const Scene &scene = *scene_;
-    const PathVertex &zo = sh.y.v[u], &zoPrev = sh.y.v[u - 1];
-    const BSDF &bo = sh.y.b[u];
+    cb->m = m;
     // y_d: the last connectable vertex before the photon (the light origin at the latest).
     int d = m - 1;
     while (d > 0 && L.v[d].delta()) --d;
-    const PathVertex &yd = L.v[d];
-    if (d == 0 && yd.isInfiniteLight()) {
-        count(FallbackInfinite);
+    cb->d = d;
+    const PathVertex &yd = L.v[d], &ym = L.v[m];
+    auto fail = [&](Counter c) {
+        cb->failure = c;
         return false;
-    }
+    };
+    if (d == 0 && yd.isInfiniteLight()) return fail(FallbackInfinite);
     const int k = m - 1 - d;  // chain interior y_{m-1} .. y_{d+1} (ideal specular)
+    cb->k = k;
     for (int i = d + 1; i < m; ++i)
-        if (!L.deltaSample[i]) {
-            count(FallbackGlossy);
-            return false;
+        if (!L.deltaSample[i]) return fail(FallbackGlossy);
+    if (k + 2 > kMaxManifoldVertices) return fail(FallbackLong);
+    if (k == 0) {
+        // Eq. 18: y_s = y_d connectable (reconnected to z'_b per offset).
+        const Vec3 dx = ym.p - yd.p;
+        const Float d2x = dx.lengthSquared();
+        if (!(d2x > 0)) return fail(FallbackBlocked);
+        cb->dirX = dx / std::sqrt(d2x);
+        cb->gX = AbsDot(Vec3(ym.ng), cb->dirX) / d2x;
+    } else {
+        // Eqs. 19-20: the chain y_d -> y_{d+1} .. y_{m-1} -> photon (JM12), built once.
+        ChainInterior &in = cb->in;
+        for (int j = 0; j < k; ++j) {
+            const int i = d + 1 + j;
+            const PathVertex &xv = L.v[i];
+            if (!VertexInteraction(scene, xv, L.v[i - 1].p, &in.si[j])) return fail(FallbackWalk);
+            in.bsdf[j] = &L.b[i];
+            in.wo[j] = Normalize(L.v[i - 1].p - xv.p);  // towards y_d (the chain's start)
+            in.wi[j] = Normalize(L.v[i + 1].p - xv.p);  // towards the photon
+            in.transmit[j] = Transmits(in.wo[j], in.wi[j], Vec3(L.b[i].ns()));
+            in.specular[j] = true;
+            in.geomId[j] = xv.geomId;
         }
-    if (k + 2 > kMaxManifoldVertices) {
-        count(FallbackLong);
+        // A point or spot light has no surface: any fixed normal (it cancels in G / cos_0).
+        const Vec3 ngD = yd.ng.isZero() ? Normalize(L.v[d + 1].p - yd.p) : Vec3(yd.ng);
+        WalkedInterior baseEval;
+        if (!BuildChain(sctx_, EndpointSP(yd.p, ngD, yd.geomId), in, k, EndpointSP(ym.p, Vec3(ym.ng), ym.geomId),
+                        &cb->chain) ||
+            !EvaluateWalked(scene, cb->chain, ym.p, in.transmit, in.geomId, arena, TransportMode::Importance, &baseEval))
+            return fail(FallbackWalk);
+        cb->dirX = Normalize(cb->chain.v[1].sp.p - yd.p);
+        // G~: solid angle at y_d per area at the photon end (JM12's G / cos_0).
+        cb->gX = ChainSolidAnglePerArea(cb->chain);
+        cb->fcosX = baseEval.factor;
+        cb->probX = baseEval.prob;
+    }
+    if (!(cb->gX > 0)) return fail(FallbackWalk);
+    cb->tX = emitFrom(L, d, cb->dirX, &cb->pX) * cb->fcosX * cb->gX;
+    if (cb->tX.isBlack() || !(cb->pX > 0)) return fail(FallbackBlocked);
+    cb->failure = NumCounters;
+    return true;
+}
+
+bool GVCMIntegrator::case2(const ShiftSubpath &L, const Case2Base &cb, const CameraShift &sh, int u,
+                           const LightVertex &lv, const VCMCameraTerms *terms, Float etaX, Arena &arena,
+                           Offset *o) const {
+    const Scene &scene = *scene_;
+    const PathVertex &zo = sh.y.v[u], &zoPrev = sh.y.v[u - 1];
+    const BSDF &bo = sh.y.b[u];
+    const int d = cb.d, k = cb.k;
+    const PathVertex &yd = L.v[d];
+    if (cb.failure != NumCounters) {
+        if (cb.failure != FallbackInfinite && cb.failure != FallbackGlossy && cb.failure != FallbackLong)
+            count(k == 0 ? Case2Empty : Case2Chain);
+        count(cb.failure);
         return false;
     }
-    // Directions at y_d (base, offset), the photon-side cosines and G~ (solid
-    // angle at y_d per area at the photon end), the chain's Dirac factors.
-    Vec3 dirX, dirY, wiY;  // wiY: at z'_b towards the chain (or y_d)
-    Float gX, gY;
-    Spectrum fcosX(1), fcosY(1);
-    Float probX = 1, probY = 1, oPhotonY;  // oPhotonY: own density of z'_b (the offset photon)
-    Float prevGeomY;                       // |cos| / d^2 at y'_{m-1} seen from z'_b
+    // The offset's direction at y_d, its photon-side cosine and G~, the chain's Dirac factors.
+    Vec3 dirY, wiY;  // wiY: at z'_b towards the chain (or y_d)
+    Float gY;
+    Spectrum fcosY(1);
+    Float probY = 1, oPhotonY;  // oPhotonY: own density of z'_b (the offset photon)
+    Float prevGeomY;            // |cos| / d^2 at y'_{m-1} seen from z'_b
     if (k == 0) {
         count(Case2Empty);
         // Eq. 18: y_s = y_d connectable, reconnected to z'_b.
-        Vec3 dx = L.v[m].p - yd.p, dy = zo.p - yd.p;
-        const Float d2x = dx.lengthSquared(), d2y = dy.lengthSquared();
-        if (!(d2x > 0) || !(d2y > 0) || !EdgeConnectible(bctx_, yd, zo)) {
+        const Vec3 dy = zo.p - yd.p;
+        const Float d2y = dy.lengthSquared();
+        if (!(d2y > 0) || !EdgeConnectible(bctx_, yd, zo)) {
             count(FallbackBlocked);
             return false;
         }
-        dirX = dx / std::sqrt(d2x);
         dirY = dy / std::sqrt(d2y);
         wiY = -dirY;
-        gX = AbsDot(Vec3(L.v[m].ng), dirX) / d2x;
         gY = AbsDot(Vec3(zo.ng), dirY) / d2y;
         if (!(gY > 0) || !scene.unoccluded(AsInteraction(yd), AsInteraction(zo))) {
             count(FallbackBlocked);
@@ -174,55 +255,24 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, int m, const CameraShift &sh, 
         prevGeomY = ConvertDensity(1, zo, yd);  // as the base's LightVertex::prevGeom
     } else {
         count(Case2Chain);
-        // Eqs. 19-20: the chain y_d -> y_{d+1} .. y_{m-1} -> photon, walked so that
-        // its end moves to z'_b with y_d and the half-vectors fixed (JM12; the
-        // walk's rays start at y_d and end on z'_b's surface).
-        ChainInterior in;
-        for (int j = 0; j < k; ++j) {
-            const int i = d + 1 + j;
-            const PathVertex &xv = L.v[i];
-            if (!VertexInteraction(scene, xv, L.v[i - 1].p, &in.si[j])) {
-                count(FallbackWalk);
-                return false;
-            }
-            in.bsdf[j] = &L.b[i];
-            in.wo[j] = Normalize(L.v[i - 1].p - xv.p);  // towards y_d (the chain's start)
-            in.wi[j] = Normalize(L.v[i + 1].p - xv.p);  // towards the photon
-            in.transmit[j] = Transmits(in.wo[j], in.wi[j], Vec3(L.b[i].ns()));
-            in.specular[j] = true;
-            in.geomId[j] = xv.geomId;
-        }
-        // A point or spot light has no surface: any fixed normal (it cancels in G / cos_0).
-        const Vec3 ngD = yd.ng.isZero() ? Normalize(L.v[d + 1].p - yd.p) : Vec3(yd.ng);
-        const PathVertex &ym = L.v[m];
-        ManifoldChain base;
-        if (!BuildChain(sctx_, EndpointSP(yd.p, ngD, yd.geomId), in, k, EndpointSP(ym.p, Vec3(ym.ng), ym.geomId),
-                        &base)) {
-            count(FallbackWalk);
-            return false;
-        }
-        // The walk with y_d fixed, the reversibility test of Sec. 4 (the walk may
-        // find another solution), the offset interior evaluated and its classes kept.
+        // Eqs. 19-20: the base chain walked so that its end moves to z'_b with y_d
+        // and the half-vectors fixed (JM12; the walk's rays start at y_d and end on
+        // z'_b's surface), the reversibility test of Sec. 4 (the walk may find
+        // another solution), the offset interior evaluated and its classes kept.
         ManifoldWalkResult res;
-        WalkedInterior walked, baseEval;
-        const ChainShiftFailure failure = ShiftChain(sctx_, scene, base, base.front().sp,
-                                                     EndpointSP(zo.p, Vec3(zo.ng), zo.geomId), in,
-                                                     TransportMode::Importance, arena, &res, &walked);
+        WalkedInterior walked;
+        const ChainShiftFailure failure =
+            ShiftChain(sctx_, scene, cb.chain, cb.chain.front().sp, EndpointSP(zo.p, Vec3(zo.ng), zo.geomId), cb.in,
+                       TransportMode::Importance, arena, &res, &walked);
         walkStatus_[size_t(res.status)].fetch_add(1, std::memory_order_relaxed);
-        if (failure != ChainShiftFailure::None ||
-            !EvaluateWalked(scene, base, ym.p, in.transmit, in.geomId, arena, TransportMode::Importance, &baseEval)) {
+        if (failure != ChainShiftFailure::None) {
             count(FallbackWalk);
             return false;
         }
         const ManifoldChain &off = res.chain;
-        dirX = Normalize(base.v[1].sp.p - yd.p);
         dirY = Normalize(off.v[1].sp.p - yd.p);
         wiY = Normalize(off.v[k].sp.p - zo.p);
-        // G~: solid angle at y_d per area at the photon end (JM12's G / cos_0).
-        gX = ChainSolidAnglePerArea(base);
         gY = ChainSolidAnglePerArea(off);
-        fcosX = baseEval.factor;
-        probX = baseEval.prob;
         fcosY = walked.factor;
         probY = walked.prob;
         // Own density of the offset photon after a Dirac vertex: remapped to 1, as the base's.
@@ -230,37 +280,22 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, int m, const CameraShift &sh, 
         const Vec3 toS = off.v[k].sp.p - zo.p;
         prevGeomY = AbsDot(Vec3(walked.si[k - 1].n), Normalize(toS)) / toS.lengthSquared();
     }
-    if (!(gX > 0) || !(gY > 0)) {
+    if (!(gY > 0)) {
         count(FallbackWalk);
         return false;
     }
-    // E(y_d -> dir): emission (times the emitter's cosine; a point light's
-    // intensity) or the BSDF times the shading cosine, and y_d's directional density.
-    auto emit = [&](const Vec3 &dir, Float *pdf) {
-        const PathVertex towards = DirectionPoint(yd.p, dir);
-        if (d == 0) {
-            const Light *light = EmitterOf(bctx_, yd);
-            Float pdfPos = 0, pdfDir = 0;
-            if (light) light->pdfLe(Ray(yd.p, dir), yd.ng, &pdfPos, &pdfDir);
-            *pdf = pdfDir;
-            return EmittedRadiance(bctx_, yd, towards) * (yd.isDeltaLight() ? Float(1) : AbsDot(Vec3(yd.ng), dir));
-        }
-        *pdf = L.b[d].pdf(Vec3(yd.wo), dir, TransportMode::Importance);
-        return EvalBSDF(yd, L.b[d], towards, TransportMode::Importance) * AbsDot(Vec3(yd.ns), dir);
-    };
-    Float pX, pY;
-    const Spectrum eX = emit(dirX, &pX), eY = emit(dirY, &pY);
-    const Spectrum tX = eX * fcosX * gX, tY = eY * fcosY * gY;
+    Float pY;
+    const Spectrum tY = emitFrom(L, d, dirY, &pY) * fcosY * gY;
     const Spectrum fz = bo.f(Vec3(zo.wo), wiY, TransportMode::Radiance);
     // f(x')/p'(x*) = beta_L(y_m) T(x')/T(x) f(z'_b) beta'_C / eta (gvcm.h; Eqs. 18-19), eta
     // the base's kernel at z_b.
-    o->f = lv.throughput() * SafeDiv(tY, tX) * fz * zo.throughput() / etaX;
-    if (o->f.isBlack() || !(pX > 0) || !(pY > 0)) {
+    o->f = lv.throughput() * SafeDiv(tY, cb.tX) * fz * zo.throughput() / etaX;
+    if (o->f.isBlack() || !(pY > 0)) {
         count(FallbackBlocked);
         return false;
     }
     // rho: the camera shift's, times the photon's area density ratio p_omega G~ prod prob.
-    o->rho = sh.rho[u] * (pY * gY * probY) / (pX * gX * probX);
+    o->rho = sh.rho[u] * (pY * gY * probY) / (cb.pX * cb.gX * cb.probX);
     if (oPhotonY < 0) oPhotonY = pY * gY;  // empty chain: z'_b sampled from y_d
     o->w = 1;
     if (terms) {
@@ -344,12 +379,35 @@ void GVCMIntegrator::addStrategies(const CameraState &st, GradientSample *out) c
             }
             return &ty[k];
         };
+        // The photons of the kernel (Algorithm 1, line 20), in the grid's order.
+        thread_local std::vector<std::pair<uint32_t, Spectrum>> found;
+        found.clear();
         grid_.query(zu.p, std::sqrt(etaU / kernel_.piN), [&](uint32_t idx, Float) {
             const LightVertex &lv = vertices_[idx];
             if (int(lv.depth) + u - 1 > set_.maxDepth) return;
+            const Spectrum f = bu.f(Vec3(zu.wo), lv.wo, TransportMode::Radiance);
+            if (!f.isBlack()) found.emplace_back(idx, f);
+        });
+        // Case-2 budget: at most K photons of the n found are shifted through z'_b,
+        // chosen by systematic sampling (one uniform offset in [0, n/K), then steps
+        // of n/K: each photon is chosen with probability K/n) and their differences
+        // weighted n/K, an unbiased estimate of the sum over all n (the primal and
+        // case 1 keep every photon).
+        const int n = int(found.size()), K = gset_.case2Budget;
+        const bool thin = K > 0 && n > K;
+        const Float stride = thin ? Float(n) / K : 1;
+        const Float start = thin ? st.sampler->get1D() * stride : 0;
+        int nextPick = 0;  // the next chosen position: floor(start + j stride)
+        for (int i = 0; i < n; ++i) {
+            const uint32_t idx = found[size_t(i)].first;
+            const Spectrum &f = found[size_t(i)].second;
+            const LightVertex &lv = vertices_[idx];
             const Vec3 wi = lv.wo;  // towards y_{m-1}
-            const Spectrum f = bu.f(Vec3(zu.wo), wi, TransportMode::Radiance);
-            if (f.isBlack()) return;
+            bool chosen = true;
+            if (thin) {
+                chosen = nextPick < K && int(start + nextPick * stride) == i;
+                if (chosen) ++nextPick;
+            }
             ++merges;
             const Float oz = Remap(lv.pdfFwd);
             const Float cRef = VCMPrevConnectible(lv) ? 1 : 0;  // the connection of y_{m-1} and z_u
@@ -364,6 +422,7 @@ void GVCMIntegrator::addStrategies(const CameraState &st, GradientSample *out) c
             const Spectrum fx = zu.throughput() * f * lv.throughput() * (w / etaU);
             out->primal += fx * wx;
             ShiftSubpath L;
+            Case2Base cb;
             bool haveL = false, badL = false;
             for (int k = 0; k < kNumNeighbours; ++k) {
                 if (!st.inside[k]) continue;
@@ -390,20 +449,29 @@ void GVCMIntegrator::addStrategies(const CameraState &st, GradientSample *out) c
                     ok = !o.f.isBlack() && o.w > 0;
                     if (ok) count(Case1Shifted);
                     else count(FallbackBlocked);
+                } else if (!chosen) {
+                    count(Case2Skipped);
+                    continue;  // not in the budget's sample: no difference from this photon
                 } else {
                     // Case 2: the offset is a physical path through z'_b (Eqs. 18-20).
                     count(Case2);
                     if (!haveL) {
+                        // The photon's light subpath, regenerated to the photon's depth (its
+                        // prefix is the light pass's: the RNG is consumed vertex by vertex),
+                        // and the base's half of the shift, once for all offsets.
                         haveL = true;
                         const uint32_t j = uint32_t(std::upper_bound(pathStart_.begin(), pathStart_.end(), idx) -
                                                     pathStart_.begin() - 1);
-                        regenerate(j, arena, &L);
+                        regenerate(j, int(lv.depth) + 1, arena, &L);
                         count(Regenerated);
                         badL = int(lv.depth) >= L.n || Distance(L.v[lv.depth].p, lv.p) > 1e-5 * (1 + Vec3(lv.p).length());
-                        if (badL) count(FallbackMismatch);
+                        if (badL)
+                            count(FallbackMismatch);
+                        else
+                            case2Base(L, lv.depth, arena, &cb);
                     }
                     if (!badL) {
-                        ok = case2(L, lv.depth, sh, u, lv, connections_ ? offsetTerms(k) : nullptr, etaU, arena, &o) &&
+                        ok = case2(L, cb, sh, u, lv, connections_ ? offsetTerms(k) : nullptr, etaU, arena, &o) &&
                              o.w > 0;
                         if (ok) {
                             o.f *= w;
@@ -411,12 +479,14 @@ void GVCMIntegrator::addStrategies(const CameraState &st, GradientSample *out) c
                         }
                     }
                 }
+                // Eq. 23; a case-2 difference of the budget's sample times n/K.
+                const Float scale = thin && u <= sh.validUpTo && !(sh.r >= 0 && u >= sh.r) ? stride : Float(1);
                 if (ok)
-                    out->diff[k] += (o.f - fx) * CombinedWeight(wx, o.w, o.rho);  // Eq. 23
+                    out->diff[k] += (o.f - fx) * (CombinedWeight(wx, o.w, o.rho) * scale);
                 else
-                    out->diff[k] += fx * -wx;  // zero offset, the base's weight
+                    out->diff[k] += fx * (-wx * scale);  // zero offset, the base's weight
             }
-        });
+        }
         if (!connections_) break;  // G-PM: the first connectable vertex only
     }
     count(Merges, merges);
@@ -429,13 +499,13 @@ std::string GVCMIntegrator::statistics() const {
                   "gvcm: mode %s, kernel %s, initial radius %.4g (last %.4g), %d iterations, %.3g light vertices per iteration "
                   "(%zu bytes each, grid %.1f MB), %llu merges%s%s\n"
                   "  merge offsets: case 1 (shared kernel) %llu, shifted %llu; case 2 (through z'_b) %llu: "
-                  "empty chain %llu, specular chain %llu, shifted %llu; light subpaths regenerated %llu\n"
+                  "empty chain %llu, specular chain %llu, shifted %llu; left out by the budget %llu; light subpaths regenerated %llu\n"
                   "  merge fallbacks (zero offset, base weight): camera shift failed %llu, light at infinity %llu, "
                   "glossy chain %llu, long chain %llu, walk failed %llu, occluded or black %llu, regeneration mismatch %llu\n",
                   gset_.mergeOnly ? "mergeonly (G-PM)" : "vcm", KernelName(gset_).c_str(), radius1_, radius_, passes_,
                   passes_ ? double(nLightVertices_) / passes_ : 0.0, sizeof(LightVertex), grid_.bytes() / 1e6,
                   c(Merges), skipped_.empty() ? "" : "; ", skipped_.c_str(), c(Case1), c(Case1Shifted), c(Case2),
-                  c(Case2Empty), c(Case2Chain), c(Case2Shifted), c(Regenerated), c(FallbackShift),
+                  c(Case2Empty), c(Case2Chain), c(Case2Shifted), c(Case2Skipped), c(Regenerated), c(FallbackShift),
                   c(FallbackInfinite), c(FallbackGlossy), c(FallbackLong), c(FallbackWalk), c(FallbackBlocked),
                   c(FallbackMismatch));
     std::string walks = "  case-2 chain walks by status:";

@@ -82,6 +82,8 @@
 //   string kernel "fixed"            fixed | adaptive (Sec. 6, above)
 //   float kernelshrink 10            adaptive: r_j = 0.5^(kernelshrink tau) r_{j-1}
 //   string footprint "median"        median | path (Sec. 6, above)
+//   integer case2budget 0            case-2 shifts per merge vertex and offset: K of the n photons
+//                                    found, by systematic sampling, differences weighted n/K (0: all)
 #pragma once
 #include <atomic>
 #include <string>
@@ -95,6 +97,7 @@ namespace gradus {
 
 struct GVCMSettings : GBDPTSettings, MergeRadiusSettings {
     bool mergeOnly;
+    int case2Budget;  // photons shifted through z'_b per merge vertex (0: all)
 };
 
 class GVCMIntegrator : public GBDPTIntegrator {
@@ -113,13 +116,18 @@ class GVCMIntegrator : public GBDPTIntegrator {
   private:
     GVCMIntegrator(const EntityDesc &desc, const GVCMSettings &set);
     struct Offset;
+    struct Case2Base;
     void lightPass(PassContext &ctx);
-    // Light subpath j of the current pass, regenerated and classified.
-    void regenerate(uint32_t j, Arena &arena, ShiftSubpath *L) const;
-    // Case 2 offset of a merge (header comment); false: fall back.
-    // terms: the offset's camera terms at z'_u (nullptr: no connections, weight 1).
-    // etaX: the base's eta at z_u (the kernel that found the photon).
-    bool case2(const ShiftSubpath &L, int m, const CameraShift &sh, int u, const LightVertex &lv,
+    // Light subpath j of the current pass, regenerated (its first maxLight vertices) and classified.
+    void regenerate(uint32_t j, int maxLight, Arena &arena, ShiftSubpath *L) const;
+    Spectrum emitFrom(const ShiftSubpath &L, int d, const Vec3 &dir, Float *pdf) const;
+    // Case 2 (header comment): the base's half, once per photon y_m = L.v[m]
+    // (false: every offset falls back, cb->failure says why), then each
+    // offset (false: fall back). terms: the offset's camera terms at z'_u
+    // (nullptr: no connections, weight 1); etaX: the base's eta at z_u (the
+    // kernel that found the photon).
+    bool case2Base(const ShiftSubpath &L, int m, Arena &arena, Case2Base *cb) const;
+    bool case2(const ShiftSubpath &L, const Case2Base &cb, const CameraShift &sh, int u, const LightVertex &lv,
                const VCMCameraTerms *terms, Float etaX, Arena &arena, Offset *o) const;
 
     GVCMSettings gset_;
@@ -136,7 +144,7 @@ class GVCMIntegrator : public GBDPTIntegrator {
     std::string skipped_;
     // Counters (relaxed atomics; order-independent sums).
     enum Counter {
-        Merges, Case1, Case1Shifted, Case2, Case2Empty, Case2Chain, Case2Shifted, FallbackShift, FallbackInfinite,
+        Merges, Case1, Case1Shifted, Case2, Case2Skipped, Case2Empty, Case2Chain, Case2Shifted, FallbackShift, FallbackInfinite,
         FallbackGlossy, FallbackLong, FallbackWalk, FallbackBlocked, FallbackMismatch, Regenerated, NumCounters
     };
     mutable std::atomic<uint64_t> counters_[NumCounters] = {};

@@ -164,8 +164,14 @@ ComparePageSummary WriteComparePage(const std::string &dir, const std::vector<Co
     }
     json data;
     data["format"] = 1;
-    data["title"] = opts.title.empty() ? "Gradus comparison: " + jimages[0]["label"].get<std::string>()
-                                       : opts.title;
+    std::string title = opts.title;
+    if (title.empty()) {
+        title = "Gradus comparison: ";
+        for (size_t k = 1; k < jimages.size(); ++k)
+            title += jimages[k]["label"].get<std::string>() + (k + 1 < jimages.size() ? ", " : " against ");
+        title += jimages[0]["label"].get<std::string>();
+    }
+    data["title"] = title;
     data["width"] = ref.width();
     data["height"] = ref.height();
     data["exposure"] = opts.exposure;

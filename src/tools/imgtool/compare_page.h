@@ -16,7 +16,7 @@ struct ComparePageInput {
 };
 
 struct ComparePageOptions {
-    std::string title;        // "" = "Gradus comparison: <reference label>"
+    std::string title;        // "" = "Gradus comparison: A, B against REF" (labels)
     double exposure = 0;      // initial exposure (EV)
     double errorMax = 0;      // initial top of the relative-error ramp (0 = from the data)
     CompareOptions metrics;   // epsilon and trimming of the figures (layers come from the inputs)

@@ -2,7 +2,8 @@
 // run_browser_test.sh, which installs playwright-core into WORK_DIR):
 // renders three small images, writes the page, opens it from file:// and checks
 //  - no console error or page error while it loads and is used;
-//  - keyboard flipping (1-9, left/right) changes the image shown;
+//  - keyboard flipping (1-9, left/right) changes the image shown; wheel zoom
+//    and drag pan move the one view;
 //  - every pixel read back from the WebGL canvas equals the EXR's value after
 //    the same tone map, computed here from imgtool's PFM of the EXR (sRGB at
 //    three exposures; false colour and relative error within 2/255);
@@ -183,6 +184,22 @@ check('opens on the first method at the page\'s exposure', s.current === 1 && s.
   JSON.stringify(s));
 const shownPath = await comparePixels('sRGB pixels of path at +0.5 EV', 1, 'sRGB', 0.5, 1);
 const shot1 = await tab.locator('#gl').screenshot();
+
+// Wheel zoom keeps the image point under the cursor; dragging pans.
+const glBox = await tab.locator('#gl').boundingBox(), pz = (await tab.evaluate(() => window.gradusPanels()))[0];
+const mx = glBox.x + pz.x + pz.w / 2 + 40, my = glBox.y + pz.y + pz.h / 2 + 20;  // image point (W/2+10, H/2+5)
+await tab.mouse.move(mx, my);
+await tab.mouse.wheel(0, -240);
+await tab.waitForFunction(() => window.gradusState().zoom === 8);
+s = await state();
+check('the wheel zooms about the cursor', s.zoom === 8 && s.cx + 40 / 8 === W / 2 + 10 && s.cy + 20 / 8 === H / 2 + 5,
+  JSON.stringify(s));
+await tab.mouse.down();
+await tab.mouse.move(mx - 80, my - 40, { steps: 4 });
+await tab.mouse.up();
+const s2 = await state();
+check('dragging pans', s2.cx === s.cx + 10 && s2.cy === s.cy + 5 && s2.crops === 0, JSON.stringify(s2));
+await tab.evaluate(([w, h]) => window.gradusSetView(4, w / 2, h / 2), [W, H]);
 
 // Flipping with the keyboard.
 const flips = [['ArrowRight', 2], ['ArrowRight', 0], ['ArrowLeft', 2], ['1', 0], ['3', 2], ['2', 1], ['ArrowRight', 2]];

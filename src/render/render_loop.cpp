@@ -41,6 +41,10 @@ void InstallInterruptHandler() {
 }
 bool InterruptRequested() { return gInterrupts.load() > 0; }
 void ResetInterrupt() { gInterrupts = 0; }
+void RequestInterrupt() {
+    int none = 0;
+    gInterrupts.compare_exchange_strong(none, 1);  // never counts as a second signal
+}
 
 bool DebugTracing() { return tDebugTracing; }
 void DebugTrace(const char *fmt, ...) {

@@ -189,6 +189,9 @@ RenderStats RunRender(Integrator &integrator, const Scene &scene, Film &film, co
 void InstallInterruptHandler();
 bool InterruptRequested();
 void ResetInterrupt();
+// Asks the loop to stop as the first signal does (for hosts with their own
+// signal handling, e.g. the Python module polling Python's Ctrl-C).
+void RequestInterrupt();
 
 // --debugpixel output: true on the thread that runs the debug pixel's work.
 bool DebugTracing();

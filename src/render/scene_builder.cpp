@@ -508,7 +508,7 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
         throw UnsupportedError(fp.locOf("maxsampleluminance", fd.loc), "Film \"maxsampleluminance\" clamping");
     fp.checkUnused("Film \"image\"");
     if (!opts.outfileOverride.empty()) filename = opts.outfileOverride;
-    CheckWritableImagePath(filename);  // before any geometry is loaded or a sample rendered
+    if (opts.checkOutput) CheckWritableImagePath(filename);  // before any geometry is loaded or a sample rendered
     std::unique_ptr<Filter> filter = CreateFilter(desc.filter);
     try {
         job.film = std::make_unique<Film>(res, crop, std::move(filter), filename, scale);

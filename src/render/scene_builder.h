@@ -21,6 +21,7 @@ struct BuildOptions {
     bool hasCrop = false;            // --cropwindow
     Float crop[4] = {0, 1, 0, 1};
     std::string outfileOverride;     // --outfile
+    bool checkOutput = true;         // check that the output path is writable (off when no file is written)
     Point2i resolution{0, 0};        // --resolution (0: the Film's)
     bool quiet = false;
     // --param NAME=VALUE: integrator parameters from the command line (replace the scene's).

@@ -1,6 +1,5 @@
 // gradus: renders a pbrt-v3 or glTF 2.0 scene.
 #include <cerrno>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <new>
@@ -16,7 +15,7 @@
 #include "image/image.h"
 #include "parser/gltf.h"
 #include "parser/scene_desc.h"
-#include "render/scene_builder.h"
+#include "render/render_route.h"
 
 using namespace gradus;
 
@@ -209,29 +208,21 @@ int main(int argc, char **argv) {
     try {
         // The output is checked before anything is loaded (again once the Film's name is known).
         if (!bo.outfileOverride.empty()) CheckWritableImagePath(bo.outfileOverride);
-        auto t0 = std::chrono::steady_clock::now();
-        ResetInputFiles();
         if (!gltfOpts.camera.empty() && !IsGltfFile(sceneFile))
             Fail("--camera applies to glTF scenes (.gltf, .glb); pbrt scenes place glTF cameras with GltfAsset");
-        SceneDesc desc = IsGltfFile(sceneFile) ? LoadGltfScene(sceneFile, gltfOpts) : ParseFile(sceneFile);
-        RenderJob job = BuildRenderJob(desc, bo);
+        double loadSec = 0;
+        RenderJob job = LoadRenderJob(sceneFile, gltfOpts, bo, &loadSec);
         // Always said: e.g. scene parameters an --integrator override does not use.
         for (const auto &w : job.warnings) std::fprintf(stderr, "note: %s\n", w.c_str());
-        double loadSec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         if (printStats) std::fprintf(stderr, "%s", job.scene->features.describe().c_str());
-        if (ro.spp <= 0) ro.spp = job.sampler->samplesPerPixel();
-        if (ro.timeLimit > 0 && bo.sppOverride <= 0) ro.spp = 0;  // time budget alone
+        ResolveSampleCount(job, bo, &ro);
         if (ro.debug && !job.film->sampleBounds().inside(ro.debugPixel))
             throw Error("--debugpixel (" + std::to_string(ro.debugPixel.x) + ", " + std::to_string(ro.debugPixel.y) +
                         ") lies outside the sampled pixels");
         InstallInterruptHandler();
-        StatRegistry::get().reset();
-        RenderResult res = RenderJobImage(job, ro);
+        RenderResult res = RenderLoadedJob(job, ro, sceneFile, commandLine, loadSec);
         const RenderStats &rs = res.stats;
         Image &img = res.image;
-        img.metadata["scene"] = sceneFile;
-        img.metadata["command_line"] = commandLine;
-        img.metadata["scene_load_seconds"] = MetaValue::Double(loadSec);
         if (ro.debug) {
             std::fprintf(stderr, "--debugpixel: no image written\n");
             return 0;

@@ -21,7 +21,14 @@ class Error : public std::runtime_error {
   public:
     explicit Error(const std::string &msg) : std::runtime_error(msg) {}
     // Located error: what() is "file:line:col: msg".
-    Error(const FileLoc &loc, const std::string &msg) : std::runtime_error(loc.str() + ": " + msg) {}
+    Error(const FileLoc &loc, const std::string &msg)
+        : std::runtime_error(loc.str() + ": " + msg), loc_(loc), located_(true) {}
+    // The location of a located error (for callers that report it as data, e.g. the Python module).
+    const FileLoc *location() const { return located_ ? &loc_ : nullptr; }
+
+  private:
+    FileLoc loc_;
+    bool located_ = false;
 };
 
 // A known pbrt-v3 feature Gradus does not implement (still an error, exit 1).

@@ -66,6 +66,16 @@ ReconstructionOptions ReconstructionOptions::Hybrid(double alpha) {
     return o;
 }
 
+ReconstructionOptions ReconstructionOptions::Preset(const std::string &name) {
+    if (name == "hybrid") return Hybrid();
+    if (name == "l1") return L1Default();
+    if (name == "l1-reference") return L1Reference();
+    if (name == "l2") return L2Exact();
+    if (name == "l2-cg") return L2CG();
+    if (name == "weighted") return Weighted();
+    throw Error("unknown preset '" + name + "' (valid: hybrid, l1, l1-reference, l2, l2-cg, weighted)");
+}
+
 ReconstructionNorm ParseReconstructionNorm(const std::string &name) {
     if (name == "l2" || name == "L2") return ReconstructionNorm::L2;
     if (name == "l1" || name == "L1") return ReconstructionNorm::L1;

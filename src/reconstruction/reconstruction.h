@@ -92,6 +92,8 @@ struct ReconstructionOptions {
     static ReconstructionOptions Weighted();
     // L1Default's IRLS with the primal's coarse scales (sigma 8 px).
     static ReconstructionOptions Hybrid(double alpha = 0.2);
+    // By name: hybrid, l1, l1-reference, l2, l2-cg, weighted (else gradus::Error).
+    static ReconstructionOptions Preset(const std::string &name);
 };
 
 struct ReconstructionStats {

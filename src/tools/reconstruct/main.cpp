@@ -125,13 +125,7 @@ int Run(int argc, char **argv) {
         preset = ReconstructionNormName(n);
         if (n == ReconstructionNorm::L2 && opt.count("--l2-method") && opt["--l2-method"] == "cg") preset = "l2-cg";
     }
-    if (preset == "" || preset == "hybrid") o = ReconstructionOptions::Hybrid();
-    else if (preset == "l1") o = ReconstructionOptions::L1Default();
-    else if (preset == "l1-reference") o = ReconstructionOptions::L1Reference();
-    else if (preset == "l2") o = ReconstructionOptions::L2Exact();
-    else if (preset == "l2-cg") o = ReconstructionOptions::L2CG();
-    else if (preset == "weighted") o = ReconstructionOptions::Weighted();
-    else Fail("unknown preset '" + preset + "' (valid: hybrid, l1, l1-reference, l2, l2-cg, weighted)");
+    o = ReconstructionOptions::Preset(preset.empty() ? "hybrid" : preset);
     if (opt.count("--norm")) o.norm = ParseReconstructionNorm(opt["--norm"]);
     if (opt.count("--lowpass-sigma")) o.lowpassSigma = ParseDouble("--lowpass-sigma", opt["--lowpass-sigma"]);
     if (opt.count("--alpha")) {

@@ -4,6 +4,10 @@
 'use strict';
 (function () {
   const D = window.GRADUS_COMPARE;
+  if (!D) {
+    document.getElementById('status').textContent = 'data.js is missing beside index.html';
+    return;
+  }
   const W = D.width, H = D.height, N = D.images.length;
   const MODES = ['sRGB', 'false colour', 'relative error'];
   // Ramp of imgtool falsecolor (display values): black, purple, red, orange, yellow, white.
@@ -481,7 +485,7 @@
     $('crop-mode').onclick = () => { state.cropMode = !state.cropMode; updateControls(); };
     window.addEventListener('resize', redraw);
     document.addEventListener('keydown', (e) => {
-      if (e.ctrlKey || e.metaKey || e.altKey) return;
+      if (e.ctrlKey || e.metaKey || e.altKey || !state.ready) return;
       if (e.target.tagName === 'INPUT' && e.key.startsWith('Arrow')) return;  // the slider's own keys
       const k = e.key;
       if (k >= '1' && k <= '9') select(Number(k) - 1);

@@ -658,13 +658,23 @@ TEST(GBDPTShift, RouletteFactorsCancelInTheShiftRatio) {
 // endpoint lies at least 3 vertices past the reconnection r, the offset's BDPT
 // weight from the base's split parts at r + 1 and the offset's prefix sum
 // equals the full O(n) MISWeight of the offset, for every light subpath
-// length, with and without light tracing.
+// length, with and without light tracing, and with merging terms (G-VCM: a
+// constant eta, merges at every mergeable vertex in the sums).
 TEST(GBDPTShift, IncrementalOffsetWeightsEqualFullWeights) {
-    for (bool lightTracing : {true, false}) {
+    for (int config = 0; config < 3; ++config) {
+        const bool lightTracing = config != 1, merging = config == 2;
         Fixture f(lightTracing ? "Integrator \"gbdpt\" \"integer maxdepth\" [12]"
                                : "Integrator \"gbdpt\" \"integer maxdepth\" [12] \"bool lighttracing\" \"false\"");
         const SubpathShiftContext &sc = f.g->shiftContext();
         const BidirContext &bc = f.g->bidirContext();
+        StrategySet set = bc.strategies;
+        if (merging) {
+            set.merging = true;
+            set.mergeRoughOnly = true;
+            set.kernel = nullptr;
+            set.mergeFactor = 0.37;  // eta = pi r^2 N, of the order of the box's area densities
+        }
+        int mergeMatters = 0;
         std::unique_ptr<Sampler> sampler = f.job.sampler->clone();
         Arena arena;
         const int maxV = 12;
@@ -682,7 +692,7 @@ TEST(GBDPTShift, IncrementalOffsetWeightsEqualFullWeights) {
             ShiftCameraSubpath(sc, x, cs, {0, 1}, arena, &sh, &st);
             const int m = sh.r + 1;
             if (sh.r < 0 || m + 2 > sh.validUpTo) continue;
-            const Float Q = CameraPrefixSum(bc, bc.strategies, sh.y.view(), m);
+            const Float Q = CameraPrefixSum(bc, set, sh.y.view(), m);
             for (int t = m + 3; t <= sh.validUpTo + 1; ++t)
                 for (int s = 0; s <= L.n; ++s) {
                     if (s >= 1 && (!IsDiffuseVertex(sc, x.v[t - 1], &x.b[t - 1]) || x.v[t - 1].type != VertexType::Surface))
@@ -690,15 +700,20 @@ TEST(GBDPTShift, IncrementalOffsetWeightsEqualFullWeights) {
                     if (s >= 2 && !IsDiffuseVertex(sc, L.v[s - 1], &L.b[s - 1])) continue;
                     if (s == 0 && !(EmitterOf(bc, x.v[t - 1]))) continue;
                     MISSplit parts;
-                    Float wx = MISWeight(bc, bc.strategies, L.view(), x.view(), s, t, nullptr, m, &parts);
-                    Float wy = MISWeight(bc, L.view(), sh.y.view(), s, t, nullptr);
+                    Float wx = MISWeight(bc, set, L.view(), x.view(), s, t, nullptr, m, &parts);
+                    Float wy = MISWeight(bc, set, L.view(), sh.y.view(), s, t, nullptr);
                     ASSERT_TRUE(parts.valid);
                     EXPECT_NEAR(parts.weight(Q) / wy, 1.0, 1e-9) << "s " << s << " t " << t << " r " << sh.r;
-                    EXPECT_NEAR(wx, MISWeight(bc, L.view(), x.view(), s, t, nullptr), 1e-15);
+                    EXPECT_NEAR(wx, MISWeight(bc, set, L.view(), x.view(), s, t, nullptr), 1e-15);
+                    if (merging && std::abs(wy / MISWeight(bc, bc.strategies, L.view(), sh.y.view(), s, t, nullptr) - 1) > 1e-3)
+                        ++mergeMatters;
                     ++compared;
                 }
         }
-        EXPECT_GT(compared, 300) << "light tracing " << lightTracing;
-        std::printf("light tracing %d: %d offset weights compared\n", int(lightTracing), compared);
+        EXPECT_GT(compared, 300) << "light tracing " << lightTracing << ", merging " << merging;
+        // The merge terms change the weights being compared (else merging would go untested).
+        if (merging) EXPECT_GT(mergeMatters, compared / 4);
+        std::printf("light tracing %d, merging %d: %d offset weights compared (%d changed by merging)\n",
+                    int(lightTracing), int(merging), compared, mergeMatters);
     }
 }

@@ -571,7 +571,7 @@ Float MISWeight(const BidirContext &ctx, const StrategySet &set, SubpathView lig
     if (parts) *parts = MISSplit();
     if (t == 1 && !set.lightTracing) return 0;  // not in play
     if (s + t == 2) return 1;
-    GRADUS_CHECK(!parts || (!set.merging && split >= 1 && split + 2 <= t - 1));
+    GRADUS_CHECK(!parts || (SplitSupported(set) && split >= 1 && split + 2 <= t - 1));
     Float ptRev;
     Float w = 1 / (1 + OtherStrategies(ctx, set, light, camera, s, t, sampled, false, &ptRev, split, parts));
     if (parts) parts->valid = true;
@@ -579,18 +579,24 @@ Float MISWeight(const BidirContext &ctx, const StrategySet &set, SubpathView lig
 }
 
 Float CameraPrefixSum(const BidirContext &ctx, const StrategySet &set, SubpathView camera, int split) {
-    GRADUS_CHECK(!set.merging && split >= 1 && split < camera.n);
+    GRADUS_CHECK(SplitSupported(set) && split >= 1 && split < camera.n);
     // The camera loop of OtherStrategies over i = split .. 1 with ri starting
     // at 1: Q = sum_i allowed_i prod_{j=i}^{split} rho_j, rho_j = pdfRev_j /
-    // pdfFwd_j (Veach 1997 Eq. 10.9; Dirac densities remapped to 1). Stored
+    // pdfFwd_j (Veach 1997 Eq. 10.9; Dirac densities remapped to 1), and with
+    // merging the merge at each mergeable C[i], eta pdfRev_i prod_{j=i+1}^{split}
+    // rho_j (G-VCM Eq. 12; VCM's recursive camera sum, Georgiev et al. 2012,
+    // for a constant eta: the strategies of t >= split + 3 have n_s = 1). Stored
     // pdfRev are exact here: vertices below split + 1 are never a connection's
     // endpoint or its predecessor for the strategies MISSplit serves.
     const bool power = ctx.heuristic == MISHeuristic::Power;
     auto mis = [&](Float r) { return power ? r * r : r; };
     auto remap = [](Float f) { return f != 0 ? f : Float(1); };
+    const Float eta = !set.merging ? 0 : set.kernel ? set.kernel->piN * set.kernel->r2 : set.mergeFactor;
     const PathVertex *c = camera.v;
     Float ri = 1, sum = 0;
     for (int i = split; i > 0; --i) {
+        if (eta > 0 && MergeableIn(set, c[i], camera.bsdf ? &camera.bsdf[i] : nullptr))
+            sum += mis(eta * remap(c[i].pdfRev) * ri);
         ri *= remap(c[i].pdfRev) / remap(c[i].pdfFwd);
         if (i == 1 && !set.lightTracing) continue;  // (s + t - 1, 1) not in play
         if (i == 1 && c[1].pdfFwd == 0 && c[0].type == VertexType::Camera) continue;  // filter margin

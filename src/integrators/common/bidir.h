@@ -232,7 +232,7 @@ inline Float MISWeight(const BidirContext &ctx, SubpathView light, SubpathView c
 // Incremental weights of camera subpaths that differ only below a vertex
 // (G-BDPT's offsets share the base's vertices from the reconnection on).
 // With rho_j = pdfRev_j / pdfFwd_j, MISWeight's camera terms of strategy (s, t)
-// split at m (m + 2 <= t - 1, no merging) into those with endpoints above m,
+// split at m (m + 2 <= t - 1; with merging, SplitSupported) into those with endpoints above m,
 // which involve only vertices m + 1 .. t - 1 and the light subpath, and
 // prod_{j=m+1}^{t-1} rho_j times CameraPrefixSum(camera, m):
 //   w_st = 1 / (1 + shared + product * CameraPrefixSum(m))   (Veach Eq. 10.9).
@@ -248,6 +248,9 @@ struct MISSplit {
 };
 Float MISWeight(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s, int t,
                 const PathVertex *sampled, int split, MISSplit *parts);
+// With merging, the split holds for a kernel whose eta is the same at every
+// vertex (merge_kernel.h): the merge terms at C[1..m] join the prefix sum.
+inline bool SplitSupported(const StrategySet &set) { return !set.merging || !set.kernel || !set.kernel->varies(); }
 Float CameraPrefixSum(const BidirContext &ctx, const StrategySet &set, SubpathView camera, int split);
 
 // True when strategy (s, t) of the full path could produce it: both endpoints

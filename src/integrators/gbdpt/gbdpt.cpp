@@ -165,8 +165,9 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
     int rShared = -1;
     for (int k = 0; k < kNumNeighbours; ++k)
         if (inside[k] && shifts[k].r >= 0) rShared = shifts[k].r;
-    // (Not with merging terms in the sums: MISSplit leaves them out.)
-    const int misSplit = rShared >= 0 && !bctx_.strategies.merging ? rShared + 1 : -1;
+    // With merging (G-VCM) the prefix sum takes the merges at z'_1 .. z'_{r+1}
+    // too, for a kernel with one eta at every vertex (SplitSupported).
+    const int misSplit = rShared >= 0 && SplitSupported(bctx_.strategies) ? rShared + 1 : -1;
     Float prefixY[kNumNeighbours];
     bool havePrefix[kNumNeighbours] = {};
 

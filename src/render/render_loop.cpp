@@ -3,13 +3,16 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <csignal>
 #include <cstdarg>
 #include <cstdio>
+#include <mutex>
 
 #include "integrators/integrator.h"
 
@@ -128,18 +131,95 @@ bool PassContext::interrupted() const { return pass_ > 0 && !opts_.wholePasses &
 
 void PassContext::addNonFinite(uint64_t n) { shared_.nonFinite += n; }
 
+namespace {
+// Runs work(i) for i in [0, n) on the loop's threads, started in increasing
+// order, and merges each result into the film in index order as soon as it and
+// all before it are done (so the film does not depend on the thread count).
+// At most `window` results are started and not yet merged: a thread that would
+// start one more waits for the earliest to finish, so memory is bounded by the
+// window, not by n.
+class OrderedMerge {
+  public:
+    using Work = std::function<std::unique_ptr<FilmTile>(int64_t)>;  // null: nothing to merge
+    OrderedMerge(Film &film, int64_t n, int64_t window)
+        : film_(film), n_(n), window_(std::max<int64_t>(1, window)), slot_(size_t(window_)), ready_(size_t(window_)) {}
+
+    void run(const Work &work) {
+        const int threads = int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+        const int lanes = int(std::max<int64_t>(1, std::min<int64_t>(n_, std::max(1, threads))));
+        tbb::parallel_for(0, lanes, [&](int) { lane(work); }, tbb::simple_partitioner());
+        GRADUS_CHECK(merged_ == n_);
+    }
+
+  private:
+    void lane(const Work &work) {
+        for (;;) {
+            int64_t i;
+            {
+                std::unique_lock<std::mutex> lk(m_);
+                canStart_.wait(lk, [&] { return claimed_ >= n_ || claimed_ < merged_ + window_; });
+                if (claimed_ >= n_) return;
+                i = claimed_++;
+            }
+            std::unique_ptr<FilmTile> t;
+            // Isolated: a nested parallel wait inside work must not pick up another lane (which could wait on i).
+            tbb::this_task_arena::isolate([&] { t = work(i); });
+            {
+                std::lock_guard<std::mutex> lk(m_);
+                slot_[size_t(i % window_)] = std::move(t);
+                ready_[size_t(i % window_)] = 1;
+            }
+            mergeReady();
+        }
+    }
+    // Merges the ready results from merged_ on; one thread merges at a time (the
+    // others go on rendering), and re-checks after each merge, so none is left.
+    void mergeReady() {
+        for (;;) {
+            std::unique_ptr<FilmTile> t;
+            {
+                std::lock_guard<std::mutex> lk(m_);
+                const size_t k = size_t(merged_ % window_);
+                if (merging_ || merged_ >= n_ || !ready_[k]) return;
+                merging_ = true;
+                t = std::move(slot_[k]);
+                ready_[k] = 0;
+            }
+            if (t) film_.mergeTile(*t);
+            t.reset();
+            {
+                std::lock_guard<std::mutex> lk(m_);
+                ++merged_;
+                merging_ = false;
+            }
+            canStart_.notify_all();
+        }
+    }
+
+    Film &film_;
+    const int64_t n_, window_;
+    std::mutex m_;
+    std::condition_variable canStart_;
+    int64_t claimed_ = 0, merged_ = 0;
+    bool merging_ = false;
+    std::vector<std::unique_ptr<FilmTile>> slot_;  // result i at i % window
+    std::vector<char> ready_;
+};
+}  // namespace
+
+int64_t PassContext::mergeWindow() const {
+    const int threads = int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+    return std::max<int64_t>(kMergeWindow, 8 * int64_t(threads));
+}
+
 void PassContext::forEachTile(const TileFn &fn) {
-    const int n = tiles_.count();
-    std::vector<std::unique_ptr<FilmTile>> out(n);
-    tbb::parallel_for(0, n, [&](int t) {
-        if (interrupted()) return;
-        Bounds2i tb = tiles_.tile(t);
+    OrderedMerge(film_, tiles_.count(), mergeWindow()).run([&](int64_t t) -> std::unique_ptr<FilmTile> {
+        if (interrupted()) return nullptr;
+        Bounds2i tb = tiles_.tile(int(t));
         auto tile = film_.makeTile(tb);
-        fn(t, tb, *tile, worker());
-        out[t] = std::move(tile);
+        fn(int(t), tb, *tile, worker());
+        return tile;
     });
-    for (auto &t : out)
-        if (t) film_.mergeTile(*t);
 }
 
 void PassContext::forEachPixelSample(const SampleEstimator &est) {
@@ -182,11 +262,10 @@ void PassContext::forEachPixelSample(const SampleEstimator &est) {
 }
 
 void PassContext::forEachItem(int64_t n, uint64_t tag, const ItemFn &fn) {
-    const int64_t chunks = (n + PassContext::kItemChunk - 1) / PassContext::kItemChunk;
-    std::vector<std::unique_ptr<FilmTile>> out(size_t(std::max<int64_t>(0, chunks)));
+    const int64_t chunks = std::max<int64_t>(0, (n + PassContext::kItemChunk - 1) / PassContext::kItemChunk);
     const uint64_t key = seed() ^ tag;
-    tbb::parallel_for(int64_t(0), chunks, [&](int64_t c) {
-        if (interrupted()) return;
+    OrderedMerge(film_, chunks, mergeWindow()).run([&](int64_t c) -> std::unique_ptr<FilmTile> {
+        if (interrupted()) return nullptr;
         auto tile = film_.makeSplatTile();
         Worker &w = worker();
         uint64_t bad = 0;
@@ -198,10 +277,8 @@ void PassContext::forEachItem(int64_t n, uint64_t tag, const ItemFn &fn) {
             w.arena.reset();
         }
         addNonFinite(bad);
-        out[size_t(c)] = std::move(tile);
+        return tile;
     });
-    for (auto &t : out)
-        if (t) film_.mergeTile(*t);
 }
 
 void PassContext::parallelFor(int64_t n, int64_t grain, const RangeFn &fn) {

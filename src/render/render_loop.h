@@ -8,8 +8,9 @@
 //   - per-item work inside a pass (forEachItem: n items such as light
 //     subpaths or chains, an RNG keyed by (seed, pass, item)), per-tile work
 //     (forEachTile) and plain parallel loops (parallelFor).
-// Film output goes through FilmTiles merged in tile / item-chunk order, so
-// images do not depend on the thread count.
+// Film output goes through FilmTiles merged in tile / item-chunk order as they
+// finish (at most a window of them waits for an earlier, slower one), so images
+// do not depend on the thread count and memory does not grow with the image.
 #pragma once
 #include <cstdint>
 #include <functional>
@@ -144,13 +145,18 @@ class PassContext {
     // [firstSample, firstSample + sampleCount) (only the debug pixel when debugging).
     void forEachPixelSample(const SampleEstimator &est);
     // Per-tile work over tiles(): fn(tile index, tile pixels, film tile, worker);
-    // tiles are merged in index order.
+    // tiles start in index order and are merged in index order as they finish:
+    // at most mergeWindow() of them are started and not yet merged (a thread
+    // waits rather than start one more).
+    static constexpr int64_t kMergeWindow = 64;
+    int64_t mergeWindow() const;  // kMergeWindow, or 8 per thread when larger
     using TileFn = std::function<void(int, const Bounds2i &, FilmTile &, Worker &)>;
     void forEachTile(const TileFn &fn);
     // Per-item work: fn(item, rng, recorder, worker) for items [0, n). The RNG
     // is keyed by (seed, tag, pass, item); the recorder's splats go to the
     // film, merged in item order (chunks of kItemChunk items; the items of one
-    // chunk run in order on one thread, so per-chunk output needs no locking).
+    // chunk run in order on one thread, so per-chunk output needs no locking;
+    // chunks are merged as they finish, with the tiles' window).
     // When interrupted(), forEachTile and forEachItem skip the tiles / chunks
     // not started yet.
     static constexpr int64_t kItemChunk = 256;

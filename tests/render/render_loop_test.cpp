@@ -225,3 +225,55 @@ TEST(RenderLoop, InterruptRunsTheFirstPassWhole) {
         EXPECT_EQ(it.calls, it.items);
     }
 }
+
+// Tiles and item chunks are merged as they finish: while the first one is
+// slow, the others start only up to the merge window (so memory is bounded by
+// the window, not by the image), and every one of them is merged.
+TEST(RenderLoop, MergeWindowBoundsWorkAheadOfASlowTile) {
+    RenderJob job = Job();
+    struct Slow : Integrator {
+        std::string name() const override { return "slow"; }
+        void runPass(PassContext &ctx) override {
+            window = ctx.mergeWindow();
+            tiles = ctx.tiles().count();
+            std::atomic<bool> firstDone{false};
+            ctx.forEachTile([&](int t, const Bounds2i &tb, FilmTile &tile, Worker &) {
+                if (!firstDone) aheadTiles = std::max<int64_t>(aheadTiles, t);
+                if (t == 0) {
+                    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+                    firstDone = true;
+                }
+                tile.addSample(Point2(tb.pMin.x + 0.5, tb.pMin.y + 0.5), Spectrum(1));
+            });
+            firstDone = false;
+            chunks = (items + PassContext::kItemChunk - 1) / PassContext::kItemChunk;
+            ctx.forEachItem(items, kTag, [&](int64_t i, RNG &, SampleRecorder &rec, Worker &) {
+                const int64_t c = i / PassContext::kItemChunk;
+                if (!firstDone) aheadChunks = std::max<int64_t>(aheadChunks, c);
+                if (i == PassContext::kItemChunk - 1) {
+                    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+                    firstDone = true;
+                }
+                rec.splat(Point2(0.5, 0.5), Spectrum(1));
+            });
+        }
+        const int64_t items = 100 * PassContext::kItemChunk;
+        int64_t window = 0, tiles = 0, chunks = 0;
+        std::atomic<int64_t> aheadTiles{0}, aheadChunks{0};
+    } slow;
+    RenderOptions ro;
+    ro.spp = 1;
+    ro.nthreads = 2;
+    ro.quiet = true;
+    ro.tileSize = 1;  // one tile per pixel: more tiles than the window
+    RunRender(slow, *job.scene, *job.film, *job.sampler, ro);
+    ASSERT_GT(slow.tiles, slow.window);
+    ASSERT_GT(slow.chunks, slow.window);
+    EXPECT_LT(slow.aheadTiles.load(), slow.window);
+    EXPECT_LT(slow.aheadChunks.load(), slow.window);
+    // Every tile's sample and every splat reached the film.
+    Image img = job.film->mainImage();
+    for (int y = 0; y < img.height(); ++y)
+        for (int x = 0; x < img.width(); ++x)
+            ASSERT_EQ(img.at(x, y, 0), x == 0 && y == 0 ? 1 + slow.items : 1) << x << ", " << y;
+}

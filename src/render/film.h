@@ -46,6 +46,11 @@ class Film {
     int addLayer(const std::string &name, LayerUse use = LayerUse::Both);
     int numLayers() const { return int(layerNames_.size()); }
     const std::string &layerName(int i) const { return layerNames_[i]; }
+    // Whether integrators keep per-pixel squared values for variance layers
+    // (gradus --variance; gradient integrators: 240 bytes per pixel). Set before
+    // Integrator::preprocess adds the layers.
+    void setVarianceLayers(bool on) { variance_ = on; }
+    bool varianceLayers() const { return variance_; }
 
     std::unique_ptr<FilmTile> makeTile(const Bounds2i &samplePixels) const;
     // A tile that holds only light-tracing splats (work items without a pixel).
@@ -91,6 +96,7 @@ class Film {
     std::vector<std::vector<Spectrum>> layers_;
     std::vector<std::vector<Spectrum>> layerSplats_;
     double splatSpp_ = 0;
+    bool variance_ = false;
     float toOutput(double v) const;
     static constexpr double kBaseBytesPerPixel = 2 * sizeof(Spectrum) + 2 * sizeof(double);
     static constexpr double kLayerBytesPerPixel = 2 * sizeof(Spectrum);  // an upper bound (LayerUse::Both)

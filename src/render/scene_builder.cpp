@@ -549,6 +549,9 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
             }
     }
     idesc.params.checkUnused("Integrator \"" + idesc.type + "\"");
+    // Variance layers: --variance, or a gradient integrator's weighted reconstruction (which reads them).
+    const Param *recon = idesc.params.find("reconstruction");
+    job.film->setVarianceLayers(opts.variance || (recon && recon->strings.size() == 1 && recon->strings[0] == "weighted"));
     // An integrator with its own sample count (mlt's mutationsperpixel, vcm's
     // numiterations) keeps it unless --spp is given, carried by a "random" sampler
     // (a stratified one could round it; mlt draws no numbers from it, and pbrt-v3's
@@ -586,6 +589,7 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
     m["cropwindow"] = std::to_string(crop[0]) + " " + std::to_string(crop[1]) + " " + std::to_string(crop[2]) +
                       " " + std::to_string(crop[3]);
     m["quick"] = MetaValue::Int(opts.quick ? 1 : 0);
+    m["variance_layers"] = MetaValue::Int(job.film->varianceLayers() ? 1 : 0);
     InputFilesSummary in = InputFiles();
     m["scene_files"] = MetaValue::Int(in.files);
     m["scene_bytes"] = MetaValue::Int(int64_t(in.bytes));
@@ -605,6 +609,7 @@ std::string RenderIdentity(const RenderJob &job, const RenderOptions &opts) {
     id += "integrator: " + job.integrator->name() + "\n";
     id += "spp: " + std::to_string(opts.spp) + " (" + std::to_string(opts.sppPerPass) + " per pass)\n";
     id += "seed: " + std::to_string(job.sampler->seed()) + "\n";
+    if (job.film->varianceLayers()) id += "variance layers: yes\n";  // (absent in older checkpoints)
     return id;
 }
 

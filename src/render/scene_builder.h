@@ -24,6 +24,9 @@ struct BuildOptions {
     bool checkOutput = true;         // check that the output path is writable (off when no file is written)
     Point2i resolution{0, 0};        // --resolution (0: the Film's)
     bool quiet = false;
+    // --variance: gradient integrators keep squared values and write primal_var,
+    // dx_var, dy_var (also on with "reconstruction" "weighted", which reads them).
+    bool variance = false;
     // --param NAME=VALUE: integrator parameters from the command line (replace the scene's).
     std::vector<std::string> paramOverrides;
 };

@@ -51,8 +51,11 @@ inline std::string ClosedBoxWallsAndSphere() {
     return s;
 }
 
-inline RenderJob MakeTestJob(const SceneDesc &desc, int spp, uint64_t seed, const std::string &integrator = "") {
+// variance: gradient integrators keep their variance layers (gradus --variance).
+inline RenderJob MakeTestJob(const SceneDesc &desc, int spp, uint64_t seed, const std::string &integrator = "",
+                             bool variance = false) {
     BuildOptions bo;
+    bo.variance = variance;
     bo.sppOverride = spp;
     bo.seed = seed;
     bo.integratorOverride = integrator;
@@ -77,8 +80,8 @@ inline TestRender RenderTestJob(RenderJob job, int spp, uint64_t seed, int nthre
 }
 
 inline TestRender RenderTestDesc(const SceneDesc &desc, int spp, uint64_t seed, int nthreads = 0,
-                                 const std::string &integrator = "") {
-    return RenderTestJob(MakeTestJob(desc, spp, seed, integrator), spp, seed, nthreads);
+                                 const std::string &integrator = "", bool variance = false) {
+    return RenderTestJob(MakeTestJob(desc, spp, seed, integrator, variance), spp, seed, nthreads);
 }
 
 // Mean luminance of a layer ("" = main image) over [x0,x1) x [y0,y1).

@@ -10,8 +10,9 @@
 
 namespace gradus::gbdpttest {
 
+// With variance layers (the tests compare gradients against them).
 inline RenderJob MakeJob(const std::string &text, int spp, uint64_t seed, const std::string &integrator = "") {
-    return test::MakeTestJob(ParseString(text, "gbdpt_test.pbrt", "."), spp, seed, integrator);
+    return test::MakeTestJob(ParseString(text, "gbdpt_test.pbrt", "."), spp, seed, integrator, true);
 }
 
 inline Image Render(const std::string &text, int spp, uint64_t seed, const std::string &integrator = "",

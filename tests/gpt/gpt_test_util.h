@@ -11,7 +11,8 @@ namespace gradus::gpttest {
 
 inline Image Render(const std::string &text, int spp, uint64_t seed, const std::string &integrator = "",
                     std::string *statistics = nullptr) {
-    test::TestRender r = test::RenderTestDesc(ParseString(text, "gpt_test.pbrt", "."), spp, seed, 0, integrator);
+    test::TestRender r =  // with variance layers (the tests compare gradients against them)
+        test::RenderTestDesc(ParseString(text, "gpt_test.pbrt", "."), spp, seed, 0, integrator, true);
     if (statistics) *statistics = r.statistics;
     return std::move(r.image);
 }

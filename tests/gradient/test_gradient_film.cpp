@@ -5,6 +5,8 @@
 // per-pixel part of the same images.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "integrators/gradient/gradient_film.h"
 
 namespace gradus {
@@ -15,9 +17,11 @@ struct BoxFilter : Filter {
     Float evaluate(Point2) const override { return 1; }
 };
 
-std::unique_ptr<Film> MakeFilm(int w, int h) {
+std::unique_ptr<Film> MakeFilm(int w, int h, bool variance = true) {
     const Float crop[4] = {0, 1, 0, 1};
-    return std::make_unique<Film>(Point2i{w, h}, crop, std::make_unique<BoxFilter>(), "unused.exr", 1);
+    auto film = std::make_unique<Film>(Point2i{w, h}, crop, std::make_unique<BoxFilter>(), "unused.exr", 1);
+    film->setVarianceLayers(variance);
+    return film;
 }
 
 float At(const std::vector<float> &v, int w, int x, int y) { return v[(size_t(y) * w + x) * 3]; }
@@ -87,6 +91,49 @@ TEST(GradientFilm, LightTracingSplatsAddToPixelSamples) {
     // Camera samples: mean 3 (variance 0); splats: 2 / 2 = 1 (variance 2 / 2 / 2).
     EXPECT_FLOAT_EQ(At(g.primal, w, 1, 0), 4);
     EXPECT_FLOAT_EQ(At(g.primalVar, w, 1, 0), 0.5);
+}
+
+// Without variances (the default) the film holds no squares and the images
+// have no variance arrays; the values are those of a film with variances.
+TEST(GradientFilm, NoSquaresWithoutVariance) {
+    const int w = 3, h = 2, spp = 2;
+    GradientImages g[2];
+    int layers[2];
+    for (int v = 0; v < 2; ++v) {
+        std::unique_ptr<Film> film = MakeFilm(w, h, v == 1);
+        GradientFilm gf;
+        gf.init(*film, false, true);
+        layers[v] = film->numLayers();
+        std::unique_ptr<FilmTile> tile = film->makeTile({{0, 0}, {w, h}});
+        for (int s = 0; s < spp; ++s) {
+            SampleRecorder rec(*tile, {1, 0}, Point2(1.5, 0.5));
+            tile->addCount({1, 0}, 1);
+            GradientSample cam;
+            cam.primal = Spectrum(3 + s);
+            cam.diff[0] = Spectrum(0.25 * s);
+            cam.active[0] = true;
+            gf.record(rec, cam);
+            const double d[kNumNeighbours] = {1, 0.5, 0, 0};
+            const bool on[kNumNeighbours] = {true, true, false, false};
+            gf.splatLightTracing(rec, Splat({1, 0}, 1 + s, d, on), 1);
+        }
+        film->mergeTile(*tile);
+        film->setSplatSamples(spp);
+        g[v] = gf.images(*film, spp);
+    }
+    EXPECT_EQ(layers[0], 10);  // values of the primal and 4 differences, per-sample and splats
+    EXPECT_EQ(layers[1], 20);
+    EXPECT_FALSE(g[0].hasVariance());
+    EXPECT_TRUE(g[1].hasVariance());
+    EXPECT_EQ(g[0].primal, g[1].primal);
+    EXPECT_EQ(g[0].dx, g[1].dx);
+    EXPECT_EQ(g[0].dy, g[1].dy);
+    Image out;
+    EXPECT_THROW(WriteGradientOutput(g[0], ReconstructionNorm::Weighted, 0.2, &out), Error);
+    WriteGradientOutput(g[0], ReconstructionNorm::L1, 0.2, &out);
+    const std::vector<std::string> names = out.layers();
+    EXPECT_NE(std::find(names.begin(), names.end(), "primal"), names.end());
+    EXPECT_EQ(std::find(names.begin(), names.end(), "primal_var"), names.end());
 }
 
 }  // namespace

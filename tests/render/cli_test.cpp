@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -42,6 +43,38 @@ TEST_F(CliTest, RendersAndWritesMetadata) {
     EXPECT_EQ(img.metadata["integrator"], "path");
     // The sphere's centre is lit head-on: non-zero.
     EXPECT_GT(img.at(8, 8, 0), 0.0f);
+}
+
+// Variance layers only with --variance (or a weighted reconstruction, which
+// reads them); the other layers do not change; a checkpoint of one kind is not
+// resumed as the other.
+TEST_F(CliTest, VarianceLayersOnlyWhenAskedFor) {
+    write("tiny.pbrt", kTiny);
+    auto render = [&](const std::string &args, const std::string &out) {
+        RunResult r = run("tiny.pbrt --integrator gpt --spp 2 --seed 3 --quiet --outfile " + out + " " + args);
+        EXPECT_EQ(r.status, 0) << r.err;
+        return gradus::ReadImage((dir_ / out).string());
+    };
+    auto has = [](const gradus::Image &img, const char *layer) {
+        const std::vector<std::string> l = img.layers();
+        return std::find(l.begin(), l.end(), layer) != l.end();
+    };
+    gradus::Image plain = render("", "plain.exr"), var = render("--variance", "var.exr");
+    gradus::Image weighted = render("--param reconstruction=weighted", "weighted.exr");
+    for (const char *l : {"primal_var", "dx_var", "dy_var"}) {
+        EXPECT_FALSE(has(plain, l)) << l;
+        EXPECT_TRUE(has(var, l)) << l;
+        EXPECT_TRUE(has(weighted, l)) << l;
+    }
+    EXPECT_EQ(plain.metadata["variance_layers"], "0");
+    EXPECT_EQ(var.metadata["variance_layers"], "1");
+    for (const char *l : {"", "primal", "dx", "dy", "reconstructed_l1", "reconstructed_l2"})
+        EXPECT_EQ(plain.layerRGB(l).data(), var.layerRGB(l).data()) << l;
+    RunResult c = run("tiny.pbrt --integrator gpt --spp 2 --seed 3 --quiet --passes 0:1 --checkpoint part.ckpt");
+    ASSERT_EQ(c.status, 0) << c.err;
+    RunResult r = run("tiny.pbrt --integrator gpt --spp 2 --seed 3 --quiet --variance --resume part.ckpt");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("variance layers"), std::string::npos) << r.err;
 }
 
 TEST_F(CliTest, OutfileAndCropWindow) {

@@ -34,12 +34,16 @@ void GradientFilm::init(Film &film, bool useFilmFilter, bool lightTracing, bool 
     static const char *names[NumLayers] = {"gd.primal", "gd.primal2", "gd.dxf", "gd.dxf2", "gd.dxb",
                                            "gd.dxb2",   "gd.dyf",     "gd.dyf2", "gd.dyb", "gd.dyb2"};
     samples_ = samples;
-    // Sample layers hold no splat storage and splat layers no sample storage (24 B per pixel each).
-    for (int i = 0; i < NumLayers; ++i) layer_[i] = samples ? film.addLayer(names[i], LayerUse::Samples) : -1;
+    variance_ = film.varianceLayers();
+    // Sample layers hold no splat storage and splat layers no sample storage (24 B per pixel each);
+    // the squares only with variances.
+    auto wanted = [&](int i) { return variance_ || !IsSquare(i); };
+    for (int i = 0; i < NumLayers; ++i)
+        layer_[i] = samples && wanted(i) ? film.addLayer(names[i], LayerUse::Samples) : -1;
     lightTracing_ = lightTracing;
-    if (lightTracing)
-        for (int i = 0; i < NumLayers; ++i)
-            splatLayer_[i] = film.addLayer(std::string("gd.lt.") + (names[i] + 3), LayerUse::Splats);
+    for (int i = 0; i < NumLayers; ++i)
+        splatLayer_[i] = lightTracing && wanted(i) ? film.addLayer(std::string("gd.lt.") + (names[i] + 3), LayerUse::Splats)
+                                                   : -1;
 }
 
 namespace {
@@ -95,7 +99,7 @@ void GradientFilm::record(SampleRecorder &rec, const GradientSample &s) const {
     auto put = [&](int layer, int layerSq, const Spectrum &v, Point2i offset) {
         if (!fp) {
             rec.addLayer(layer_[layer], v, offset);
-            rec.addLayer(layer_[layerSq], v * v, offset);
+            if (variance_) rec.addLayer(layer_[layerSq], v * v, offset);
             return;
         }
         if (v.isBlack()) return;  // adds nothing to either layer
@@ -103,7 +107,7 @@ void GradientFilm::record(SampleRecorder &rec, const GradientSample &s) const {
             Spectrum hv = v * fp->weight(i);
             Point2i at{fp->offset(i).x + offset.x, fp->offset(i).y + offset.y};
             rec.addLayer(layer_[layer], hv, at);
-            rec.addLayer(layer_[layerSq], hv * hv, at);
+            if (variance_) rec.addLayer(layer_[layerSq], hv * hv, at);
         }
     };
     put(Primal, PrimalSq, s.primal, {0, 0});
@@ -122,7 +126,7 @@ void GradientFilm::splatLightTracing(SampleRecorder &rec, const GradientSplat &s
     const GradientSample &g = s.value;
     if (!g.primal.isFinite()) return;
     auto put = [&](Point2i px, int layer, const Spectrum &v) {
-        if (!bounds_.inside(px)) return;
+        if (!bounds_.inside(px) || splatLayer_[layer] < 0) return;  // < 0: a square without variances
         rec.splat(Point2(px.x + 0.5, px.y + 0.5), v, splatLayer_[layer]);
     };
     Spectrum v = g.primal * scale;
@@ -157,21 +161,26 @@ GradientImages GradientFilm::images(const Film &film, double spp) const {
     g.channels = 3;
     if (!samples_) {
         const size_t n = size_t(g.width) * g.height * 3;
-        for (auto *v : {&g.primal, &g.dx, &g.dy, &g.primalVar, &g.dxVar, &g.dyVar}) v->assign(n, 0.f);
+        for (auto *v : {&g.primal, &g.dx, &g.dy}) v->assign(n, 0.f);
+        if (variance_)
+            for (auto *v : {&g.primalVar, &g.dxVar, &g.dyVar}) v->assign(n, 0.f);
         addSplats(film, spp, &g);
         return g;
     }
     Image L[NumLayers];
-    for (int i = 0; i < NumLayers; ++i) L[i] = film.layerImage(layer_[i]);
+    for (int i = 0; i < NumLayers; ++i)
+        if (layer_[i] >= 0) L[i] = film.layerImage(layer_[i]);
     g.width = L[0].width();
     g.height = L[0].height();
     size_t n = size_t(g.width) * g.height * 3;
     g.primal.resize(n);
     g.dx.resize(n);
     g.dy.resize(n);
-    g.primalVar.resize(n);
-    g.dxVar.resize(n);
-    g.dyVar.resize(n);
+    if (variance_) {
+        g.primalVar.resize(n);
+        g.dxVar.resize(n);
+        g.dyVar.resize(n);
+    }
     double invN = spp > 0 ? 1 / spp : 0;
     auto var = [&](int mean, int sq, size_t i) {
         double m = L[mean].data()[i], m2 = L[sq].data()[i];
@@ -181,6 +190,7 @@ GradientImages GradientFilm::images(const Film &film, double spp) const {
         g.primal[i] = L[Primal].data()[i];
         g.dx[i] = SumF(L[DxF].data()[i], L[DxB].data()[i]);
         g.dy[i] = SumF(L[DyF].data()[i], L[DyB].data()[i]);
+        if (!variance_) continue;
         g.primalVar[i] = ToFloat(var(Primal, PrimalSq, i));
         g.dxVar[i] = ToFloat(var(DxF, DxFSq, i) + var(DxB, DxBSq, i));
         g.dyVar[i] = ToFloat(var(DyF, DyFSq, i) + var(DyB, DyBSq, i));
@@ -193,13 +203,15 @@ void GradientFilm::addSplats(const Film &film, double spp, GradientImages *g) co
     // The film has normalised the splats by the samples per pixel; their
     // variance is approximated by the second moment / N.
     Image L[NumLayers];
-    for (int i = 0; i < NumLayers; ++i) L[i] = film.layerImage(splatLayer_[i]);
+    for (int i = 0; i < NumLayers; ++i)
+        if (splatLayer_[i] >= 0) L[i] = film.layerImage(splatLayer_[i]);
     double invN = spp > 0 ? 1 / spp : 0;
     for (size_t i = 0; i < g->primal.size(); ++i) {
         auto at = [&](int layer) { return double(L[layer].data()[i]); };
         g->primal[i] = SumF(g->primal[i], ToFloat(at(Primal)));
         g->dx[i] = SumF(g->dx[i], ToFloat(at(DxF) + at(DxB)));
         g->dy[i] = SumF(g->dy[i], ToFloat(at(DyF) + at(DyB)));
+        if (!variance_) continue;
         g->primalVar[i] = SumF(g->primalVar[i], ToFloat(at(PrimalSq) * invN));
         g->dxVar[i] = SumF(g->dxVar[i], ToFloat((at(DxFSq) + at(DxBSq)) * invN));
         g->dyVar[i] = SumF(g->dyVar[i], ToFloat((at(DyFSq) + at(DyBSq)) * invN));
@@ -213,6 +225,8 @@ void WriteGradientOutput(const GradientImages &g, ReconstructionNorm norm, doubl
         im.data() = v;
         return im;
     };
+    if (norm == ReconstructionNorm::Weighted && !g.hasVariance())
+        throw Error("reconstruction \"weighted\" needs the variance layers (gradus --variance)");
     // The last column of dx and the last row of dy are unused by the solver.
     ReconstructionOptions o1 = ReconstructionOptions::L1Default();
     o1.alpha = alpha;
@@ -235,11 +249,16 @@ void WriteGradientOutput(const GradientImages &g, ReconstructionNorm norm, doubl
         iw = ResultToImage(rw);
         chosen = &iw;
     }
-    const Image primal = toImage(g.primal), dx = toImage(g.dx), dy = toImage(g.dy), primalVar = toImage(g.primalVar),
-                dxVar = toImage(g.dxVar), dyVar = toImage(g.dyVar);
-    std::vector<std::pair<const char *, const Image *>> layers = {
-        {"primal", &primal}, {"dx", &dx}, {"dy", &dy}, {"primal_var", &primalVar}, {"dx_var", &dxVar},
-        {"dy_var", &dyVar}, {"reconstructed_l1", &i1}, {"reconstructed_l2", &i2}, {"reconstructed_hybrid", &ih}};
+    const Image primal = toImage(g.primal), dx = toImage(g.dx), dy = toImage(g.dy);
+    std::vector<std::pair<const char *, const Image *>> layers = {{"primal", &primal}, {"dx", &dx}, {"dy", &dy}};
+    Image primalVar, dxVar, dyVar;
+    if (g.hasVariance()) {
+        primalVar = toImage(g.primalVar);
+        dxVar = toImage(g.dxVar);
+        dyVar = toImage(g.dyVar);
+        layers.insert(layers.end(), {{"primal_var", &primalVar}, {"dx_var", &dxVar}, {"dy_var", &dyVar}});
+    }
+    layers.insert(layers.end(), {{"reconstructed_l1", &i1}, {"reconstructed_l2", &i2}, {"reconstructed_hybrid", &ih}});
     if (norm == ReconstructionNorm::Weighted) layers.push_back({"reconstructed_weighted", &iw});
     Image img = Image::RGB(g.width, g.height);
     img.metadata = out->metadata;

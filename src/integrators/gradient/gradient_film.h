@@ -5,7 +5,8 @@
 //   dx(x,y) = I(x+1,y) - I(x,y),  dy(x,y) = I(x,y+1) - I(x,y).
 // dx at p sums two independent halves: shifts from base paths at p towards
 // p+(1,0) ("forward") and from base paths at p+(1,0) towards p ("backward").
-// Each half keeps per-sample sums of squares, so the variance of the mean is
+// With variances (Film::varianceLayers(), gradus --variance) each half also
+// keeps per-sample sums of squares, so the variance of the mean is
 //   var = (E[v^2] - E[v]^2 / K) / N   per half, summed over the halves,
 // with K the number of pixels a sample reaches (1 for the box filter).
 // Pixel filter: "box" (default) adds a sample to its own pixel only. "film"
@@ -17,9 +18,9 @@
 // differences through the film's splat path (normalised by the samples per
 // pixel like every splat) on layers of their own, whose variance is
 // approximated by the second moment / N; images() adds both parts.
-// WriteGradientOutput writes primal, dx, dy, primal_var, dx_var, dy_var,
-// reconstructed_l1, reconstructed_l2 (and reconstructed_weighted when chosen)
-// and sets the unprefixed R, G, B to the chosen reconstruction.
+// WriteGradientOutput writes primal, dx, dy, primal_var, dx_var, dy_var (with
+// variances), reconstructed_l1, reconstructed_l2 (and reconstructed_weighted
+// when chosen) and sets the unprefixed R, G, B to the chosen reconstruction.
 #pragma once
 #include <string>
 
@@ -50,9 +51,9 @@ struct GradientSplat {
 
 class GradientFilm {
   public:
-    // Adds the internal accumulation layers to the film; useFilmFilter selects
-    // the film's pixel filter instead of the box; lightTracing adds the layers
-    // of splatLightTracing().
+    // Adds the internal accumulation layers to the film (the squares only when
+    // film.varianceLayers()); useFilmFilter selects the film's pixel filter
+    // instead of the box; lightTracing adds the layers of splatLightTracing().
     // samples = false: splats only (no per-sample layers; record() is not allowed).
     void init(Film &film, bool useFilmFilter = false, bool lightTracing = false, bool samples = true);
     // Records one camera sample's primal value and neighbour differences.
@@ -61,18 +62,20 @@ class GradientFilm {
     // (differences: forward at the pixel, backward at the neighbour, as in
     // record()); pixels outside the film are dropped. Needs init(.., true).
     void splatLightTracing(SampleRecorder &rec, const GradientSplat &s, Float scale) const;
-    // Extracts the gradient images (with variances) from the film.
+    // Extracts the gradient images (with variances when kept) from the film.
     // `samplesPerPixel` is the N of the variance of the mean.
     GradientImages images(const Film &film, double samplesPerPixel) const;
 
   private:
     enum { Primal, PrimalSq, DxF, DxFSq, DxB, DxBSq, DyF, DyFSq, DyB, DyBSq, NumLayers };
+    static bool IsSquare(int layer) { return layer % 2 == 1; }
     // Layers (value, square) of each neighbour's difference: +x is dx at p; -x
     // is dx at p-(1,0) with the sign flipped (I(p) - I(p-1)). Same for y.
     static constexpr int kDiffLayers_[kNumNeighbours][2] = {{DxF, DxFSq}, {DxB, DxBSq}, {DyF, DyFSq}, {DyB, DyBSq}};
     void addSplats(const Film &film, double samplesPerPixel, GradientImages *g) const;
-    int layer_[NumLayers] = {};
+    int layer_[NumLayers] = {};       // film layer, -1 when not kept
     int splatLayer_[NumLayers] = {};  // light-tracing splats (same meaning as layer_)
+    bool variance_ = false;           // the squares are kept
     bool lightTracing_ = false;
     bool samples_ = true;
     Bounds2i bounds_;
@@ -82,7 +85,7 @@ class GradientFilm {
 };
 
 // Output image of a gradient integrator from its gradient images: layers
-// primal, dx, dy, their variances, reconstructed_l1, reconstructed_l2 (and
+// primal, dx, dy, their variances (when g has them), reconstructed_l1, reconstructed_l2 (and
 // reconstructed_weighted), the chosen one in the unprefixed R, G, B; keeps
 // out->metadata and adds the reconstruction's. `report` gets the timings.
 void WriteGradientOutput(const GradientImages &g, ReconstructionNorm norm, double alpha, Image *out,

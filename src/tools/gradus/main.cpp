@@ -47,6 +47,8 @@ const char *kUsage =
     "  --debugpixel x,y[,s] re-run the samples (or sample s) of one pixel single-threaded with the\n"
     "                       random numbers of the full render; prints vertices and contributions\n"
     "                       on stdout and writes no image\n"
+    "  --variance           gradient integrators also write primal_var, dx_var, dy_var\n"
+    "                       (240 more bytes per pixel while rendering)\n"
     "  --quick              1/4 resolution and 1/8 of the samples\n"
     "  --stats              print the scene features after loading\n"
     "  --quiet              no progress bar or statistics\n"
@@ -184,6 +186,8 @@ int main(int argc, char **argv) {
             bo.integratorOverride = next();
         } else if (a == "--quick") {
             bo.quick = true;
+        } else if (a == "--variance") {
+            bo.variance = true;
         } else if (a == "--quiet") {
             bo.quiet = ro.quiet = true;
         } else if (a == "--stats") {

@@ -108,7 +108,8 @@ TEST(GVCMUnbiased, Case2BudgetMatchesEveryPhotonShifted) {
     const int runs = 8, spp = 64;
     Image sum[2], sum2[2];
     for (int k = 0; k < runs; ++k) {
-        Image g = Render(BoxScene(std::string("Integrator \"gvcm\"") + radius), spp, 5000 + k);
+        Image g = Render(BoxScene(std::string("Integrator \"gvcm\" \"integer case2budget\" [0]") + radius), spp,
+                         5000 + k);
         for (int l = 0; l < 2; ++l) {
             Image d = g.layerRGB(l == 0 ? "dx" : "dy");
             if (k == 0) sum[l] = sum2[l] = Image::RGB(d.width(), d.height());

@@ -27,7 +27,7 @@ ParamTable<GVCMSettings> Table() {
     t.enumeration<bool>("mode", &S::mergeOnly, "vcm", {{"vcm", false}, {"mergeonly", true}},
                         "vcm (G-VCM) | mergeonly (G-PM: merges at the first connectable camera vertex only)");
     t.append(MergeRadiusParams());
-    t.integer("case2budget", &S::case2Budget, 0,
+    t.integer("case2budget", &S::case2Budget, 1,
               "case-2 shifts (through z'_b) per merge vertex and offset: K of the n photons found, chosen by "
               "systematic sampling, their differences weighted n/K (unbiased); 0: every photon",
               AtLeast(0));

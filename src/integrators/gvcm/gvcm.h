@@ -29,6 +29,12 @@
 //          T = E(y_d -> chain) G~ prod f|cos| the chain's contribution from
 //          y_d to the photon's position (G~: solid angle at y_d per area at
 //          the photon end, ChainSolidAnglePerArea).
+//        Case 2 costs a walk (and its reversibility walk) per photon and
+//          offset, so at most `case2budget` photons per merge vertex and offset
+//          take it: K of the n found, by systematic sampling (each with
+//          probability K/n), their differences weighted n/K; an unbiased
+//          estimate of the sum over all n whose cost does not grow with the
+//          photons in the kernel (the primal and case 1 keep every photon).
 //      Gradient weights: Eq. 23 as CombinedWeight(w_x, w_y, rho) with w_x, w_y
 //      the base's and the offset's VCM weights (Eqs. 21-22) and rho = |T'|
 //      p_y / p_x (the camera shift's rho, times the photon density ratio in
@@ -82,8 +88,10 @@
 //   string kernel "fixed"            fixed | adaptive (Sec. 6, above)
 //   float kernelshrink 10            adaptive: r_j = 0.5^(kernelshrink tau) r_{j-1}
 //   string footprint "median"        median | path (Sec. 6, above)
-//   integer case2budget 0            case-2 shifts per merge vertex and offset: K of the n photons
-//                                    found, by systematic sampling, differences weighted n/K (0: all)
+//   integer case2budget 1            case-2 shifts per merge vertex and offset: K of the n photons
+//                                    found, by systematic sampling, differences weighted n/K (0: all;
+//                                    a merge's walks then no longer grow with the photons in the
+//                                    kernel; bench/gvcm/RESULTS.md)
 #pragma once
 #include <atomic>
 #include <string>

@@ -53,5 +53,7 @@ setup(
     package_dir={"": "python"},
     ext_modules=[Extension("gradus._gradus", sources=[])],
     cmdclass={"build_ext": CMakeBuild},
+    # Not build/: that is the CMake build directory of scripts/build.
+    options={"build": {"build_base": "build-pip"}},
     zip_safe=False,
 )

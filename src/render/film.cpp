@@ -51,7 +51,7 @@ Bounds2i Film::sampleBounds() const {
     return b;
 }
 
-int Film::addLayer(const std::string &name, LayerUse use) {
+int Film::addLayer(const std::string &name, LayerUse use, bool written) {
     for (int i = 0; i < numLayers(); ++i)
         if (layerNames_[i] == name) {
             GRADUS_CHECK(use == LayerUse::Both ? !layers_[i].empty() && !layerSplats_[i].empty()
@@ -60,6 +60,7 @@ int Film::addLayer(const std::string &name, LayerUse use) {
         }
     checkMemory("layer \"" + name + "\"", kLayerBytesPerPixel);
     layerNames_.push_back(name);
+    layerWritten_.push_back(written);
     const size_t n = size_t(bounds_.area());
     layers_.emplace_back(use != LayerUse::Splats ? n : 0, Spectrum(0));
     layerSplats_.emplace_back(use != LayerUse::Samples ? n : 0, Spectrum(0));
@@ -163,14 +164,17 @@ Image Film::mainImage() const {
     return img;
 }
 
+Spectrum Film::layerPixel(int layer, size_t i) const {
+    Spectrum v = count_[i] > 0 && !layers_[layer].empty() ? layers_[layer][i] / count_[i] : Spectrum(0);
+    if (splatSpp_ > 0 && !layerSplats_[layer].empty()) v += layerSplats_[layer][i] / splatSpp_;
+    return v * scale_;
+}
+
 Image Film::layerImage(int layer) const {
     Image img = Image::RGB(bounds_.width(), bounds_.height());
     for (int y = 0; y < bounds_.height(); ++y)
         for (int x = 0; x < bounds_.width(); ++x) {
-            size_t i = size_t(y) * bounds_.width() + x;
-            Spectrum v = count_[i] > 0 && !layers_[layer].empty() ? layers_[layer][i] / count_[i] : Spectrum(0);
-            if (splatSpp_ > 0 && !layerSplats_[layer].empty()) v += layerSplats_[layer][i] / splatSpp_;
-            v *= scale_;
+            const Spectrum v = layerPixel(layer, size_t(y) * bounds_.width() + x);
             for (int c = 0; c < 3; ++c) img.at(x, y, c) = toOutput(v[c]);
         }
     return img;
@@ -180,9 +184,11 @@ Image Film::toImage() const {
     Image img = mainImage();
     std::vector<std::string> names;
     for (int l = 0; l < numLayers(); ++l)
-        for (const std::string &c : Image::LayerRGBNames(layerNames_[l])) names.push_back(c);
+        if (layerWritten_[l])
+            for (const std::string &c : Image::LayerRGBNames(layerNames_[l])) names.push_back(c);
     img.addChannels(names);  // one reallocation for all layers
-    for (int l = 0; l < numLayers(); ++l) img.setLayerRGB(layerNames_[l], layerImage(l));
+    for (int l = 0; l < numLayers(); ++l)
+        if (layerWritten_[l]) img.setLayerRGB(layerNames_[l], layerImage(l));
     return img;
 }
 

@@ -43,7 +43,9 @@ class Film {
 
     // Extra per-pixel layer: value = sum of contributions / samples of that pixel,
     // plus the layer's splats / total samples per pixel (like the main image).
-    int addLayer(const std::string &name, LayerUse use = LayerUse::Both);
+    // written = false: an accumulator that the integrator turns into outputs of
+    // its own (toImage leaves it out).
+    int addLayer(const std::string &name, LayerUse use = LayerUse::Both, bool written = true);
     int numLayers() const { return int(layerNames_.size()); }
     const std::string &layerName(int i) const { return layerNames_[i]; }
     // Whether integrators keep per-pixel squared values for variance layers
@@ -63,6 +65,11 @@ class Film {
     // Final images (cropped size).
     Image mainImage() const;
     Image layerImage(int layer) const;
+    // The R, G, B of layerImage(layer) at pixel i of the cropped image (row-major), without the image.
+    void layerValues(int layer, size_t i, float rgb[3]) const {
+        const Spectrum v = layerPixel(layer, i);
+        for (int c = 0; c < 3; ++c) rgb[c] = toOutput(v[c]);
+    }
     // RGB main image and all layers ("name.R" ...) in one image.
     Image toImage() const;
     // Output values clamped to the float range by the image functions so far.
@@ -93,11 +100,13 @@ class Film {
     std::vector<Spectrum> splat_;
     std::vector<double> count_;
     std::vector<std::string> layerNames_;
+    std::vector<char> layerWritten_;
     std::vector<std::vector<Spectrum>> layers_;
     std::vector<std::vector<Spectrum>> layerSplats_;
     double splatSpp_ = 0;
     bool variance_ = false;
     float toOutput(double v) const;
+    Spectrum layerPixel(int layer, size_t i) const;
     static constexpr double kBaseBytesPerPixel = 2 * sizeof(Spectrum) + 2 * sizeof(double);
     static constexpr double kLayerBytesPerPixel = 2 * sizeof(Spectrum);  // an upper bound (LayerUse::Both)
     void checkMemory(const std::string &what, double bytesPerPixel) const;

@@ -39,11 +39,12 @@ void GradientFilm::init(Film &film, bool useFilmFilter, bool lightTracing, bool 
     // the squares only with variances.
     auto wanted = [&](int i) { return variance_ || !IsSquare(i); };
     for (int i = 0; i < NumLayers; ++i)
-        layer_[i] = samples && wanted(i) ? film.addLayer(names[i], LayerUse::Samples) : -1;
+        layer_[i] = samples && wanted(i) ? film.addLayer(names[i], LayerUse::Samples, false) : -1;
     lightTracing_ = lightTracing;
     for (int i = 0; i < NumLayers; ++i)
-        splatLayer_[i] = lightTracing && wanted(i) ? film.addLayer(std::string("gd.lt.") + (names[i] + 3), LayerUse::Splats)
-                                                   : -1;
+        splatLayer_[i] = lightTracing && wanted(i)
+                             ? film.addLayer(std::string("gd.lt.") + (names[i] + 3), LayerUse::Splats, false)
+                             : -1;
 }
 
 namespace {
@@ -167,11 +168,6 @@ GradientImages GradientFilm::images(const Film &film, double spp) const {
         addSplats(film, spp, &g);
         return g;
     }
-    Image L[NumLayers];
-    for (int i = 0; i < NumLayers; ++i)
-        if (layer_[i] >= 0) L[i] = film.layerImage(layer_[i]);
-    g.width = L[0].width();
-    g.height = L[0].height();
     size_t n = size_t(g.width) * g.height * 3;
     g.primal.resize(n);
     g.dx.resize(n);
@@ -182,18 +178,26 @@ GradientImages GradientFilm::images(const Film &film, double spp) const {
         g.dyVar.resize(n);
     }
     double invN = spp > 0 ? 1 / spp : 0;
-    auto var = [&](int mean, int sq, size_t i) {
-        double m = L[mean].data()[i], m2 = L[sq].data()[i];
+    // The film's layer values (the floats of Film::layerImage) pixel by pixel:
+    // no image per layer.
+    float L[NumLayers][3];
+    auto var = [&](int mean, int sq, int c) {
+        double m = L[mean][c], m2 = L[sq][c];
         return std::max(0.0, (m2 - m * m / footprint_) * invN);
     };
-    for (size_t i = 0; i < n; ++i) {
-        g.primal[i] = L[Primal].data()[i];
-        g.dx[i] = SumF(L[DxF].data()[i], L[DxB].data()[i]);
-        g.dy[i] = SumF(L[DyF].data()[i], L[DyB].data()[i]);
-        if (!variance_) continue;
-        g.primalVar[i] = ToFloat(var(Primal, PrimalSq, i));
-        g.dxVar[i] = ToFloat(var(DxF, DxFSq, i) + var(DxB, DxBSq, i));
-        g.dyVar[i] = ToFloat(var(DyF, DyFSq, i) + var(DyB, DyBSq, i));
+    for (size_t p = 0; p < n / 3; ++p) {
+        for (int k = 0; k < NumLayers; ++k)
+            if (layer_[k] >= 0) film.layerValues(layer_[k], p, L[k]);
+        for (int c = 0; c < 3; ++c) {
+            const size_t i = 3 * p + c;
+            g.primal[i] = L[Primal][c];
+            g.dx[i] = SumF(L[DxF][c], L[DxB][c]);
+            g.dy[i] = SumF(L[DyF][c], L[DyB][c]);
+            if (!variance_) continue;
+            g.primalVar[i] = ToFloat(var(Primal, PrimalSq, c));
+            g.dxVar[i] = ToFloat(var(DxF, DxFSq, c) + var(DxB, DxBSq, c));
+            g.dyVar[i] = ToFloat(var(DyF, DyFSq, c) + var(DyB, DyBSq, c));
+        }
     }
     if (lightTracing_) addSplats(film, spp, &g);
     return g;
@@ -202,12 +206,13 @@ GradientImages GradientFilm::images(const Film &film, double spp) const {
 void GradientFilm::addSplats(const Film &film, double spp, GradientImages *g) const {
     // The film has normalised the splats by the samples per pixel; their
     // variance is approximated by the second moment / N.
-    Image L[NumLayers];
-    for (int i = 0; i < NumLayers; ++i)
-        if (splatLayer_[i] >= 0) L[i] = film.layerImage(splatLayer_[i]);
+    float L[NumLayers][3];
     double invN = spp > 0 ? 1 / spp : 0;
     for (size_t i = 0; i < g->primal.size(); ++i) {
-        auto at = [&](int layer) { return double(L[layer].data()[i]); };
+        if (i % 3 == 0)
+            for (int k = 0; k < NumLayers; ++k)
+                if (splatLayer_[k] >= 0) film.layerValues(splatLayer_[k], i / 3, L[k]);
+        auto at = [&](int layer) { return double(L[layer][i % 3]); };
         g->primal[i] = SumF(g->primal[i], ToFloat(at(Primal)));
         g->dx[i] = SumF(g->dx[i], ToFloat(at(DxF) + at(DxB)));
         g->dy[i] = SumF(g->dy[i], ToFloat(at(DyF) + at(DyB)));

@@ -137,12 +137,14 @@ namespace {
 // all before it are done (so the film does not depend on the thread count).
 // At most `window` results are started and not yet merged: a thread that would
 // start one more waits for the earliest to finish, so memory is bounded by the
-// window, not by n.
+// window, not by n. onMerged(i), when given, runs right after result i is
+// merged (in index order, one at a time).
 class OrderedMerge {
   public:
     using Work = std::function<std::unique_ptr<FilmTile>(int64_t)>;  // null: nothing to merge
-    OrderedMerge(Film &film, int64_t n, int64_t window)
-        : film_(film), n_(n), window_(std::max<int64_t>(1, window)), slot_(size_t(window_)), ready_(size_t(window_)) {}
+    OrderedMerge(Film &film, int64_t n, int64_t window, const std::function<void(int64_t)> &onMerged = nullptr)
+        : film_(film), n_(n), window_(std::max<int64_t>(1, window)), onMerged_(onMerged), slot_(size_t(window_)),
+          ready_(size_t(window_)) {}
 
     void run(const Work &work) {
         const int threads = int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
@@ -177,16 +179,19 @@ class OrderedMerge {
     void mergeReady() {
         for (;;) {
             std::unique_ptr<FilmTile> t;
+            int64_t i;
             {
                 std::lock_guard<std::mutex> lk(m_);
-                const size_t k = size_t(merged_ % window_);
-                if (merging_ || merged_ >= n_ || !ready_[k]) return;
+                i = merged_;
+                const size_t k = size_t(i % window_);
+                if (merging_ || i >= n_ || !ready_[k]) return;
                 merging_ = true;
                 t = std::move(slot_[k]);
                 ready_[k] = 0;
             }
             if (t) film_.mergeTile(*t);
             t.reset();
+            if (onMerged_) onMerged_(i);
             {
                 std::lock_guard<std::mutex> lk(m_);
                 ++merged_;
@@ -198,6 +203,7 @@ class OrderedMerge {
 
     Film &film_;
     const int64_t n_, window_;
+    const std::function<void(int64_t)> onMerged_;
     std::mutex m_;
     std::condition_variable canStart_;
     int64_t claimed_ = 0, merged_ = 0;
@@ -261,10 +267,10 @@ void PassContext::forEachPixelSample(const SampleEstimator &est) {
     });
 }
 
-void PassContext::forEachItem(int64_t n, uint64_t tag, const ItemFn &fn) {
+void PassContext::forEachItem(int64_t n, uint64_t tag, const ItemFn &fn, const ChunkFn &chunkMerged) {
     const int64_t chunks = std::max<int64_t>(0, (n + PassContext::kItemChunk - 1) / PassContext::kItemChunk);
     const uint64_t key = seed() ^ tag;
-    OrderedMerge(film_, chunks, mergeWindow()).run([&](int64_t c) -> std::unique_ptr<FilmTile> {
+    OrderedMerge(film_, chunks, mergeWindow(), chunkMerged).run([&](int64_t c) -> std::unique_ptr<FilmTile> {
         if (interrupted()) return nullptr;
         auto tile = film_.makeSplatTile();
         Worker &w = worker();

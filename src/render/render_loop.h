@@ -156,12 +156,15 @@ class PassContext {
     // is keyed by (seed, tag, pass, item); the recorder's splats go to the
     // film, merged in item order (chunks of kItemChunk items; the items of one
     // chunk run in order on one thread, so per-chunk output needs no locking;
-    // chunks are merged as they finish, with the tiles' window).
+    // chunks are merged as they finish, with the tiles' window). chunkMerged(c),
+    // when given, runs right after chunk c's splats are merged: in chunk order,
+    // one at a time (e.g. to gather per-chunk output in item order).
     // When interrupted(), forEachTile and forEachItem skip the tiles / chunks
-    // not started yet.
+    // not started yet (chunkMerged still runs for them).
     static constexpr int64_t kItemChunk = 256;
     using ItemFn = std::function<void(int64_t, RNG &, SampleRecorder &, Worker &)>;
-    void forEachItem(int64_t n, uint64_t tag, const ItemFn &fn);
+    using ChunkFn = std::function<void(int64_t)>;
+    void forEachItem(int64_t n, uint64_t tag, const ItemFn &fn, const ChunkFn &chunkMerged = nullptr);
     // Plain parallel loop without film output: fn(begin, end, worker) over
     // fixed-size ranges of [0, n) (grain: items per range). Always runs to the
     // end (callers check interrupted() between stages).

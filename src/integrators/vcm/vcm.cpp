@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include <unistd.h>
+
 #include "core/error.h"
 #include "core/stats.h"
 #include "integrators/factories.h"
@@ -262,6 +264,32 @@ void ConcatLightVertices(PassContext &ctx, const std::vector<std::vector<LightVe
     });
 }
 
+LightVertexGather::LightVertexGather(int64_t subpaths, int maxDepth, std::vector<LightVertex> *vertices,
+                                     std::vector<uint32_t> *pathStart)
+    : chunks_(size_t((subpaths + PassContext::kItemChunk - 1) / PassContext::kItemChunk)), n_(subpaths),
+      vertices_(vertices), pathStart_(pathStart) {
+    pathStart->assign(size_t(subpaths) + 1, 0);
+    vertices->clear();  // keeps the capacity of the last pass (pages already resident)
+    // At most maxDepth stored vertices per subpath (y_1 .. y_maxDepth): reserved as
+    // address space when that is a small part of the memory, so appending never
+    // reallocates (a reallocation would hold two copies).
+    static const double physical = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
+    const double bound = double(subpaths) * std::max(1, maxDepth);
+    if (bound > double(vertices->capacity()) && bound * sizeof(LightVertex) < physical / 4)
+        vertices->reserve(size_t(bound));
+}
+
+void LightVertexGather::merged(int64_t c) {
+    // Counts to offsets for this chunk's subpaths, then its vertices to the end of the pass's.
+    const int64_t j0 = c * PassContext::kItemChunk, j1 = std::min(n_, j0 + PassContext::kItemChunk);
+    std::vector<uint32_t> &start = *pathStart_;
+    for (int64_t j = j0; j < j1; ++j) start[size_t(j) + 1] += start[size_t(j)];
+    std::vector<LightVertex> &chunk = chunks_[size_t(c)];
+    GRADUS_CHECK(size_t(start[size_t(j1)]) == vertices_->size() + chunk.size());
+    vertices_->insert(vertices_->end(), chunk.begin(), chunk.end());
+    std::vector<LightVertex>().swap(chunk);
+}
+
 void BuildLightVertexGrid(PassContext &ctx, const std::vector<LightVertex> &vertices, Float radius, PhotonGrid *grid) {
     grid->build(vertices.size(), [&](size_t i) { return vertices[i].p; }, radius,
                 [&](int64_t n, int64_t grain, const std::function<void(int64_t, int64_t)> &fn) {
@@ -339,9 +367,7 @@ void VCMIntegrator::lightPass(PassContext &ctx) {
     const int64_t N = bounds_.area();
     const int maxLight = set_.maxDepth + 1;
     const VCMWeights weights{merging_ ? &kernel_ : nullptr, merging_, connecting_, ctx_.heuristic == MISHeuristic::Power};
-    const int64_t chunks = (N + PassContext::kItemChunk - 1) / PassContext::kItemChunk;
-    std::vector<std::vector<LightVertex>> out(static_cast<size_t>(chunks));
-    std::vector<uint32_t> count(static_cast<size_t>(N), 0);
+    LightVertexGather gather(N, set_.maxDepth, &vertices_, &pathStart_);
     const Scene &scene = ctx.scene();
     ctx.forEachItem(N, kLightTag, [&](int64_t item, RNG &rng, SampleRecorder &rec, Worker &wk) {
         if (scene.lights.empty()) return;
@@ -350,9 +376,9 @@ void VCMIntegrator::lightPass(PassContext &ctx) {
         AllocSubpath(wk.arena, maxLight, &v, &b);
         RNGSampler smp(rng);
         const int n = GenerateLightSubpath(ctx_, smp, wk.arena, maxLight, v, b);
-        std::vector<LightVertex> &dst = out[size_t(item / PassContext::kItemChunk)];
+        std::vector<LightVertex> &dst = gather.buffer(item);
         const size_t first = dst.size();
-        count[size_t(item)] = uint32_t(VCMLightVertices(ctx_, v, b, n, weights, &dst));
+        gather.setCount(item, VCMLightVertices(ctx_, v, b, n, weights, &dst));
         for (size_t k = first; k < dst.size(); ++k) {
             const LightVertex &lv = dst[k];
             const int i = lv.depth;
@@ -376,8 +402,7 @@ void VCMIntegrator::lightPass(PassContext &ctx) {
             }
             rec.splat(cws.pRaster, L * (splatScale_ / (1 + VCMLightSum(lv, oi, oim1, h, weights.sigma(&b[i]), weights))));
         }
-    });
-    ConcatLightVertices(ctx, out, count, &vertices_, &pathStart_);
+    }, gather.chunkMerged());
     nLightVertices_ += vertices_.size();
 }
 

@@ -191,6 +191,31 @@ Float VCMFootprintRadius(const Scene &scene, const Bounds2i &bounds, Float scale
 void ConcatLightVertices(PassContext &ctx, const std::vector<std::vector<LightVertex>> &chunks,
                          const std::vector<uint32_t> &count, std::vector<LightVertex> *vertices,
                          std::vector<uint32_t> *pathStart);
+// A light pass's vertices gathered in subpath order while it runs
+// (PassContext::forEachItem): the subpaths of chunk c append to buffer(item),
+// and chunkMerged() moves chunk c's buffer to the end of *vertices as soon as
+// the chunks before it are merged, so besides the vertices only the merge
+// window's buffers exist (ConcatLightVertices holds every chunk and then a
+// second copy of all of them). *vertices keeps its capacity from pass to pass;
+// subpath j owns (*vertices)[(*pathStart)[j], (*pathStart)[j + 1]).
+class LightVertexGather {
+  public:
+    LightVertexGather(int64_t subpaths, int maxDepth, std::vector<LightVertex> *vertices,
+                      std::vector<uint32_t> *pathStart);
+    std::vector<LightVertex> &buffer(int64_t item) { return chunks_[size_t(item / PassContext::kItemChunk)]; }
+    void setCount(int64_t item, int count) { (*pathStart_)[size_t(item) + 1] = uint32_t(count); }
+    // forEachItem's chunkMerged.
+    PassContext::ChunkFn chunkMerged() {
+        return [this](int64_t c) { merged(c); };
+    }
+
+  private:
+    void merged(int64_t chunk);
+    std::vector<std::vector<LightVertex>> chunks_;
+    int64_t n_;
+    std::vector<LightVertex> *vertices_;
+    std::vector<uint32_t> *pathStart_;
+};
 // The photon hash grid over a pass's light vertices (cell 2r), built in parallel.
 void BuildLightVertexGrid(PassContext &ctx, const std::vector<LightVertex> &vertices, Float radius, PhotonGrid *grid);
 // Radius of 1-based iteration i: r_i^2 = r_1^2 i^(alpha - 1).

@@ -225,61 +225,72 @@ void GradientFilm::addSplats(const Film &film, double spp, GradientImages *g) co
 
 void WriteGradientOutput(const GradientImages &g, ReconstructionNorm norm, double alpha, Image *out,
                          std::string *report) {
-    auto toImage = [&](const std::vector<float> &v) {
-        Image im = Image::RGB(g.width, g.height);
-        im.data() = v;
-        return im;
-    };
     if (norm == ReconstructionNorm::Weighted && !g.hasVariance())
         throw Error("reconstruction \"weighted\" needs the variance layers (gradus --variance)");
+    // The output's channels first; then each layer is set as soon as it is
+    // computed and its intermediate freed (at most one solution and one
+    // layer image beside the output).
+    std::vector<const char *> layers = {"primal", "dx", "dy"};
+    if (g.hasVariance()) layers.insert(layers.end(), {"primal_var", "dx_var", "dy_var"});
+    layers.insert(layers.end(), {"reconstructed_l1", "reconstructed_l2", "reconstructed_hybrid"});
+    if (norm == ReconstructionNorm::Weighted) layers.push_back("reconstructed_weighted");
+    Image img = Image::RGB(g.width, g.height);
+    img.metadata = std::move(out->metadata);
+    *out = Image();  // the film's image: only its metadata is kept
+    std::vector<std::string> names;  // every layer's channels in one reallocation
+    for (const char *l : layers)
+        for (const std::string &c : Image::LayerRGBNames(l)) names.push_back(c);
+    img.addChannels(names);
+    auto put = [&](const char *layer, const std::vector<float> &v) {
+        Image im = Image::RGB(g.width, g.height);
+        im.data() = v;
+        img.setLayerRGB(layer, im);
+    };
+    put("primal", g.primal);
+    put("dx", g.dx);
+    put("dy", g.dy);
+    if (g.hasVariance()) {
+        put("primal_var", g.primalVar);
+        put("dx_var", g.dxVar);
+        put("dy_var", g.dyVar);
+    }
+    // A solution to its layer, and to the unprefixed R, G, B when it is the chosen one.
+    auto solution = [&](const char *layer, const ReconstructionResult &r, bool chosen) {
+        const Image im = ResultToImage(r);
+        img.setLayerRGB(layer, im);
+        if (chosen) img.setLayerRGB("", im);
+    };
     // The last column of dx and the last row of dy are unused by the solver.
     ReconstructionOptions o1 = ReconstructionOptions::L1Default();
     o1.alpha = alpha;
-    ReconstructionResult r1 = Reconstruct(g, o1);
-    ReconstructionResult r2 = Reconstruct(g, ReconstructionOptions::L2Exact(alpha));
-    Image i1 = ResultToImage(r1), i2 = ResultToImage(r2);
-    // Hybrid: the L1 solution above with the primal's coarse scales (reconstruction.h).
-    ReconstructionResult rh = r1;
-    rh.image = CombineScales(r1.image, g.primal, r1.width, r1.height, r1.channels,
-                             ReconstructionOptions::Hybrid().lowpassSigma);
-    Image ih = ResultToImage(rh);
-    const Image *chosen = &i1;
-    Image iw;
-    ReconstructionStats sw;
-    if (norm == ReconstructionNorm::L2) chosen = &i2;
-    if (norm == ReconstructionNorm::Hybrid) chosen = &ih;
+    double l1Seconds, l2Seconds, weightedSeconds = 0;
+    {
+        ReconstructionResult r = Reconstruct(g, o1);
+        l1Seconds = r.stats.seconds;
+        solution("reconstructed_l1", r, norm != ReconstructionNorm::L2 && norm != ReconstructionNorm::Hybrid &&
+                                            norm != ReconstructionNorm::Weighted);
+        // Hybrid: the L1 solution with the primal's coarse scales (reconstruction.h).
+        r.image = CombineScales(r.image, g.primal, r.width, r.height, r.channels,
+                                ReconstructionOptions::Hybrid().lowpassSigma);
+        solution("reconstructed_hybrid", r, norm == ReconstructionNorm::Hybrid);
+    }
+    {
+        ReconstructionResult r = Reconstruct(g, ReconstructionOptions::L2Exact(alpha));
+        l2Seconds = r.stats.seconds;
+        solution("reconstructed_l2", r, norm == ReconstructionNorm::L2);
+    }
     if (norm == ReconstructionNorm::Weighted) {
-        ReconstructionResult rw = Reconstruct(g, ReconstructionOptions::Weighted());
-        sw = rw.stats;
-        iw = ResultToImage(rw);
-        chosen = &iw;
+        ReconstructionResult r = Reconstruct(g, ReconstructionOptions::Weighted());
+        weightedSeconds = r.stats.seconds;
+        solution("reconstructed_weighted", r, true);
     }
-    const Image primal = toImage(g.primal), dx = toImage(g.dx), dy = toImage(g.dy);
-    std::vector<std::pair<const char *, const Image *>> layers = {{"primal", &primal}, {"dx", &dx}, {"dy", &dy}};
-    Image primalVar, dxVar, dyVar;
-    if (g.hasVariance()) {
-        primalVar = toImage(g.primalVar);
-        dxVar = toImage(g.dxVar);
-        dyVar = toImage(g.dyVar);
-        layers.insert(layers.end(), {{"primal_var", &primalVar}, {"dx_var", &dxVar}, {"dy_var", &dyVar}});
-    }
-    layers.insert(layers.end(), {{"reconstructed_l1", &i1}, {"reconstructed_l2", &i2}, {"reconstructed_hybrid", &ih}});
-    if (norm == ReconstructionNorm::Weighted) layers.push_back({"reconstructed_weighted", &iw});
-    Image img = Image::RGB(g.width, g.height);
-    img.metadata = out->metadata;
-    std::vector<std::string> names;  // every layer's channels in one reallocation
-    for (const auto &l : layers)
-        for (const std::string &c : Image::LayerRGBNames(l.first)) names.push_back(c);
-    img.addChannels(names);
-    for (const auto &l : layers) img.setLayerRGB(l.first, *l.second);
-    img.setLayerRGB("", *chosen);
     img.metadata["reconstruction"] = ReconstructionNormName(norm);
     img.metadata["reconstruction_alpha"] = std::to_string(alpha);
     if (report) {
         char buf[256];
-        std::snprintf(buf, sizeof buf, "Reconstruction: L1 %.3fs, L2 %.3fs%s (output: %s, alpha %g)\n",
-                      r1.stats.seconds, r2.stats.seconds,
-                      norm == ReconstructionNorm::Weighted ? (", weighted " + std::to_string(sw.seconds) + "s").c_str()
+        std::snprintf(buf, sizeof buf, "Reconstruction: L1 %.3fs, L2 %.3fs%s (output: %s, alpha %g)\n", l1Seconds,
+                      l2Seconds,
+                      norm == ReconstructionNorm::Weighted ? (", weighted " + std::to_string(weightedSeconds) + "s").c_str()
                                                             : "",
                       ReconstructionNormName(norm), alpha);
         *report = buf;

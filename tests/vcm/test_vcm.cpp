@@ -58,6 +58,32 @@ TEST(PhotonGrid, QueriesEqualBruteForce) {
     }
 }
 
+// Far from the origin the grid's float positions are coarser than the radius
+// (1e6: steps of 0.06 against r = 0.004): the points found are still exactly
+// those of the exact positions, with their exact distances.
+TEST(PhotonGrid, FloatPositionsFindExactlyTheExactNeighbours) {
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u(-0.05, 0.05);
+    const Point3 c(1e6, -2e6, 3e5);
+    std::vector<Point3> pts;
+    for (int i = 0; i < 5000; ++i) pts.push_back(c + Vec3(u(rng), u(rng), u(rng)));
+    const double r = 0.004;
+    PhotonGrid g;
+    g.build(pts.size(), [&](size_t i) { return pts[i]; }, r, Serial(false));
+    for (int q = 0; q < 400; ++q) {
+        const Point3 p = q % 2 ? pts[q] + Vec3(0.7 * r, 0, 0) : c + Vec3(u(rng), u(rng), u(rng));
+        std::vector<uint32_t> got, want;
+        g.query(p, [&](uint32_t i, Float d2) {
+            got.push_back(i);
+            EXPECT_EQ(d2, (pts[i] - p).lengthSquared());
+        });
+        for (uint32_t i = 0; i < pts.size(); ++i)
+            if ((pts[i] - p).lengthSquared() < r * r) want.push_back(i);
+        std::sort(got.begin(), got.end());
+        EXPECT_EQ(got, want) << "query " << q;
+    }
+}
+
 // The recursive weights of vcm (VCMLightVertices / VCMCameraEta / VCMCameraB
 // and the sums) equal the O(n) reference MISWeight with the same merging terms
 // for connections (s >= 2, t >= 2), light tracing (t = 1) and emitter hits

@@ -2,14 +2,19 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
+#include <cstring>
+#include <limits>
 #include <memory>
 
 #include "core/error.h"
 
 namespace gradus {
 
-void PhotonGrid::build(size_t numPoints, const std::function<Point3(size_t)> &position, Float radius,
+void PhotonGrid::build(size_t numPoints, std::function<Point3(size_t)> positionFn, Float radius,
                        const ParallelFor &pf) {
+    position_ = std::move(positionFn);
+    const std::function<Point3(size_t)> &position = position_;
     GRADUS_CHECK(radius > 0 && numPoints < (uint64_t(1) << 32));
     radius_ = radius;
     r2_ = radius * radius;
@@ -51,9 +56,29 @@ void PhotonGrid::build(size_t numPoints, const std::function<Point3(size_t)> &po
         for (int64_t b = b0; b < b1; ++b) std::sort(index_.begin() + start_[b], index_.begin() + start_[b + 1]);
     });
     points_.resize(size_t(n));
+    // margin_: |float(x) - x| <= 2^-24 |x| per coordinate, so a point lies within
+    // 2^-23 max|coordinate| of its float position (an infinite bound accepts all).
+    std::atomic<uint64_t> maxBits{0};  // the largest |coordinate| (non-negative doubles order as their bits)
     pf(n, 4096, [&](int64_t k0, int64_t k1) {
-        for (int64_t k = k0; k < k1; ++k) points_[k] = position(index_[k]);
+        double m = 0;
+        for (int64_t k = k0; k < k1; ++k) {
+            const Point3 p = position(index_[k]);
+            points_[k] = {float(p.x), float(p.y), float(p.z)};
+            for (double c : {p.x, p.y, p.z}) m = std::max(m, std::abs(c));  // NaN: ignored (never found)
+        }
+        uint64_t bits;
+        std::memcpy(&bits, &m, 8);
+        for (uint64_t cur = maxBits.load(); bits > cur && !maxBits.compare_exchange_weak(cur, bits);) {
+        }
     });
+    double maxAbs;
+    const uint64_t bits = maxBits.load();
+    std::memcpy(&maxAbs, &bits, 8);
+    margin_ = Float(std::ldexp(maxAbs, -23));
+    if (!(maxAbs < 1e38)) {  // beyond the float range: no rejection, every point is tested exactly
+        margin_ = std::numeric_limits<Float>::infinity();
+        std::fill(points_.begin(), points_.end(), Point3f{0, 0, 0});
+    }
 }
 
 }  // namespace gradus

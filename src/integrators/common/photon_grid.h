@@ -7,6 +7,11 @@
 // (27 for the larger radii of a varying kernel).
 // Built by a counting sort; each bucket lists its points by increasing index,
 // so queries visit them in an order that does not depend on the thread count.
+// The grid keeps the points' positions as floats (12 bytes a point, in bucket
+// order) to reject far points, and reads the exact position through the
+// position function for the others: the points found and their distances are
+// those of the exact positions. The position function (and what it reads)
+// must stay valid and unchanged while the grid is queried.
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -23,7 +28,7 @@ class PhotonGrid {
     // fn(begin, end) over fixed ranges of [0, n); may run ranges in parallel.
     using ParallelFor = std::function<void(int64_t n, int64_t grain, const std::function<void(int64_t, int64_t)> &)>;
     // Indexes the points position(0..n) for queries of radius `radius` (> 0).
-    void build(size_t n, const std::function<Point3(size_t)> &position, Float radius, const ParallelFor &pf);
+    void build(size_t n, std::function<Point3(size_t)> position, Float radius, const ParallelFor &pf);
     // Calls fn(index, squared distance) for every point closer than the radius to p.
     template <typename Fn>
     void query(const Point3 &p, Fn &&fn) const {
@@ -36,7 +41,7 @@ class PhotonGrid {
 
     Float radius() const { return radius_; }
     size_t size() const { return points_.size(); }
-    size_t bytes() const { return points_.capacity() * sizeof(Point3) + start_.capacity() * 4 + index_.capacity() * 4; }
+    size_t bytes() const { return points_.capacity() * sizeof(Point3f) + start_.capacity() * 4 + index_.capacity() * 4; }
 
   private:
     uint32_t bucket(int64_t x, int64_t y, int64_t z) const {
@@ -46,11 +51,16 @@ class PhotonGrid {
         h ^= h >> 32;
         return uint32_t(h & mask_);
     }
+    struct Point3f {
+        float x, y, z;
+    };
     Float radius_ = 0, r2_ = 0, invCell_ = 0;
+    Float margin_ = 0;  // bounds the distance between a point and its float position
     uint64_t mask_ = 0;
     std::vector<uint32_t> start_;  // bucket b: index_[start_[b], start_[b+1])
     std::vector<uint32_t> index_;  // point indices, bucket by bucket, increasing within a bucket
-    std::vector<Point3> points_;   // positions in index_ order (locality of queries)
+    std::vector<Point3f> points_;  // float positions in index_ order (locality of queries)
+    std::function<Point3(size_t)> position_;  // exact positions
 };
 
 template <typename Fn>
@@ -58,6 +68,9 @@ void PhotonGrid::query(const Point3 &p, Float r, Fn &&fn) const {
     if (points_.empty() || !(r > 0)) return;
     r = std::min(r, 2 * radius_);
     const Float r2 = r * r;
+    // Float positions within margin_ of the exact ones: a point closer than r
+    // is closer than rf to its float position (relative slack for rounding).
+    const Float rf = r * (1 + 1e-9) + margin_, rf2 = rf * rf;
     // Cells overlapped by the ball's bounding box: at most 2 per axis for
     // r <= radius (half a cell), 3 for r <= 2 radius.
     const Float inv = invCell_;
@@ -76,7 +89,10 @@ void PhotonGrid::query(const Point3 &p, Float r, Fn &&fn) const {
                 if (dup) continue;
                 seen[nSeen++] = b;
                 for (uint32_t k = start_[b]; k < start_[b + 1]; ++k) {
-                    const Float d2 = (points_[k] - p).lengthSquared();
+                    const Point3f &q = points_[k];
+                    const Float dx = Float(q.x) - p.x, dy = Float(q.y) - p.y, dz = Float(q.z) - p.z;
+                    if (!(dx * dx + dy * dy + dz * dz < rf2)) continue;
+                    const Float d2 = (position_(index_[k]) - p).lengthSquared();
                     if (d2 < r2) fn(index_[k], d2);
                 }
             }

@@ -83,6 +83,7 @@ void GVCMIntegrator::runPass(PassContext &ctx) {
         lightPass(ctx);
         if (ctx.interrupted()) return;
         BuildLightVertexGrid(ctx, vertices_, radius_, &grid_);
+        gridBytes_ = grid_.bytes();
         if (ctx.interrupted()) return;
     }
     ctx.forEachPixelSample(*this);
@@ -104,17 +105,26 @@ void GVCMIntegrator::lightPass(PassContext &ctx) {
     lightKey_ = ctx.seed() ^ kLightTag;
     lightPassIndex_ = ctx.pass();
     const VCMWeights weights{&kernel_, true, connections_ && set_.lightTracing, false, true};
-    const int64_t chunks = (N + PassContext::kItemChunk - 1) / PassContext::kItemChunk;
-    std::vector<std::vector<LightVertex>> out(static_cast<size_t>(chunks));
-    std::vector<uint32_t> count(static_cast<size_t>(N), 0);
-    ctx.forEachItem(N, kLightTag, [&](int64_t item, RNG &, SampleRecorder &, Worker &wk) {
-        ShiftSubpath L;
-        regenerate(uint32_t(item), set_.maxDepth + 1, wk.arena, &L);  // the same RNG as forEachItem's (seed ^ tag, pass, item)
-        count[size_t(item)] =
-            uint32_t(VCMLightVertices(bctx_, L.v, L.b, L.n, weights, &out[size_t(item / PassContext::kItemChunk)]));
-    });
-    ConcatLightVertices(ctx, out, count, &vertices_, &pathStart_);
+    // Chunks gathered into vertices_ in subpath order as they merge (vcm's LightVertexGather).
+    LightVertexGather gather(N, set_.maxDepth, &vertices_, &pathStart_);
+    ctx.forEachItem(
+        N, kLightTag,
+        [&](int64_t item, RNG &, SampleRecorder &, Worker &wk) {
+            ShiftSubpath L;
+            regenerate(uint32_t(item), set_.maxDepth + 1, wk.arena, &L);  // the same RNG as forEachItem's (seed ^ tag, pass, item)
+            gather.setCount(item, VCMLightVertices(bctx_, L.v, L.b, L.n, weights, &gather.buffer(item)));
+        },
+        gather.chunkMerged());
     nLightVertices_ += vertices_.size();
+}
+
+void GVCMIntegrator::finish(const Film &film, const RenderStats &stats, Image *out) {
+    // The passes are over: the last pass's light vertices and grid are not part of the output
+    // (the reconstruction would otherwise run beside them; bench/gvcm/MEMORY.md).
+    std::vector<LightVertex>().swap(vertices_);
+    std::vector<uint32_t>().swap(pathStart_);
+    grid_ = PhotonGrid();
+    GBDPTIntegrator::finish(film, stats, out);
 }
 
 // An offset merge: value f(y)|T'|/p(x) (times the camera weight), its VCM
@@ -503,7 +513,7 @@ std::string GVCMIntegrator::statistics() const {
                   "  merge fallbacks (zero offset, base weight): camera shift failed %llu, light at infinity %llu, "
                   "glossy chain %llu, long chain %llu, walk failed %llu, occluded or black %llu, regeneration mismatch %llu\n",
                   gset_.mergeOnly ? "mergeonly (G-PM)" : "vcm", KernelName(gset_).c_str(), radius1_, radius_, passes_,
-                  passes_ ? double(nLightVertices_) / passes_ : 0.0, sizeof(LightVertex), grid_.bytes() / 1e6,
+                  passes_ ? double(nLightVertices_) / passes_ : 0.0, sizeof(LightVertex), gridBytes_ / 1e6,
                   c(Merges), skipped_.empty() ? "" : "; ", skipped_.c_str(), c(Case1), c(Case1Shifted), c(Case2),
                   c(Case2Empty), c(Case2Chain), c(Case2Shifted), c(Case2Skipped), c(Regenerated), c(FallbackShift),
                   c(FallbackInfinite), c(FallbackGlossy), c(FallbackLong), c(FallbackWalk), c(FallbackBlocked),

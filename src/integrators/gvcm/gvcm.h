@@ -115,6 +115,7 @@ class GVCMIntegrator : public GBDPTIntegrator {
     void preprocess(const Scene &scene, Film &film) override;
     int samplesPerPass(const RenderOptions &) const override { return 1; }  // one iteration = 1 spp
     void runPass(PassContext &ctx) override;
+    void finish(const Film &film, const RenderStats &stats, Image *out) override;
     std::string statistics() const override;
     Float radiusAt(int iteration) const { return VCMRadius(radius1_, gset_.radiusAlpha, iteration); }
 
@@ -146,6 +147,7 @@ class GVCMIntegrator : public GBDPTIntegrator {
     std::vector<LightVertex> vertices_;
     std::vector<uint32_t> pathStart_;
     PhotonGrid grid_;
+    size_t gridBytes_ = 0;  // the last pass's grid (statistics, after finish() released it)
     uint64_t lightKey_ = 0;
     int lightPassIndex_ = 0, passes_ = 0;
     uint64_t nLightVertices_ = 0;

@@ -248,22 +248,6 @@ Float VCMFootprintRadius(const Scene &scene, const Bounds2i &bounds, Float scale
     return std::isfinite(rad) && rad > 0 ? 1e-3 * rad : 1e-3;
 }
 
-void ConcatLightVertices(PassContext &ctx, const std::vector<std::vector<LightVertex>> &chunks,
-                         const std::vector<uint32_t> &count, std::vector<LightVertex> *vertices,
-                         std::vector<uint32_t> *pathStart) {
-    // Chunks hold their items' vertices in item order: concatenate in chunk order.
-    const size_t N = count.size();
-    pathStart->assign(N + 1, 0);
-    for (size_t j = 0; j < N; ++j) (*pathStart)[j + 1] = (*pathStart)[j] + count[j];
-    vertices->resize((*pathStart)[N]);
-    std::vector<size_t> chunkStart(chunks.size() + 1, 0);
-    for (size_t c = 0; c < chunks.size(); ++c) chunkStart[c + 1] = chunkStart[c] + chunks[c].size();
-    ctx.parallelFor(int64_t(chunks.size()), 1, [&](int64_t c0, int64_t c1, Worker &) {
-        for (int64_t c = c0; c < c1; ++c)
-            std::copy(chunks[c].begin(), chunks[c].end(), vertices->begin() + chunkStart[c]);
-    });
-}
-
 LightVertexGather::LightVertexGather(int64_t subpaths, int maxDepth, std::vector<LightVertex> *vertices,
                                      std::vector<uint32_t> *pathStart)
     : chunks_(size_t((subpaths + PassContext::kItemChunk - 1) / PassContext::kItemChunk)), n_(subpaths),

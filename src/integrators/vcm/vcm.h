@@ -185,18 +185,12 @@ Float VCMCameraSum(const VCMCameraTerms &c, Float oz, Float oPrev, bool gu, bool
 // r_1 from the pixel footprint: `scale` times the median distance between the
 // primary hits of neighbouring pixels (16 x 16 probes; G-VCM Sec. 6, "about one pixel").
 Float VCMFootprintRadius(const Scene &scene, const Bounds2i &bounds, Float scale);
-// A light pass's vertices, produced per chunk of PassContext::kItemChunk
-// subpaths (count[j]: vertices of subpath j), concatenated in subpath order:
-// subpath j owns (*vertices)[(*pathStart)[j], (*pathStart)[j + 1]).
-void ConcatLightVertices(PassContext &ctx, const std::vector<std::vector<LightVertex>> &chunks,
-                         const std::vector<uint32_t> &count, std::vector<LightVertex> *vertices,
-                         std::vector<uint32_t> *pathStart);
 // A light pass's vertices gathered in subpath order while it runs
 // (PassContext::forEachItem): the subpaths of chunk c append to buffer(item),
 // and chunkMerged() moves chunk c's buffer to the end of *vertices as soon as
 // the chunks before it are merged, so besides the vertices only the merge
-// window's buffers exist (ConcatLightVertices holds every chunk and then a
-// second copy of all of them). *vertices keeps its capacity from pass to pass;
+// window's buffers exist (not every chunk and then a copy of all of them).
+// *vertices keeps its capacity from pass to pass;
 // subpath j owns (*vertices)[(*pathStart)[j], (*pathStart)[j + 1]).
 class LightVertexGather {
   public:

@@ -136,7 +136,7 @@ struct GVCMIntegrator::Offset {
 
 // The base's half of a case-2 offset (case2Base).
 struct GVCMIntegrator::Case2Base {
-    int m = 0, d = 0, k = 0;
+    int d = 0, k = 0;
     ChainInterior in;      // the chain's interior (k > 0)
     ManifoldChain chain;   // y_d .. y_m (k > 0)
     Vec3 dirX;             // direction at y_d
@@ -167,7 +167,8 @@ Spectrum GVCMIntegrator::emitFrom(const ShiftSubpath &L, int d, const Vec3 &dir,
 // y_d, the chain y_d .. y_m and T(x) = E(y_d -> chain) G~ prod f|cos| (gvcm.h).
 bool GVCMIntegrator::case2Base(const ShiftSubpath &L, int m, Arena &arena, Case2Base *cb) const {
     const Scene &scene = *scene_;
-    cb->m = m;
+    cb->fcosX = Spectrum(1);  // no Dirac vertex (k = 0) unless the chain sets them
+    cb->probX = 1;
     // y_d: the last connectable vertex before the photon (the light origin at the latest).
     int d = m - 1;
     while (d > 0 && L.v[d].delta()) --d;
@@ -408,6 +409,7 @@ void GVCMIntegrator::addStrategies(const CameraState &st, GradientSample *out) c
         const Float stride = thin ? Float(n) / K : 1;
         const Float start = thin ? st.sampler->get1D() * stride : 0;
         int nextPick = 0;  // the next chosen position: floor(start + j stride)
+        Case2Base cb;      // one photon's at a time (large: built once per vertex, filled by case2Base)
         for (int i = 0; i < n; ++i) {
             const uint32_t idx = found[size_t(i)].first;
             const Spectrum &f = found[size_t(i)].second;
@@ -432,7 +434,6 @@ void GVCMIntegrator::addStrategies(const CameraState &st, GradientSample *out) c
             const Spectrum fx = zu.throughput() * f * lv.throughput() * (w / etaU);
             out->primal += fx * wx;
             ShiftSubpath L;
-            Case2Base cb;
             bool haveL = false, badL = false;
             for (int k = 0; k < kNumNeighbours; ++k) {
                 if (!st.inside[k]) continue;

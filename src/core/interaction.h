@@ -7,6 +7,15 @@ namespace gradus {
 
 class Material;
 class AreaLight;
+class Medium;
+
+// Media on the two sides of a surface (media/medium.h): inside is against the
+// geometric normal n, outside along it. pbrt-v3: inside == outside is not a
+// transition, and a ray crossing or scattering at such a surface keeps its medium.
+struct MediumInterface {
+    const Medium *inside = nullptr, *outside = nullptr;
+    bool transition() const { return inside != outside; }
+};
 
 // Offset for spawning rays off a surface: Embree intersects in float, hits are
 // refined in double; a relative epsilon of the scene scale keeps rays off the
@@ -73,6 +82,7 @@ struct SurfaceInteraction : Interaction {
     } shading;
     const Material *material = nullptr;
     const AreaLight *areaLight = nullptr;
+    MediumInterface mediumInterface;  // of the surface hit (Scene::intersect)
     int geomId = -1, primId = -1;  // Embree ids (for shifts: "same surface" tests)
 
     // Sets the shading frame; flips the geometric normal into the shading hemisphere
@@ -88,6 +98,12 @@ struct SurfaceInteraction : Interaction {
         shading.dpdv = dpdvs;
         shading.dndu = dndus;
         shading.dndv = dndvs;
+    }
+    // The medium a ray leaving this point in direction d travels in; `current`
+    // is the medium of the ray that arrived (kept where the surface is no transition).
+    const Medium *mediumAfter(const Vec3 &d, const Medium *current) const {
+        if (!mediumInterface.transition()) return current;
+        return Dot(Vec3(n), d) > 0 ? mediumInterface.outside : mediumInterface.inside;
     }
     // Emitted radiance from an area light at this point towards w (0 if none).
     Spectrum Le(const Vec3 &w) const;

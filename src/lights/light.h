@@ -42,6 +42,10 @@ class Light {
     virtual ~Light() = default;
     const int flags;
     const Transform worldFromLight;
+    // The media around the light (scene builder): point, spot, goniometric and
+    // projection lights sit in `outside`; an area light has its shape's
+    // interface; infinite and distant lights have none.
+    MediumInterface mediumInterface;
 
     virtual Spectrum power() const = 0;
     virtual void preprocess(const Bounds3 &sceneBounds) {}

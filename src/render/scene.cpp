@@ -38,6 +38,7 @@ bool Scene::intersect(const Ray &r, SurfaceInteraction *si) const {
     si->areaLight = g.areaLights.empty() ? nullptr : g.areaLights[h.primId];
     si->geomId = h.geomId;
     si->primId = h.primId;
+    si->mediumInterface = g.mediumInterface;
     return true;
 }
 
@@ -56,6 +57,32 @@ bool Scene::occluded(const Ray &r) const {
     return accel.occluded(r);
 }
 
+Spectrum Scene::transmittance(const Interaction &a, const Medium *ma, const Interaction &b, RNG &rng) const {
+    if (!features.media) return unoccluded(a, b) ? Spectrum(1) : Spectrum(0);
+    GRADUS_STAT_COUNTER("Rays/Transmittance rays", nTr);
+    ++nTr;
+    Spectrum tr(1);
+    Interaction from = a;
+    const Medium *medium = ma;
+    for (int k = 0; k <= kMaxInterfaceCrossings; ++k) {
+        Ray ray = from.spawnRayTo(b);
+        SurfaceInteraction si;
+        const bool hit = intersect(ray, &si);
+        if (hit && si.material) return Spectrum(0);  // an opaque or scattering surface in between
+        if (medium) {
+            // The segment up to the interface (or to b): t in units of |ray.d|.
+            Ray seg = ray;
+            if (hit) seg.tMax = Dot(si.p - ray.o, ray.d) / ray.d.lengthSquared();
+            tr *= medium->Tr(seg, rng);
+            if (tr.isBlack()) return tr;
+        }
+        if (!hit) return tr;
+        medium = si.mediumAfter(ray.d, medium);
+        from = si;
+    }
+    return Spectrum(0);  // stuck between interfaces
+}
+
 std::string SceneFeatures::describe() const {
     std::ostringstream os;
     auto yn = [](bool b) { return b ? "yes" : "no"; };
@@ -68,6 +95,7 @@ std::string SceneFeatures::describe() const {
        << "  delta lights: " << yn(deltaLights) << ", infinite lights: " << yn(infiniteLights)
        << ", area lights: " << yn(areaLights) << "\n"
        << "  textures: " << yn(textures) << ", subdivision surfaces: " << yn(subdivisionSurfaces) << "\n"
+       << "  participating media: " << yn(media) << ", subsurface scattering: " << yn(subsurface) << "\n"
        << "  emitters directly visible: " << yn(emittersDirectlyVisible) << "\n";
     return os.str();
 }

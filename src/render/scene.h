@@ -9,6 +9,7 @@
 #include "cameras/camera.h"
 #include "lights/light.h"
 #include "materials/material.h"
+#include "media/medium.h"
 
 namespace gradus {
 
@@ -22,6 +23,8 @@ struct SceneFeatures {
     bool areaLights = false;
     bool textures = false;
     bool subdivisionSurfaces = false;
+    bool media = false;       // some MakeNamedMedium is in use (camera, light or surface)
+    bool subsurface = false;  // some material has a BSSRDF
     bool emittersDirectlyVisible = false;  // probed with camera rays at load
     int numLights = 0;
     int64_t numTriangles = 0;
@@ -46,6 +49,7 @@ struct GeometryRecord {
     std::shared_ptr<const AnalyticShape> sphere;
     const Material *material = nullptr;
     std::vector<const AreaLight *> areaLights;  // per primitive; empty if not emissive
+    MediumInterface mediumInterface;            // the shape's (no media: both null)
 
     // World-space triangle data of a mesh record (placement applied).
     void meshInteraction(int tri, Float b1, Float b2, const Vec3 &wo, SurfaceInteraction *si) const {
@@ -69,6 +73,12 @@ class Scene {
     bool occluded(const Ray &r) const;
     // Shadow-ray test between two interactions (offset at both ends).
     bool unoccluded(const Interaction &a, const Interaction &b) const { return !occluded(a.spawnRayTo(b)); }
+    // Transmittance from a (in medium `ma`, the medium a ray leaving a towards b
+    // starts in) to b: 0 when a surface with a material lies between, else the
+    // product of the media's transmittances over the segments between the
+    // interfaces crossed (pbrt-v3's VisibilityTester::Tr). Equals
+    // unoccluded(a, b) ? 1 : 0 in a scene without media.
+    Spectrum transmittance(const Interaction &a, const Medium *ma, const Interaction &b, RNG &rng) const;
 
     EmbreeAccel accel;
     std::vector<GeometryRecord> geometry;   // indexed by record id (EmbreeAccel)
@@ -77,6 +87,8 @@ class Scene {
     std::vector<const Light *> infiniteLights;
     std::vector<std::shared_ptr<Material>> materials;  // owned
     std::unique_ptr<Camera> camera;
+    std::vector<std::shared_ptr<Medium>> media;  // owned (MakeNamedMedium)
+    const Medium *cameraMedium = nullptr;        // the medium the camera sits in
     Bounds3 bounds;
     SceneFeatures features;
 };

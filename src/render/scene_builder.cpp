@@ -188,13 +188,30 @@ double PeakRSSMegabytes() {
 
 std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
     // pbrt-v3 features that would otherwise be dropped silently.
-    if (!desc.media.empty())
-        throw UnsupportedError(desc.media.front().loc, "participating media (MakeNamedMedium \"" +
-                                                           desc.media.front().name + "\")");
     if (desc.motionBlur)
         throw UnsupportedError(desc.motionLoc, "motion blur (this entity's start and end transforms differ)");
     auto scene = std::make_unique<Scene>();
     SceneFeatures &feat = scene->features;
+
+    // Media (MakeNamedMedium); names were checked by the parser. "" is vacuum.
+    std::map<std::string, const Medium *> mediumByName;
+    for (const MediumDesc &md : desc.media) {
+        auto m = CreateMedium(md);
+        md.params.checkUnused("MakeNamedMedium \"" + md.name + "\"");
+        mediumByName[md.name] = m.get();
+        scene->media.push_back(std::move(m));
+    }
+    auto mediumNamed = [&](const std::string &name) -> const Medium * {
+        if (name.empty()) return nullptr;
+        feat.media = true;
+        return mediumByName.at(name);
+    };
+    auto interfaceOf = [&](const ShapeDesc &sd) {
+        MediumInterface mi;
+        mi.inside = mediumNamed(sd.insideMedium);
+        mi.outside = mediumNamed(sd.outsideMedium);
+        return mi;
+    };
 
     // Textures (in file order: later ones may reference earlier ones).
     NamedTextures textures;
@@ -246,6 +263,7 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
     struct ObjectBuild {
         int embreeObject = -1;
         std::vector<const Material *> materials;  // per mesh of the Embree object
+        std::vector<MediumInterface> media;       // per mesh of the Embree object
         Bounds3 bounds;                           // of those meshes, in the object's space
         int64_t triangles = 0;
         std::vector<ShapeDesc> flattened;  // shapes copied per use
@@ -279,6 +297,7 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
                 for (const auto &q : b.mesh->p) ob.bounds.expand(q);
                 ob.triangles += b.mesh->numTriangles();
                 ob.materials.push_back(materialOf(sd));
+                ob.media.push_back(interfaceOf(sd));
                 scene->accel.addObjectMesh(ob.embreeObject, b.mesh);
             }
             feat.numStoredTriangles += ob.triangles;
@@ -292,6 +311,7 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
         ShapeBuild b = CreateShape(sd, desc, textures);
         GeometryRecord rec;
         rec.material = materialOf(sd);
+        rec.mediumInterface = interfaceOf(sd);
         if (b.mesh) {
             if (b.mesh->numTriangles() == 0) continue;  // empty mesh: nothing to add
             rec.mesh = b.mesh;
@@ -355,11 +375,13 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
                         }
                     }
                     auto al = std::make_shared<AreaLight>(tri, Lt, twoSided);
+                    al->mediumInterface = rec.mediumInterface;
                     rec.areaLights.push_back(al.get());
                     scene->lights.push_back(al);
                 }
             } else if (b.analytic->area() > 0) {
                 auto al = std::make_shared<AreaLight>(b.analytic, L, twoSided);
+                al->mediumInterface = rec.mediumInterface;
                 rec.areaLights.push_back(al.get());
                 scene->lights.push_back(al);
             } else {
@@ -382,6 +404,7 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
             rec.mesh = scene->accel.objectMesh(ob->embreeObject, k);
             rec.placement = pl;
             rec.material = ob->materials[size_t(k)];
+            rec.mediumInterface = ob->media[size_t(k)];
             scene->geometry.push_back(std::move(rec));
         }
         feat.numInstances++;
@@ -398,6 +421,11 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
 
     for (const auto &ld : desc.lights) {
         auto l = CreateLight(ld, desc);
+        // Lights at a position sit in the medium current at LightSource;
+        // lights at infinity send their light in from outside every medium.
+        if (!(l->flags & (LIGHT_INFINITE | LIGHT_DELTA_DIRECTION))) {
+            l->mediumInterface.inside = l->mediumInterface.outside = mediumNamed(ld.outsideMedium);
+        }
         if (l->flags & LIGHT_INFINITE) {
             scene->infiniteLights.push_back(l.get());
             feat.infiniteLights = true;
@@ -422,6 +450,7 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
     feat.nearSpecularSurfaces = feat.minRoughness < kDefaultShiftThreshold;
 
     scene->camera = CreateCamera(desc.camera, resolution);
+    scene->cameraMedium = mediumNamed(desc.camera.mediumName);
 
     // Are emitters directly visible? Probe a coarse grid of camera rays.
     const int probe = 64;

@@ -49,6 +49,10 @@ class Integrator {
     // True when pass p needs nothing from passes before it but its index
     // (gradus --passes A:B can then render [A, B) alone); false for mlt.
     virtual bool independentPasses() const { return true; }
+    // Scene parts an integrator must handle or refuse (the job refuses a scene
+    // with media or BSSRDFs, at the Integrator directive, when these are false).
+    virtual bool rendersMedia() const { return false; }
+    virtual bool rendersSubsurface() const { return false; }
 };
 
 // An integrator that estimates independent camera samples: each pass is

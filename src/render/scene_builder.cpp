@@ -186,6 +186,29 @@ double PeakRSSMegabytes() {
 }
 }  // namespace
 
+// Media and BSSRDFs are refused by integrators that do not render them,
+// naming the integrator and the scene part (never a silently wrong image).
+constexpr const char *kMediaIntegrators = "path (pbrt-v3's volpath), bdpt, mbdpt and vcm";
+static void RefuseUnhandledParts(const Integrator &integrator, const Scene &scene, const SceneDesc &desc,
+                          const EntityDesc &idesc) {
+    const FileLoc at = idesc.present ? idesc.loc : (desc.media.empty() ? FileLoc() : desc.media.front().loc);
+    if (scene.features.media && !integrator.rendersMedia()) {
+        const MediumDesc &m = desc.media.front();
+        throw Error(at, "Integrator \"" + idesc.type + "\" does not render participating media (medium \"" + m.name +
+                            "\" made at " + m.loc.str() + "); media render with " + kMediaIntegrators);
+    }
+    if (scene.features.subsurface && !integrator.rendersSubsurface()) {
+        FileLoc mloc;
+        for (const MaterialDesc &md : desc.materials)
+            if (md.type == "subsurface" || md.type == "kdsubsurface") {
+                mloc = md.loc;
+                break;
+            }
+        throw Error(at, "Integrator \"" + idesc.type + "\" does not render subsurface scattering (material made at " +
+                            mloc.str() + "); BSSRDFs render with path");
+    }
+}
+
 std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
     // pbrt-v3 features that would otherwise be dropped silently.
     if (desc.motionBlur)
@@ -565,6 +588,7 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
     bool overridden = !opts.integratorOverride.empty() && opts.integratorOverride != idesc.type;
     if (!opts.integratorOverride.empty()) idesc.type = opts.integratorOverride;
     MapPbrtSppm(&idesc);
+    if (idesc.type == "volpath") idesc.type = "path";  // path renders media as pbrt-v3's volpath does
     ApplyParamOverrides(opts.paramOverrides, &idesc);
     job.integrator = CreateIntegrator(idesc);
     if (overridden) {
@@ -603,6 +627,7 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
     }
 
     job.scene = BuildScene(desc, res);
+    RefuseUnhandledParts(*job.integrator, *job.scene, desc, idesc);
 
     Metadata &m = job.provenance;
     auto entity = [](const EntityDesc &e, const std::string &type) {

@@ -2,6 +2,7 @@
 // of simple fast space-efficient statistically good algorithms").
 #pragma once
 #include <cstdint>
+#include <cstring>
 
 namespace gradus {
 
@@ -23,6 +24,13 @@ inline uint64_t Hash(uint64_t a, uint64_t b = 0, uint64_t c = 0, uint64_t d = 0)
     h = MixBits(h ^ (c + 0x8cb92ba72f3d8dd7ULL));
     h = MixBits(h ^ (d + 0xa0761d6478bd642fULL));
     return h;
+}
+
+// The bits of a double (hash keys).
+inline uint64_t FloatBits(double v) {
+    uint64_t b;
+    std::memcpy(&b, &v, sizeof b);
+    return b;
 }
 
 // Largest double below 1.

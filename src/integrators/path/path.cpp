@@ -25,12 +25,19 @@ PathIntegrator::PathIntegrator(const EntityDesc &desc) : set_(PathParams().parse
 
 void PathIntegrator::preprocess(const Scene &scene, Film &) {
     lightSampler_ = LightSampler(scene.lights, set_.lightStrategy, loc_, scene.bounds);
+    volumetric_ = scene.features.media || scene.features.subsurface;
 }
 
 void PathIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const {
     Ray ray;
     Float w = scene_->camera->generateRay(cs, &ray);
     if (w == 0) return;
+    if (volumetric_) {
+        // Media draw from their own stream, keyed by the render seed and the film position.
+        RNG rng(Hash(sampler.seed(), FloatBits(cs.pFilm.x), FloatBits(cs.pFilm.y), FloatBits(cs.pLens.x)));
+        rec.addRadiance(LiVolumetric(ray, sampler, arena, rng) * w);
+        return;
+    }
     rec.addRadiance(Li(ray, sampler, arena) * w);
 }
 

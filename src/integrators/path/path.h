@@ -35,9 +35,21 @@ class PathIntegrator : public PixelSampleIntegrator {
     void estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const override;
     // Radiance along a camera ray (exposed for tests).
     Spectrum Li(const Ray &ray, Sampler &sampler, Arena &arena) const;
+    // The same in a scene with participating media or BSSRDFs (pbrt-v3's
+    // volpath; volpath.cpp): the camera ray starts in scene.cameraMedium;
+    // `rng` serves distance sampling and transmittance estimates.
+    Spectrum LiVolumetric(const Ray &ray, Sampler &sampler, Arena &arena, RNG &rng) const;
     int maxDepth() const { return set_.maxDepth; }
+    bool rendersMedia() const override { return true; }
+    bool rendersSubsurface() const override { return true; }
 
   private:
+    // Next-event estimation at a surface (bsdf) or medium (phase) vertex, the
+    // connection weighted against the scattering sample (volpath.cpp).
+    Spectrum sampleLightVolumetric(const Interaction &it, const BSDF *bsdf, const Vec3 &shadingN,
+                                   const HGPhase *phase, const Medium *medium, const SurfaceInteraction *surface,
+                                   Sampler &sampler, RNG &rng) const;
+    bool volumetric_ = false;  // the scene has media or BSSRDFs: estimate() takes LiVolumetric
     PathSettings set_;
     FileLoc loc_;
     LightSampler lightSampler_;

@@ -10,6 +10,8 @@
 
 namespace gradus {
 
+class BSSRDF;  // materials/bssrdf.h
+
 class Material {
   public:
     virtual ~Material() = default;
@@ -19,6 +21,11 @@ class Material {
     // "has specular or near-specular surfaces"). 0 = perfectly specular.
     virtual Float minRoughness() const = 0;
     virtual bool hasTextures() const { return false; }
+    // Subsurface scattering below the surface (pbrt-v3's "subsurface", "kdsubsurface"):
+    // the BSSRDF at si (called with the si getBSDF returned with), allocated in the arena;
+    // nullptr for materials without one.
+    virtual const BSSRDF *getBSSRDF(const SurfaceInteraction &si, Arena &arena) const { return nullptr; }
+    virtual bool hasSubsurface() const { return false; }
 };
 
 // Creates a material of pbrt-v3 type `desc.type` ("matte", ...). Reads its

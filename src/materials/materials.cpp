@@ -1,8 +1,10 @@
 // pbrt-v3 materials: matte, plastic, metal, mirror, glass, uber, substrate,
 // translucent, mix (+ "bumpmap" on each). Parameter names and defaults follow pbrt-v3.
-// "gltfpbr" (glTF 2.0 metallic-roughness) lives in gltf_pbr.cpp.
+// "gltfpbr" (glTF 2.0 metallic-roughness) lives in gltf_pbr.cpp, "subsurface" and
+// "kdsubsurface" in subsurface.cpp.
 #include <vector>
 
+#include "materials/bssrdf.h"
 #include "materials/bxdfs.h"
 #include "materials/gltf_pbr.h"
 #include "materials/material.h"
@@ -307,7 +309,7 @@ std::shared_ptr<Material> CreateMaterial(const MaterialDesc &desc, const NamedTe
     const ParamSet &p = desc.params;
     const FileLoc &loc = desc.loc;
     const std::string &t = desc.type;
-    if (t == "fourier" || t == "hair" || t == "kdsubsurface" || t == "subsurface" || t == "disney")
+    if (t == "fourier" || t == "hair" || t == "disney")
         throw UnsupportedError(loc, "material \"" + t + "\"");
     if (t == "" || t == "none" || t == "interface") return std::make_shared<InterfaceMaterial>();
     if (t == "mix") {
@@ -378,8 +380,9 @@ std::shared_ptr<Material> CreateMaterial(const MaterialDesc &desc, const NamedTe
         return m;
     }
     if (t == "gltfpbr") return CreateGltfPbrMaterial(p, tex, loc, bump);
+    if (t == "subsurface" || t == "kdsubsurface") return CreateSubsurfaceMaterial(t, p, tex, loc, bump);
     throw Error(loc, "unknown material type \"" + t +
-                         "\" (known: matte, plastic, metal, mirror, glass, uber, substrate, translucent, mix, gltfpbr)");
+                         "\" (known: matte, plastic, metal, mirror, glass, uber, substrate, translucent, mix, gltfpbr, subsurface, kdsubsurface)");
 }
 
 }  // namespace gradus

@@ -92,6 +92,64 @@ GridMedium::GridMedium(const Spectrum &sa, const Spectrum &ss, Float g, const Tr
         worldFromMedium * Translate(Vec3(p0.x, p0.y, p0.z)) * Scale(p1.x - p0.x, p1.y - p0.y, p1.z - p0.z);
     mediumFromWorld_ = worldFromGrid.inverse();
     for (Float v : density_) maxDensity_ = std::max(maxDensity_, v);
+    // Majorant cells: the density at p reads voxels floor(p n - 1/2) and the
+    // next one on each axis, so a cell [lo, hi] depends on voxels
+    // floor(lo n - 1/2) .. floor(hi n - 1/2) + 1 (clamped to the grid).
+    const int n[3] = {nx_, ny_, nz_};
+    int lo[3][16], hi[3][16];
+    for (int a = 0; a < 3; ++a) {
+        m_[a] = std::min(n[a], 16);
+        for (int c = 0; c < m_[a]; ++c) {
+            lo[a][c] = std::max(0, int(std::floor(Float(c) / m_[a] * n[a] - 0.5)));
+            hi[a][c] = std::min(n[a] - 1, int(std::floor(Float(c + 1) / m_[a] * n[a] - 0.5)) + 1);
+        }
+    }
+    majorant_.assign(size_t(m_[0]) * m_[1] * m_[2], 0);
+    for (int cz = 0; cz < m_[2]; ++cz)
+        for (int cy = 0; cy < m_[1]; ++cy)
+            for (int cx = 0; cx < m_[0]; ++cx) {
+                Float mx = 0;
+                for (int z = lo[2][cz]; z <= hi[2][cz]; ++z)
+                    for (int y = lo[1][cy]; y <= hi[1][cy]; ++y)
+                        for (int x = lo[0][cx]; x <= hi[0][cx]; ++x) mx = std::max(mx, d(x, y, z));
+                majorant_[(size_t(cz) * m_[1] + cy) * m_[0] + cx] = mx;
+            }
+}
+
+// 3-D DDA over the majorant cells (Amanatides & Woo 1987).
+template <class Visit>
+void GridMedium::traverse(const Ray &local, Float t0, Float t1, Visit &&visit) const {
+    const Point3 p = local(t0);
+    int cell[3], step[3];
+    Float tNext[3], tDelta[3];
+    for (int a = 0; a < 3; ++a) {
+        cell[a] = std::clamp(int(p[a] * m_[a]), 0, m_[a] - 1);
+        const Float dir = local.d[a];
+        if (dir > 0) {
+            step[a] = 1;
+            tNext[a] = t0 + (Float(cell[a] + 1) / m_[a] - p[a]) / dir;
+            tDelta[a] = 1 / (m_[a] * dir);
+        } else if (dir < 0) {
+            step[a] = -1;
+            tNext[a] = t0 + (Float(cell[a]) / m_[a] - p[a]) / dir;
+            tDelta[a] = -1 / (m_[a] * dir);
+        } else {
+            step[a] = 0;
+            tNext[a] = Infinity;
+            tDelta[a] = Infinity;
+        }
+    }
+    Float t = t0;
+    for (;;) {
+        const int a = tNext[0] < tNext[1] ? (tNext[0] < tNext[2] ? 0 : 2) : (tNext[1] < tNext[2] ? 1 : 2);
+        const Float tb = std::min(tNext[a], t1);
+        if (tb > t && !visit(majorant_[(size_t(cell[2]) * m_[1] + cell[1]) * m_[0] + cell[0]], t, tb)) return;
+        if (tb >= t1) return;
+        t = tb;
+        cell[a] += step[a];
+        if (cell[a] < 0 || cell[a] >= m_[a]) return;
+        tNext[a] += tDelta[a];
+    }
 }
 
 Float GridMedium::d(int x, int y, int z) const {
@@ -138,44 +196,55 @@ bool GridMedium::clip(const Ray &ray, Ray *local, Float *t0, Float *t1) const {
     return true;
 }
 
-// Ratio tracking (Novak et al. 2014, Sec. 4.2) against the majorant sigma_t * max density.
+// Ratio tracking (Novak et al. 2014, Sec. 4.2) against the cells' majorants
+// sigma_t * max d (the exponential steps restart at each cell boundary: memoryless).
 Spectrum GridMedium::Tr(const Ray &ray, RNG &rng) const {
     Ray local;
     Float t0, t1;
     if (maxDensity_ <= 0 || sigmaT_ <= 0 || !clip(ray, &local, &t0, &t1)) return Spectrum(1);
-    const Float invMajorant = 1 / (sigmaT_ * maxDensity_);
-    Float tr = 1, t = t0;
-    for (;;) {
-        t -= std::log(1 - rng.uniform()) * invMajorant;
-        if (t >= t1) break;
-        tr *= 1 - std::max<Float>(0, density(local(t)) / maxDensity_);
-        if (tr <= 0) break;
-    }
+    Float tr = 1;
+    traverse(local, t0, t1, [&](Float maxD, Float ta, Float tb) {
+        if (maxD <= 0) return true;
+        const Float invMajorant = 1 / (sigmaT_ * maxD);
+        for (Float t = ta;;) {
+            t -= std::log(1 - rng.uniform()) * invMajorant;
+            if (t >= tb) return true;
+            tr *= 1 - std::max<Float>(0, density(local(t)) / maxD);
+            if (tr <= 0) return false;
+        }
+    });
     return Spectrum(std::max<Float>(tr, 0));
 }
 
-// Delta tracking (Woodcock et al. 1965; Novak et al. 2014, Sec. 4.1): a tentative
-// collision is real with probability d(p) / max d; a real one scatters with the
-// albedo sigma_s / sigma_t as throughput factor (absorption folded in).
+// Delta tracking (Woodcock et al. 1965; Novak et al. 2014, Sec. 4.1) against
+// the cells' majorants: a tentative collision is real with probability
+// d(p) / max d of its cell; a real one scatters with the albedo
+// sigma_s / sigma_t as throughput factor (absorption folded in).
 Spectrum GridMedium::sample(const Ray &ray, RNG &rng, MediumInteraction *mi) const {
     Ray local;
     Float t0, t1;
     if (maxDensity_ <= 0 || sigmaT_ <= 0 || !clip(ray, &local, &t0, &t1)) return Spectrum(1);
-    const Float invMajorant = 1 / (sigmaT_ * maxDensity_);
-    Float t = t0;
-    for (;;) {
-        t -= std::log(1 - rng.uniform()) * invMajorant;
-        if (t >= t1) return Spectrum(1);
-        if (density(local(t)) / maxDensity_ > rng.uniform()) {
-            const Float len = ray.d.length();
-            mi->p = ray.o + ray.d * (t / len);
-            mi->n = Normal3(0, 0, 0);
-            mi->wo = -ray.d / len;
-            mi->medium = this;
-            mi->phase = phase;
-            return sigmaS_ / sigmaT_;
+    Float tHit = -1;
+    traverse(local, t0, t1, [&](Float maxD, Float ta, Float tb) {
+        if (maxD <= 0) return true;
+        const Float invMajorant = 1 / (sigmaT_ * maxD);
+        for (Float t = ta;;) {
+            t -= std::log(1 - rng.uniform()) * invMajorant;
+            if (t >= tb) return true;
+            if (density(local(t)) / maxD > rng.uniform()) {
+                tHit = t;
+                return false;
+            }
         }
-    }
+    });
+    if (tHit < 0) return Spectrum(1);
+    const Float len = ray.d.length();
+    mi->p = ray.o + ray.d * (tHit / len);
+    mi->n = Normal3(0, 0, 0);
+    mi->wo = -ray.d / len;
+    mi->medium = this;
+    mi->phase = phase;
+    return sigmaS_ / sigmaT_;
 }
 
 // ---------------------------------------------------------------- creation

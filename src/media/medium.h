@@ -71,8 +71,11 @@ class HomogeneousMedium : public Medium {
 
 // pbrt-v3's GridDensityMedium: density d(p) trilinearly interpolated over an
 // nx x ny x nz grid spanning [p0, p1] in the medium's space (values at voxel
-// centres, zero outside the grid), sigma = d(p) * sigma. Needs a grey sigma_t
-// (delta tracking against sigma_t * max density; ratio tracking for Tr).
+// centres, zero outside the grid), sigma = d(p) * sigma. Needs a grey sigma_t.
+// Delta tracking (sample) and ratio tracking (Tr) run against a piecewise-
+// constant majorant: the maximum density over each cell of a coarse grid (at
+// most 16 cells per axis), visited in ray order (3-D DDA), so that empty and
+// thin regions cost few null collisions.
 class GridMedium : public Medium {
   public:
     GridMedium(const Spectrum &sigmaA, const Spectrum &sigmaS, Float g, const Transform &worldFromMedium,
@@ -86,6 +89,10 @@ class GridMedium : public Medium {
     // The ray in the medium's space, clipped to the grid's bounds: [t0, t1).
     bool clip(const Ray &ray, Ray *local, Float *t0, Float *t1) const;
     Float d(int x, int y, int z) const;
+    // Calls visit(majorant density, ta, tb) for the majorant cells the local
+    // ray crosses within [t0, t1], in order, until visit returns false.
+    template <class Visit>
+    void traverse(const Ray &local, Float t0, Float t1, Visit &&visit) const;
     const Spectrum sigmaA_, sigmaS_;
     Float sigmaT_;      // grey
     Transform mediumFromWorld_;
@@ -93,6 +100,8 @@ class GridMedium : public Medium {
     int nx_, ny_, nz_;
     std::vector<Float> density_;
     Float maxDensity_ = 0;
+    int m_[3] = {1, 1, 1};          // majorant cells per axis
+    std::vector<Float> majorant_;   // max density over each cell's support
 };
 
 // Measured scattering coefficients (pbrt-v3's named presets: Jensen et al.

@@ -279,8 +279,10 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
         ++uses[use.name];
     }
     auto materialOf = [&](const ShapeDesc &sd) {
-        if (sd.material >= 0 && matByIndex[sd.material])
+        if (sd.material >= 0 && matByIndex[sd.material]) {
             feat.minRoughness = std::min(feat.minRoughness, matByIndex[sd.material]->minRoughness());
+            if (matByIndex[sd.material]->hasSubsurface()) feat.subsurface = true;
+        }
         return sd.material >= 0 ? matByIndex[sd.material] : defaultMaterial.get();
     };
     struct ObjectBuild {

@@ -22,10 +22,7 @@
 #include "core/error.h"
 #include "core/stats.h"
 #include "integrators/path/path.h"
-#if __has_include("integrators/path/subsurface.h")
 #include "integrators/path/subsurface.h"
-#define GRADUS_VOLPATH_SUBSURFACE 1
-#endif
 #include "samplers/sampling.h"
 
 namespace gradus {
@@ -148,16 +145,11 @@ Spectrum PathIntegrator::LiVolumetric(const Ray &cameraRay, Sampler &sampler, Ar
             prevScatterPdf = bs.pdf;
             prevIt = isect;
             if (bs.isTransmission()) etaScale *= Sqr(bs.eta);
-#ifdef GRADUS_VOLPATH_SUBSURFACE
             const BSSRDF *bssrdf = bs.isTransmission() ? isect.material->getBSSRDF(isect, arena) : nullptr;
-#else
-            const void *bssrdf = nullptr;
-#endif
             if (!bssrdf) {
                 medium = isect.mediumAfter(bs.wi, medium);
                 ray = isect.spawnRay(bs.wi);
             } else {
-#ifdef GRADUS_VOLPATH_SUBSURFACE
                 // Light enters the body and leaves at pi (pbrt-v3 Sec. 15.4): S / pdf,
                 // then next-event estimation and the next direction from the exit BSDF.
                 SurfaceInteraction pi;
@@ -182,7 +174,6 @@ Spectrum PathIntegrator::LiVolumetric(const Ray &cameraRay, Sampler &sampler, Ar
                 prevIt = pi;
                 medium = pi.mediumAfter(es.wi, medium);
                 ray = pi.spawnRay(es.wi);
-#endif
             }
         }
         // Russian roulette (pbrt-v3: after three bounces, on beta scaled by eta^2).

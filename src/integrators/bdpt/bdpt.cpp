@@ -34,9 +34,12 @@ void BDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &a
     AllocSubpath(arena, maxLight, &lightV, &lightB);
 
     BidirDimensions dims(sampler, maxCam, maxLight);  // fixed blocks of dimensions (bidir.h)
-    int nC = GenerateCameraSubpath(ctx_, ray, sampler, arena, maxCam, camV, camB);
+    // Media: distances and transmittances from a per-sample RNG (never the sampler's dimensions).
+    RNG mediaRng;
+    RNG *mrng = scene.features.media ? &(mediaRng = CameraSampleMediaRNG(sampler, cs)) : nullptr;
+    int nC = GenerateCameraSubpath(ctx_, ray, sampler, arena, maxCam, camV, camB, mrng);
     dims.startLightSubpath(sampler);
-    int nL = scene.lights.empty() ? 0 : GenerateLightSubpath(ctx_, sampler, arena, maxLight, lightV, lightB);
+    int nL = scene.lights.empty() ? 0 : GenerateLightSubpath(ctx_, sampler, arena, maxLight, lightV, lightB, mrng);
     SubpathView cam{camV, camB, nC}, light{lightV, lightB, nL};
 
     Spectrum L(0);
@@ -45,6 +48,7 @@ void BDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &a
             int depth = s + t - 2;
             if ((s == 1 && t == 1) || depth < 0 || depth > set_.maxDepth) continue;
             ConnectSamples u;
+            u.rng = mrng;
             dims.startConnection(sampler, s, t);
             if (s == 1) {
                 u.uLightSelect = sampler.get1D();

@@ -11,6 +11,8 @@
 //                                         (-1: off, as pbrt-v3; see BidirContext::rrDepth)
 //   integer pixelbounds []                accepted (use --cropwindow instead)
 // Light-tracing (t = 1) strategy layers are filled through per-layer film splats.
+// Participating media: medium vertices on both subpaths, transmittance in
+// every connection (pbrt-v3's BDPT; common/bidir.h).
 // With both visualize flags set, visualizeweights wins.
 #pragma once
 #include "integrators/common/bidir_family.h"
@@ -24,6 +26,7 @@ class BDPTIntegrator : public PixelSampleIntegrator, public BidirFamily {
     std::string name() const override { return "bdpt"; }
     void preprocess(const Scene &scene, Film &film) override;
     void estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const override;
+    bool rendersMedia() const override { return true; }  // medium vertices (common/bidir.h)
     int maxDepth() const { return set_.maxDepth; }
     static std::string LayerName(int s, int t) { return StrategyLayerName("bdpt", s, t); }
 

@@ -50,17 +50,94 @@ void Barycentrics(const GeometryRecord &g, int tri, const Point3 &p, float *b1, 
 // Random walk shared by both subpaths (Veach 1997, Sec. 10.2): path[n-1] is the
 // origin; fills vertices n.. up to maxVertices, setting pdfFwd of each new
 // vertex and pdfRev of its predecessor.
+// What a ray met in a scene with media.
+enum class MediaStep { Miss, Surface, Medium, Absorbed, Stuck };
+
+// Traces *ray through the interfaces (surfaces without a material), sampling a
+// scattering distance in the medium of each segment (pbrt-v3's
+// Medium::Sample); *beta takes the factors, *medium the medium at the end.
+MediaStep TraceThroughMedia(const Scene &scene, Ray *ray, const Medium **medium, RNG &rng, SurfaceInteraction *isect,
+                            MediumInteraction *mi, Spectrum *beta) {
+    for (int k = 0;; ++k) {
+        const bool hit = scene.intersect(*ray, isect);
+        if (*medium) {
+            Ray seg = *ray;  // up to the hit (t in units of |d|)
+            if (hit) seg.tMax = Dot(isect->p - ray->o, ray->d) / ray->d.lengthSquared();
+            *beta *= (*medium)->sample(seg, rng, mi);
+            if (beta->isBlack() || !beta->isFinite()) return MediaStep::Absorbed;
+            if (mi->valid()) return MediaStep::Medium;
+        }
+        if (!hit) return MediaStep::Miss;
+        if (isect->material) return MediaStep::Surface;
+        if (k >= kMaxInterfaceCrossings) return MediaStep::Stuck;
+        *medium = isect->mediumAfter(ray->d, *medium);
+        *ray = isect->spawnRay(ray->d);
+    }
+}
+
 int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sampler &sampler, Arena &arena,
-               TransportMode mode, int n, int maxVertices, PathVertex *path, BSDF *bsdfs) {
+               TransportMode mode, int n, int maxVertices, PathVertex *path, BSDF *bsdfs, const Medium *medium,
+               RNG *rng) {
     GRADUS_STAT_COUNTER("BDPT/Subpath vertices", nVerts);
+    GRADUS_STAT_COUNTER("BDPT/Medium vertices", nMediumVerts);
     const Scene &scene = *ctx.scene;
+    const bool media = scene.features.media;
+    GRADUS_CHECK(!media || rng);
     Float pdfFwd = pdfDir;
     const Float beta0 = beta.maxComponent();
     while (n < maxVertices) {
         SurfaceInteraction isect;
-        const Scene::SurfaceHit h = scene.intersectSurface(&ray, &isect);  // through interfaces
-        if (h == Scene::SurfaceHit::Stuck) break;
-        const bool hit = h == Scene::SurfaceHit::Hit;
+        bool hit;
+        MediumInteraction mi;
+        if (!media) {
+            const Scene::SurfaceHit h = scene.intersectSurface(&ray, &isect);  // through interfaces
+            if (h == Scene::SurfaceHit::Stuck) break;
+            hit = h == Scene::SurfaceHit::Hit;
+        } else {
+            const MediaStep st = TraceThroughMedia(scene, &ray, &medium, *rng, &isect, &mi, &beta);
+            if (st == MediaStep::Absorbed || st == MediaStep::Stuck) break;
+            hit = st == MediaStep::Surface;
+            if (st == MediaStep::Medium) {
+                // A medium vertex: HG phase function (value = pdf, so beta is unchanged).
+                ++nVerts;
+                ++nMediumVerts;
+                PathVertex &prev = path[n - 1];
+                PathVertex &v = path[n];
+                v = PathVertex();
+                v.type = VertexType::Medium;
+                v.medium = medium;
+                v.mediumIndex = MediumIndexOf(scene, medium);
+                v.p = mi.p;
+                v.wo = -Normalize(ray.d);
+                v.setThroughput(beta);
+                v.pdfFwd = ConvertDensity(pdfFwd, prev, v);
+                bsdfs[n] = BSDF();
+                ++n;
+                DebugTrace("%s vertex %d: medium %s p (%.6g, %.6g, %.6g) pdfFwd %.4g",
+                           mode == TransportMode::Radiance ? "camera" : "light", n - 1, medium->name.c_str(), v.p.x,
+                           v.p.y, v.p.z, v.pdfFwd);
+                if (n >= maxVertices) break;
+                sampler.get1D();  // the lobe choice of a surface vertex: keeps the dimensions aligned
+                const Point2 u2 = sampler.get2D();
+                Vec3 wi;
+                const Float pdf = medium->phase.sample(Vec3(v.wo), u2, &wi);
+                if (!(pdf > 0)) break;
+                pdfFwd = pdf;
+                prev.pdfRev = ConvertDensity(pdf, v, prev);  // HG is symmetric: p(wi, wo) = p(wo, wi)
+                if (ctx.rrDepth >= 0 && n > ctx.rrDepth + 1 && n < maxVertices) {
+                    Float uRR = sampler.get1D();
+                    Float rel = beta0 > 0 ? beta.maxComponent() / beta0 : 1;
+                    if (rel < 1) {
+                        Float q = std::max<Float>(0.05, 1 - rel);
+                        if (uRR < q) break;
+                        beta = beta / (1 - q);
+                        v.rrScale = float(1 / (1 - q));
+                    }
+                }
+                ray = Ray(v.p, wi, Infinity);
+                continue;
+            }
+        }
         PathVertex &prev = path[n - 1];
         if (!hit) {
             // An escaped camera path ends on the infinite lights.
@@ -87,6 +164,7 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
         PathVertex &v = path[n];
         BSDF bsdf = isect.material->getBSDF(isect, arena, mode);
         MakeSurfaceVertex(ctx, isect, bsdf, &v);
+        if (media) v.mediumIndex = MediumIndexOf(scene, medium);
         v.setThroughput(beta);
         v.pdfFwd = ConvertDensity(pdfFwd, prev, v);
         bsdfs[n] = bsdf;
@@ -128,6 +206,7 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
                 v.rrScale = float(1 / (1 - q));
             }
         }
+        if (media) medium = isect.mediumAfter(bs.wi, medium);
         ray = isect.spawnRay(bs.wi);
     }
     return n;
@@ -155,6 +234,50 @@ Interaction AsInteraction(const PathVertex &v) {
     // Light and camera vertices off a surface get no ray offset (zero normal).
     Vec3 n = v.onSurface() ? Vec3(v.ng) : Vec3(0, 0, 0);
     return Interaction(v.p, n, v.wo);
+}
+
+const Medium *MediumAt(const Scene &scene, uint8_t index) {
+    return index == 0 ? nullptr : scene.media[size_t(index) - 1].get();
+}
+
+uint8_t MediumIndexOf(const Scene &scene, const Medium *m) {
+    if (!m) return 0;
+    for (size_t i = 0; i < scene.media.size() && i < 255; ++i)
+        if (scene.media[i].get() == m) return uint8_t(i + 1);
+    GRADUS_CHECK(false);  // more than 255 media: refused by the integrators (CheckMediaCount)
+    return 0;
+}
+
+const Medium *MediumTowards(const BidirContext &ctx, const PathVertex &v, const Vec3 &d) {
+    auto side = [&](const MediumInterface &mi) {
+        if (!mi.transition()) return mi.inside;
+        return Dot(Vec3(v.ng), d) > 0 ? mi.outside : mi.inside;
+    };
+    switch (v.type) {
+    case VertexType::Camera: return ctx.scene->cameraMedium;
+    case VertexType::Medium: return v.medium;
+    case VertexType::Light:
+        if (!v.light || v.isInfiniteLight()) return nullptr;
+        return v.ng.isZero() ? v.light->mediumInterface.inside : side(v.light->mediumInterface);
+    case VertexType::Surface: {
+        const MediumInterface &mi = ctx.scene->geometry[size_t(v.geomId)].mediumInterface;
+        return mi.transition() ? side(mi) : MediumAt(*ctx.scene, v.mediumIndex);
+    }
+    }
+    return nullptr;
+}
+
+Spectrum Transmittance(const BidirContext &ctx, const PathVertex &a, const Interaction &ia, const Interaction &ib,
+                       RNG *rng) {
+    const Scene &scene = *ctx.scene;
+    if (!scene.features.media) return scene.unoccluded(ia, ib) ? Spectrum(1) : Spectrum(0);
+    GRADUS_CHECK(rng);
+    return scene.transmittance(ia, MediumTowards(ctx, a, ib.p - ia.p), ib, *rng);
+}
+
+Float ScatterPdf(const PathVertex &v, const BSDF &bsdf, const Vec3 &wo, const Vec3 &wi, TransportMode mode) {
+    if (v.type == VertexType::Medium) return v.medium->phase.p(wo, wi);
+    return bsdf.pdf(wo, wi, mode);
 }
 
 // Veach 1997, Eq. 8.10; densities towards infinite-light vertices stay directional.
@@ -226,7 +349,7 @@ void BidirContext::init(const Scene &s, const LightSampler &ls, MISHeuristic h) 
 }
 
 int GenerateCameraSubpath(const BidirContext &ctx, const Ray &ray, Sampler &sampler, Arena &arena,
-                          int maxVertices, PathVertex *path, BSDF *bsdfs) {
+                          int maxVertices, PathVertex *path, BSDF *bsdfs, RNG *mediaRng) {
     if (maxVertices <= 0) return 0;
     PathVertex &v = path[0];
     v = PathVertex();
@@ -246,7 +369,12 @@ int GenerateCameraSubpath(const BidirContext &ctx, const Ray &ray, Sampler &samp
     // full filter weight: a 2-pixel frame up to 30% dark with a radius-2 filter.
     ctx.camera->pdfWe(ray, &pdfPos, &pdfDir);
     return RandomWalk(ctx, ray, Spectrum(1), pdfDir, sampler, arena, TransportMode::Radiance, 1, maxVertices, path,
-                      bsdfs);
+                      bsdfs, ctx.scene->cameraMedium, mediaRng);
+}
+
+RNG CameraSampleMediaRNG(const Sampler &sampler, const CameraSample &cs) {
+    return RNG(Hash(sampler.seed(), FloatBits(cs.pFilm.x), FloatBits(cs.pFilm.y),
+                    FloatBits(cs.pLens.x) ^ (FloatBits(cs.pLens.y) << 1)));
 }
 
 BidirDimensions::BidirDimensions(const Sampler &sampler, int maxCameraVertices, int maxLightVertices)
@@ -271,7 +399,7 @@ void BidirDimensions::startConnection(Sampler &sampler, int s, int t) {
 }
 
 int GenerateLightSubpath(const BidirContext &ctx, Sampler &sampler, Arena &arena, int maxVertices, PathVertex *path,
-                         BSDF *bsdfs) {
+                         BSDF *bsdfs, RNG *mediaRng) {
     Float uSel = sampler.get1D();
     Point2 u1 = sampler.get2D(), u2 = sampler.get2D();
     if (maxVertices <= 0) return 0;
@@ -295,8 +423,9 @@ int GenerateLightSubpath(const BidirContext &ctx, Sampler &sampler, Arena &arena
     bsdfs[0] = BSDF();
     Float cosL = les.nLight == Normal3(0, 0, 0) ? 1 : AbsDot(les.nLight, les.ray.d);
     Spectrum beta = les.L * (cosL / (pmf * les.pdfPos * les.pdfDir));
+    const Medium *medium = ctx.scene->features.media ? MediumTowards(ctx, v, les.ray.d) : nullptr;
     int n = RandomWalk(ctx, les.ray, beta, les.pdfDir, sampler, arena, TransportMode::Importance, 1, maxVertices,
-                       path, bsdfs);
+                       path, bsdfs, medium, mediaRng);
     if (infinite) {
         // Infinite/distant lights: the origin density is directional and the
         // first hit's density is the disk's positional density projected onto it.
@@ -323,6 +452,7 @@ bool IsConnectible(const PathVertex &v, const BSDF *bsdf) {
     case VertexType::Camera: return true;
     case VertexType::Light: return !(v.light && (v.light->flags & LIGHT_DELTA_DIRECTION));
     case VertexType::Surface: return bsdf && bsdf->hasNonSpecular();
+    case VertexType::Medium: return true;
     }
     return false;
 }
@@ -376,6 +506,11 @@ Float PdfArea(const BidirContext &ctx, const PathVertex &cur, const BSDF *bsdf, 
     if (cur.type == VertexType::Camera) {
         Float pdfPos;
         ctx.camera->pdfWe(Ray(cur.p, wn), &pdfPos, &pdf);
+    } else if (cur.type == VertexType::Medium) {
+        if (!prev) return 0;
+        Vec3 wp = prev->p - cur.p;
+        if (wp.lengthSquared() == 0) return 0;
+        pdf = cur.medium->phase.p(Normalize(wp), wn);
     } else {
         if (!prev || !bsdf || !*bsdf) return 0;
         Vec3 wp = prev->p - cur.p;
@@ -390,6 +525,7 @@ Spectrum EvalBSDF(const PathVertex &cur, const BSDF &bsdf, const PathVertex &nex
     if (wi.lengthSquared() == 0) return Spectrum(0);
     wi = Normalize(wi);
     Vec3 wo = cur.wo;
+    if (cur.type == VertexType::Medium) return Spectrum(cur.medium->phase.p(wo, wi));
     Spectrum f = bsdf.f(wo, wi, mode);
     if (mode == TransportMode::Importance) f *= ShadingCorrection(cur, wo, wi);
     return f;
@@ -625,7 +761,6 @@ bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera,
     *res = ConnectResult();
     if (t < 1 || (s == 1 && t == 1)) return false;
     if (t == 1 && !ctx.strategies.lightTracing) return false;
-    const Scene &scene = *ctx.scene;
     // An infinite-light vertex ends the camera path: only s = 0 uses it.
     if (s > 0 && camera.v[t - 1].type == VertexType::Light) return false;
     PathVertex sampled;
@@ -638,37 +773,43 @@ bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera,
     } else if (t == 1) {
         const PathVertex &qs = light.v[s - 1];
         const BSDF *qb = light.bsdf ? &light.bsdf[s - 1] : nullptr;
-        if (!IsConnectible(qs, qb) || qs.type != VertexType::Surface) return false;
+        if (!IsConnectible(qs, qb) || !qs.scatters()) return false;
         CameraWiSample cws;
         if (!SampleLensVertex(ctx, qs, u.uLens, &sampled, &cws)) return false;
         haveSampled = true;
         if (!EdgeConnectible(ctx, qs, sampled)) return false;
         L = qs.throughput() * EvalBSDF(qs, *qb, sampled, TransportMode::Importance) * (cws.We / cws.pdf) *
-            AbsDot(cws.wi, Vec3(qs.ns));
+            ScatterCos(qs, cws.wi);
         if (L.isBlack()) return false;
         res->shadowRayTraced = !u.knownVisible;
-        if (!u.knownVisible && !scene.unoccluded(AsInteraction(qs), cws.pLens)) return false;
+        if (!u.knownVisible) {
+            L *= Transmittance(ctx, qs, AsInteraction(qs), cws.pLens, u.rng);
+            if (L.isBlack()) return false;
+        }
         res->splat = true;
         res->pRaster = cws.pRaster;
     } else if (s == 1) {
         const PathVertex &pt = camera.v[t - 1];
         const BSDF *pb = camera.bsdf ? &camera.bsdf[t - 1] : nullptr;
-        if (!IsConnectible(pt, pb) || pt.type != VertexType::Surface) return false;
+        if (!IsConnectible(pt, pb) || !pt.scatters()) return false;
         LightLiSample ls;
         Spectrum Lw;
         if (!SampleLightVertex(ctx, pt, u.uLightSelect, u.uLight, &sampled, &ls, &Lw)) return false;
         haveSampled = true;
         if (!EdgeConnectible(ctx, sampled, pt)) return false;
-        L = pt.throughput() * EvalBSDF(pt, *pb, sampled, TransportMode::Radiance) * Lw * AbsDot(ls.wi, Vec3(pt.ns));
+        L = pt.throughput() * EvalBSDF(pt, *pb, sampled, TransportMode::Radiance) * Lw * ScatterCos(pt, ls.wi);
         if (L.isBlack()) return false;
         res->shadowRayTraced = !u.knownVisible;
-        if (!u.knownVisible && !scene.unoccluded(AsInteraction(pt), ls.pLight)) return false;
+        if (!u.knownVisible) {
+            L *= Transmittance(ctx, pt, AsInteraction(pt), ls.pLight, u.rng);
+            if (L.isBlack()) return false;
+        }
     } else {
         const PathVertex &qs = light.v[s - 1], &pt = camera.v[t - 1];
         const BSDF *qb = light.bsdf ? &light.bsdf[s - 1] : nullptr;
         const BSDF *pb = camera.bsdf ? &camera.bsdf[t - 1] : nullptr;
         if (!IsConnectible(qs, qb) || !IsConnectible(pt, pb)) return false;
-        if (qs.type != VertexType::Surface || pt.type != VertexType::Surface) return false;
+        if (!qs.scatters() || !pt.scatters()) return false;
         if (!EdgeConnectible(ctx, qs, pt)) return false;
         L = qs.throughput() * EvalBSDF(qs, *qb, pt, TransportMode::Importance) *
             EvalBSDF(pt, *pb, qs, TransportMode::Radiance) * pt.throughput();
@@ -678,10 +819,13 @@ bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera,
         Vec3 d = qs.p - pt.p;
         Float d2 = d.lengthSquared();
         d = d / std::sqrt(d2);
-        L *= AbsDot(Vec3(qs.ns), d) * AbsDot(Vec3(pt.ns), d) / d2;
+        L *= ScatterCos(qs, d) * ScatterCos(pt, d) / d2;
         if (L.isBlack()) return false;
         res->shadowRayTraced = !u.knownVisible;
-        if (!u.knownVisible && !scene.unoccluded(AsInteraction(qs), AsInteraction(pt))) return false;
+        if (!u.knownVisible) {
+            L *= Transmittance(ctx, qs, AsInteraction(qs), AsInteraction(pt), u.rng);
+            if (L.isBlack()) return false;
+        }
     }
     if (L.isBlack()) return false;
     Float w = MISWeight(ctx, ctx.strategies, light, camera, s, t, haveSampled ? &sampled : nullptr,

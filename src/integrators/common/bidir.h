@@ -26,6 +26,18 @@
 // evaluated strategies sum to one. Which strategies are in play at all (light
 // tracing on or off, several light-tracing samples per camera sample, vertex
 // merging) is a StrategySet: the MIS sums count exactly those.
+//
+// Participating media (pbrt-v3's BDPT, PBR 3rd ed. Sec. 16.3): each segment of
+// a subpath samples a scattering distance in its medium; a scattering point is
+// a Medium vertex (HG phase function: value = pdf, no cosines), surfaces
+// without a material are crossed, changing the medium. Connections multiply by
+// the transmittance (Scene::transmittance) instead of testing visibility. MIS
+// as pbrt-v3: vertex densities are the directional ones converted to area
+// (no cosine at medium vertices); the distance-sampling densities are left out
+// of every strategy alike, so the weights still sum to one. Medium vertices
+// are connectible, never mergeable. Random numbers of the media (distances,
+// transmittance) come from a per-sample RNG the caller passes; a scene without
+// media takes none and runs the code it ran before.
 #pragma once
 #include <vector>
 
@@ -34,6 +46,7 @@
 #include "integrators/common/path_vertex.h"
 #include "lights/light_sampler.h"
 #include "render/scene.h"
+#include "samplers/rng.h"
 #include "samplers/sampler.h"
 
 namespace gradus {
@@ -97,8 +110,10 @@ struct BidirContext {
 // maxVertices - 1 scattering vertices (an escaped ray adds an infinite-light
 // vertex when the scene has infinite lights). Returns the number of vertices.
 // Sampler use per bounce: 1D (lobe) + 2D (direction).
+// Sampler use per medium vertex: the same (1D unused, 2D phase direction).
+// mediaRng: distance sampling (required when the scene has media, else unused).
 int GenerateCameraSubpath(const BidirContext &ctx, const Ray &ray, Sampler &sampler, Arena &arena,
-                          int maxVertices, PathVertex *path, BSDF *bsdfs);
+                          int maxVertices, PathVertex *path, BSDF *bsdfs, RNG *mediaRng = nullptr);
 // Fixed blocks of sampler dimensions for one bidirectional sample taken from
 // the pixel sampler (bdpt, gbdpt): the camera subpath from the sampler's
 // dimension d0 at construction, the light subpath and each strategy's
@@ -124,7 +139,29 @@ class BidirDimensions {
 // Light subpath: picks a light (1D), samples emission (2D position + 2D direction),
 // then up to maxVertices - 1 scattering vertices. Returns the number of vertices.
 int GenerateLightSubpath(const BidirContext &ctx, Sampler &sampler, Arena &arena, int maxVertices,
-                         PathVertex *path, BSDF *bsdfs);
+                         PathVertex *path, BSDF *bsdfs, RNG *mediaRng = nullptr);
+// The per-sample RNG of the media for a camera sample (seed, film and lens position).
+RNG CameraSampleMediaRNG(const Sampler &sampler, const CameraSample &cs);
+
+// ---------------------------------------------------------------- media
+// The medium of Scene::media index (PathVertex::mediumIndex; 0: none), and back.
+const Medium *MediumAt(const Scene &scene, uint8_t index);
+uint8_t MediumIndexOf(const Scene &scene, const Medium *m);
+// The medium a ray leaving vertex v in direction d starts in (camera: the
+// camera's; light: its interface's side of d; surface: its shape's interface,
+// or the medium it was reached in where that is no transition; medium vertex: its own).
+const Medium *MediumTowards(const BidirContext &ctx, const PathVertex &v, const Vec3 &d);
+// Visibility between vertex a (interaction ia) and interaction ib: in a scene
+// with media the transmittance from a's medium towards b (rng required), else 1 or 0.
+Spectrum Transmittance(const BidirContext &ctx, const PathVertex &a, const Interaction &ia, const Interaction &ib,
+                       RNG *rng);
+// |cos| of direction w at a scattering vertex (1 at medium vertices: no foreshortening).
+inline Float ScatterCos(const PathVertex &v, const Vec3 &w) {
+    return v.type == VertexType::Medium ? Float(1) : AbsDot(w, Vec3(v.ns));
+}
+// Solid-angle density of scattering from wo to wi at a surface (its BSDF) or
+// medium vertex (its phase function).
+Float ScatterPdf(const PathVertex &v, const BSDF &bsdf, const Vec3 &wo, const Vec3 &wi, TransportMode mode);
 
 // ---------------------------------------------------------------- vertex queries
 // Area density at `next` of sampling it from `cur` (arrived at from `prev`;
@@ -139,7 +176,8 @@ Float PdfLightOrigin(const BidirContext &ctx, const PathVertex &v, const PathVer
 // Area density at `next` of the emission direction sampled at emitter vertex `v`.
 Float PdfLightDirection(const BidirContext &ctx, const PathVertex &v, const PathVertex &next);
 // BSDF value at `cur` towards `next` (with the adjoint shading-normal correction
-// in Importance mode, Veach 1997 Sec. 5.3.4), not multiplied by any cosine.
+// in Importance mode, Veach 1997 Sec. 5.3.4), not multiplied by any cosine;
+// at a medium vertex the phase function (bsdf unused).
 Spectrum EvalBSDF(const PathVertex &cur, const BSDF &bsdf, const PathVertex &next, TransportMode mode);
 // Emitted radiance from emitter vertex `v` towards `towards`.
 Spectrum EmittedRadiance(const BidirContext &ctx, const PathVertex &v, const PathVertex &towards);
@@ -188,6 +226,8 @@ struct ConnectSamples {
     // The connection edge is known to be unoccluded (a shifted path that
     // reuses its base's edge, G-BDPT): no shadow ray is traced.
     bool knownVisible = false;
+    // Transmittance estimates (scenes with media; the sample's media RNG).
+    RNG *rng = nullptr;
     // Optional: the weight's parts for camera subpaths that share this one's
     // vertices from misSplit + 1 on (MISSplit; used when misSplit + 2 <= t - 1).
     int misSplit = -1;

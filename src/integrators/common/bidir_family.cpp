@@ -1,5 +1,7 @@
 #include "integrators/common/bidir_family.h"
 
+#include "core/error.h"
+
 namespace gradus {
 
 ParamTable<BidirSettings> BidirParams(const BidirParamOptions &o) {
@@ -42,6 +44,10 @@ int BidirFamily::strategyLayer(int s, int t) const {
 }
 
 void BidirFamily::preprocessBidir(const Scene &scene, Film &film, const BidirSettings &set, const FileLoc &loc) {
+    // Path vertices name media by a one-byte index (path_vertex.h).
+    if (scene.features.media && scene.media.size() > 255)
+        throw Error(loc, "the bidirectional integrators support at most 255 media (the scene has " +
+                             std::to_string(scene.media.size()) + ")");
     lightSampler_ = LightSampler(scene.lights, set.lightStrategy, loc);
     ctx_.init(scene, lightSampler_, set.heuristic);
     ctx_.rrDepth = set.rrDepth;

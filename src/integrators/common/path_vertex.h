@@ -12,6 +12,11 @@
 // the BSDF of a stored vertex when they connect/merge with it.
 // Normals and directions are unit vectors stored in float (enough for cosines
 // and BSDF frames); the position stays double (ray offsets, short edges).
+// Media (pbrt-v3's BDPT, PBR 3rd ed. Sec. 16.3): a scattering point in a
+// medium is a Medium vertex holding its medium (phase function); a surface
+// vertex keeps the index of the medium its ray arrived in (mediumIndex), from
+// which, with its shape's MediumInterface, a connecting ray's medium follows
+// (MediumTowards, bidir.h). 120 bytes as without media.
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -25,6 +30,7 @@ namespace gradus {
 
 class Light;
 class Material;
+class Medium;
 
 struct PackedVec3 {
     float x = 0, y = 0, z = 0;
@@ -34,7 +40,7 @@ struct PackedVec3 {
     bool isZero() const { return x == 0 && y == 0 && z == 0; }
 };
 
-enum class VertexType : uint8_t { Camera, Light, Surface };
+enum class VertexType : uint8_t { Camera, Light, Surface, Medium };
 
 enum VertexFlags : uint8_t {
     VERTEX_DELTA = 1,        // the direction sampled at this vertex was a specular (delta) lobe
@@ -48,11 +54,16 @@ enum VertexFlags : uint8_t {
 // float overflowed for light subpaths above 3.4e38 (an environment of radiance
 // 1e28 over a scene of radius 1e5: every such sample was discarded as
 // non-finite). Values within [1e-30, 1e30] take exponent 0 (no scaling).
+// The exponent is stored in units of 8 (one byte: 2^(8 e), |8 e| <= 1016 covers
+// double's range; the scaled maximum stays within [2^-1, 2^8]).
 inline int PackThroughput(const Spectrum &s, float out[3]) {
     const double m = std::max({std::abs(s.r), std::abs(s.g), std::abs(s.b)});
     int e = 0;
-    if (std::isfinite(m) && m > 0 && (m > 1e30 || m < 1e-30)) std::frexp(m, &e);
-    const double scale = e ? std::ldexp(1.0, -e) : 1.0;
+    if (std::isfinite(m) && m > 0 && (m > 1e30 || m < 1e-30)) {
+        std::frexp(m, &e);
+        e = std::clamp(e >= 0 ? e / 8 : -((-e + 7) / 8), -127, 127);  // floor(e / 8)
+    }
+    const double scale = e ? std::ldexp(1.0, -8 * e) : 1.0;
     out[0] = float(s.r * scale);
     out[1] = float(s.g * scale);
     out[2] = float(s.b * scale);
@@ -60,7 +71,7 @@ inline int PackThroughput(const Spectrum &s, float out[3]) {
 }
 inline Spectrum UnpackThroughput(const float b[3], int e) {
     const Spectrum s(b[0], b[1], b[2]);
-    return e ? s * std::ldexp(1.0, e) : s;
+    return e ? s * std::ldexp(1.0, 8 * e) : s;
 }
 
 struct PathVertex {
@@ -68,12 +79,13 @@ struct PathVertex {
     PackedVec3 ng;            // geometric normal (zero for point lights; infinite: towards the scene)
     PackedVec3 ns;            // shading normal (after bump mapping)
     PackedVec3 wo;            // unit direction towards the previous vertex of its own subpath
-    float beta[3] = {0, 0, 0};// subpath throughput up to and including this vertex, times 2^-betaExp
+    float beta[3] = {0, 0, 0};// subpath throughput up to and including this vertex, times 2^(-8 betaExp)
     Float pdfFwd = 0;         // area density of generating this vertex from its own subpath
     Float pdfRev = 0;         // area density of generating it from the opposite direction
     union {
         const Material *material;  // Surface
         const Light *light;        // Light (nullptr for the infinite vertex of an escaped camera path)
+        const Medium *medium;      // Medium: the medium scattered in (its phase function)
     };
     int32_t geomId = -1, primId = -1;
     float b1 = 0, b2 = 0;     // triangle barycentrics (RebuildBSDF)
@@ -83,7 +95,10 @@ struct PathVertex {
     // throughput after this vertex (1: no roulette here). Shifts that re-derive
     // an offset's throughput from BSDF ratios multiply it back in (the offset
     // reuses the base's roulette decisions; camera_shift.cpp). Fits the padding.
-    int16_t betaExp = 0;      // power-of-two exponent of beta (PackThroughput); in the padding
+    int8_t betaExp = 0;       // beta's power-of-two exponent / 8 (PackThroughput)
+    // Surface: 1 + index in Scene::media of the medium the vertex was reached
+    // in (0: none); Medium: that of its own medium. Unused at other vertices.
+    uint8_t mediumIndex = 0;
     float rrScale = 1;
 
     PathVertex() : material(nullptr) {}
@@ -97,6 +112,9 @@ struct PathVertex {
     bool onSurface() const {
         return type == VertexType::Surface || (type == VertexType::Light && !isInfiniteLight() && !ng.isZero());
     }
+    bool inMedium() const { return type == VertexType::Medium; }
+    // Surface or medium: a vertex that scatters (BSDF or phase function).
+    bool scatters() const { return type == VertexType::Surface || type == VertexType::Medium; }
     RoughnessClass roughnessClass() const { return RoughnessClass((flags >> 3) & 3); }
     void setRoughnessClass(RoughnessClass c) { flags = uint8_t((flags & ~(3 << 3)) | (int(c) << 3)); }
 };

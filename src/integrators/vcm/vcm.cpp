@@ -20,6 +20,7 @@ std::unique_ptr<Integrator> CreateVCMIntegrator(const EntityDesc &d) { return st
 namespace {
 
 constexpr uint64_t kLightTag = 0x76636d0000000001ULL;
+constexpr uint64_t kMediaTag = 0x76636d0000000002ULL;  // the light subpaths' media RNG
 
 }  // namespace
 
@@ -62,9 +63,11 @@ Float Remap(Float f) { return f != 0 ? f : Float(1); }
 
 Float Mis(Float x, bool power) { return power ? x * x : x; }
 
-PathVertex AsPathVertex(const LightVertex &lv) {
+PathVertex AsPathVertex(const Scene &scene, const LightVertex &lv) {
     PathVertex v;
-    v.type = VertexType::Surface;
+    v.type = lv.inMedium() ? VertexType::Medium : VertexType::Surface;
+    v.mediumIndex = lv.mediumIndex;
+    if (lv.inMedium()) v.medium = MediumAt(scene, lv.mediumIndex);
     v.p = lv.p;
     v.ng = lv.ng;
     v.ns = lv.ns;
@@ -93,7 +96,7 @@ int VCMLightVertices(const BidirContext &ctx, const PathVertex *v, const BSDF *b
         const bool prevDelta = i - 1 >= 1 && v[i - 1].delta();
         const bool edgeOK = EdgeConnectible(ctx, v[i - 1], v[i]);
         const bool prevMerge = w.merging && i - 1 >= 1 && w.mergeable(v[i - 1], &b[i - 1]);
-        if (w.mergeable(v[i], &b[i])) {
+        if (w.mergeable(v[i], &b[i]) || v[i].inMedium()) {
             LightVertex lv;
             lv.p = v[i].p;
             lv.ng = v[i].ng;
@@ -101,6 +104,7 @@ int VCMLightVertices(const BidirContext &ctx, const PathVertex *v, const BSDF *b
             lv.wo = v[i].wo;
             for (int c = 0; c < 3; ++c) lv.beta[c] = v[i].beta[c];
             lv.betaExp = v[i].betaExp;
+            lv.mediumIndex = v[i].mediumIndex;
             lv.geomId = v[i].geomId;
             lv.primId = v[i].primId;
             lv.b1 = v[i].b1;
@@ -113,7 +117,7 @@ int VCMLightVertices(const BidirContext &ctx, const PathVertex *v, const BSDF *b
             GRADUS_CHECK(i < 256);
             lv.depth = uint8_t(i);
             lv.flags = uint8_t((prevDelta ? LightVertex::kPrevDelta : 0) | (prevMerge ? LightVertex::kPrevMergeable : 0) |
-                               (edgeOK ? LightVertex::kPrevEdgeOK : 0));
+                               (edgeOK ? LightVertex::kPrevEdgeOK : 0) | (v[i].inMedium() ? LightVertex::kMedium : 0));
             out->push_back(lv);
         }
         // B_{i+1} = c_{i-1} + eta g_{i-1} other(y_{i-1}) + R_{i-1} B_i, other(y_{i-1}) = pdfRev (exact);
@@ -139,8 +143,8 @@ bool VCMPrevConnectible(const LightVertex &lv) {
 }
 
 Float VCMLightSum(const LightVertex &lv, Float oi, Float oim1, Float h, Float sigmaI, const VCMWeights &w) {
-    // S_L(i) = h g_i o_i + R_i (c_{i-1} + S_L(i-1)), eta at y_{i-1} = h sigma(y_i).
-    return (w.merging ? Mis(h * Remap(oi), w.power) : 0) +
+    // S_L(i) = h g_i o_i + R_i (c_{i-1} + S_L(i-1)), eta at y_{i-1} = h sigma(y_i); g_i = 0 in a medium.
+    return (w.merging && !lv.inMedium() ? Mis(h * Remap(oi), w.power) : 0) +
            Mis(Remap(oi) / Remap(lv.pdfFwd), w.power) *
                ((VCMPrevConnectible(lv) ? 1 : 0) + VCMLightPrevSum(lv, oim1, h * sigmaI, w));
 }
@@ -189,7 +193,10 @@ VCMCameraTerms VCMCameraAt(const BidirContext &ctx, const PathVertex *z, const B
     c.B = Bu;
     c.etaU = eta[u];
     c.etaPrev = eta[u - 1];
-    c.H = zu.type == VertexType::Surface ? eta[u] * w.sigma(&zb[u]) : 0;
+    // At a medium vertex (fixed kernels only: VCMIntegrator::rendersMedia) the kernel's one eta.
+    c.H = zu.type == VertexType::Surface                ? eta[u] * w.sigma(&zb[u])
+          : zu.type == VertexType::Medium && w.kernel ? w.kernel->piN * w.kernel->r2
+                                                      : 0;
     return c;
 }
 
@@ -349,6 +356,7 @@ void VCMIntegrator::runPass(PassContext &ctx) {
 // ---------------------------------------------------------------- light pass
 void VCMIntegrator::lightPass(PassContext &ctx) {
     const int64_t N = bounds_.area();
+    const int iteration = ctx.firstSample() + 1;
     const int maxLight = set_.maxDepth + 1;
     const VCMWeights weights{merging_ ? &kernel_ : nullptr, merging_, connecting_, ctx_.heuristic == MISHeuristic::Power};
     LightVertexGather gather(N, set_.maxDepth, &vertices_, &pathStart_);
@@ -359,7 +367,12 @@ void VCMIntegrator::lightPass(PassContext &ctx) {
         BSDF *b;
         AllocSubpath(wk.arena, maxLight, &v, &b);
         RNGSampler smp(rng);
-        const int n = GenerateLightSubpath(ctx_, smp, wk.arena, maxLight, v, b);
+        // Media: distances and transmittances from their own stream, keyed by (seed, pass, subpath).
+        RNG mediaRng;
+        RNG *mrng = scene.features.media
+                        ? &(mediaRng = RNG(Hash(ctx.seed(), kMediaTag, uint64_t(iteration), uint64_t(item))))
+                        : nullptr;
+        const int n = GenerateLightSubpath(ctx_, smp, wk.arena, maxLight, v, b, mrng);
         std::vector<LightVertex> &dst = gather.buffer(item);
         const size_t first = dst.size();
         gather.setCount(item, VCMLightVertices(ctx_, v, b, n, weights, &dst));
@@ -372,11 +385,13 @@ void VCMIntegrator::lightPass(PassContext &ctx) {
             CameraWiSample cws;
             if (!SampleLensVertex(ctx_, v[i], smp.get2D(), &lens, &cws) || !EdgeConnectible(ctx_, v[i], lens)) continue;
             Spectrum L = v[i].throughput() * EvalBSDF(v[i], b[i], lens, TransportMode::Importance) *
-                         (cws.We / cws.pdf) * AbsDot(cws.wi, Vec3(v[i].ns));
-            if (L.isBlack() || !scene.unoccluded(AsInteraction(v[i]), cws.pLens)) continue;
+                         (cws.We / cws.pdf) * ScatterCos(v[i], cws.wi);
+            if (L.isBlack()) continue;
+            L *= Transmittance(ctx_, v[i], AsInteraction(v[i]), cws.pLens, mrng);
+            if (L.isBlack()) continue;
             // o_i: camera density of y_i; o_{i-1}: y_i's BSDF from the lens towards y_{i-1}.
             const Float oi = PdfArea(ctx_, lens, nullptr, nullptr, v[i], TransportMode::Radiance);
-            const Float oim1 = b[i].pdf(cws.wi, Vec3(v[i].wo), TransportMode::Radiance) * lv.prevGeom;
+            const Float oim1 = ScatterPdf(v[i], b[i], cws.wi, Vec3(v[i].wo), TransportMode::Radiance) * lv.prevGeom;
             // eta at y_i: the footprint of y_i's pixel (the first mergeable vertex from the camera).
             Float h = 0;
             if (merging_) {
@@ -400,7 +415,9 @@ void VCMIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
     PathVertex *z;
     BSDF *zb;
     AllocSubpath(arena, maxCam, &z, &zb);
-    const int nC = GenerateCameraSubpath(ctx_, ray, sampler, arena, maxCam, z, zb);
+    RNG mediaRng;
+    RNG *mrng = scene.features.media ? &(mediaRng = CameraSampleMediaRNG(sampler, cs)) : nullptr;
+    const int nC = GenerateCameraSubpath(ctx_, ray, sampler, arena, maxCam, z, zb, mrng);
     const bool power = ctx_.heuristic == MISHeuristic::Power;
     const Point2i pixel = rec.pixel();
     const int64_t own = int64_t(pixel.y - bounds_.pMin.y) * bounds_.width() + (pixel.x - bounds_.pMin.x);
@@ -435,8 +452,9 @@ void VCMIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
                 L += zu.throughput() * Le * weight;
             }
         }
-        if (zu.type != VertexType::Surface || !bu) break;
+        if (!zu.scatters() || (zu.type == VertexType::Surface && !bu)) break;
         const bool connectible = IsConnectible(zu, &bu);
+        const bool gu = merging_ && zu.type == VertexType::Surface;  // merging at z_u is a strategy
         if (connectible && connecting_) {
             // s = 1: next-event estimation (as ConnectBDPT), depth u.
             Float uSel = sampler.get1D();
@@ -446,15 +464,16 @@ void VCMIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
             Spectrum Lw;
             if (u <= set_.maxDepth && SampleLightVertex(ctx_, zu, uSel, uLight, &y0, &ls, &Lw) &&
                 EdgeConnectible(ctx_, y0, zu)) {
-                const Spectrum c =
-                    zu.throughput() * EvalBSDF(zu, bu, y0, TransportMode::Radiance) * Lw * AbsDot(ls.wi, Vec3(zu.ns));
-                if (!c.isBlack() && scene.unoccluded(AsInteraction(zu), ls.pLight)) {
+                Spectrum c =
+                    zu.throughput() * EvalBSDF(zu, bu, y0, TransportMode::Radiance) * Lw * ScatterCos(zu, ls.wi);
+                if (!c.isBlack()) c *= Transmittance(ctx_, zu, AsInteraction(zu), ls.pLight, mrng);
+                if (!c.isBlack()) {
                     // S_L(0) = R_0 c_{-1}; S_C(u) with other(z_u) = emission density, other(z_{u-1}) from y_0.
                     const Float o0 = PdfArea(ctx_, zu, &bu, &zp, y0, TransportMode::Radiance);
                     const Float SL = y0.isDeltaLight() ? 0 : Mis(Remap(o0) / Remap(y0.pdfFwd), power);
                     const Float oz = PdfLightDirection(ctx_, y0, zu);
                     const Float oPrev = PdfArea(ctx_, zu, &bu, &y0, zp, TransportMode::Importance);
-                    L += c / (1 + SL + SC(oz, oPrev, merging_));
+                    L += c / (1 + SL + SC(oz, oPrev, gu));
                 }
             }
             // s >= 2: connections to the own light subpath's vertices y_i (depth i + u).
@@ -462,28 +481,29 @@ void VCMIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
                 for (uint32_t k = pathStart_[own]; k < pathStart_[own + 1]; ++k) {
                     const LightVertex &lv = vertices_[k];
                     if (int(lv.depth) + u > set_.maxDepth) continue;
-                    const PathVertex y = AsPathVertex(lv);
+                    const PathVertex y = AsPathVertex(scene, lv);
                     if (!EdgeConnectible(ctx_, y, zu)) continue;
                     BSDF by = RebuildBSDF(ctx_, y, TransportMode::Importance, arena);
-                    if (!by) continue;
+                    if (!by && !y.inMedium()) continue;
                     Spectrum c = lv.throughput() * EvalBSDF(y, by, zu, TransportMode::Importance) *
                                  EvalBSDF(zu, bu, y, TransportMode::Radiance) * zu.throughput();
                     if (c.isBlack()) continue;
                     Vec3 d = y.p - zu.p;
                     const Float d2 = d.lengthSquared();
                     d = d / std::sqrt(d2);
-                    c *= AbsDot(Vec3(y.ns), d) * AbsDot(Vec3(zu.ns), d) / d2;
+                    c *= ScatterCos(y, d) * ScatterCos(zu, d) / d2;
                     if (c.isBlack()) continue;
                     ++connections;
-                    if (!scene.unoccluded(AsInteraction(y), AsInteraction(zu))) continue;
+                    c *= Transmittance(ctx_, y, AsInteraction(y), AsInteraction(zu), mrng);
+                    if (c.isBlack()) continue;
                     // Light side: o_i from z_u, o_{i-1} from y_i's BSDF with z_u as its successor.
                     const Float oi = PdfArea(ctx_, zu, &bu, &zp, y, TransportMode::Radiance);
-                    const Float oim1 = by.pdf(-d, Vec3(y.wo), TransportMode::Radiance) * lv.prevGeom;
+                    const Float oim1 = ScatterPdf(y, by, -d, Vec3(y.wo), TransportMode::Radiance) * lv.prevGeom;
                     const Float SL = VCMLightSum(lv, oi, oim1, terms.H, weights.sigma(&by), weights);
                     // Camera side: other(z_u) from y_i's BSDF, other(z_{u-1}) from z_u's BSDF with y_i as predecessor.
-                    const Float oz = ConvertDensity(by.pdf(Vec3(y.wo), -d, TransportMode::Importance), y, zu);
+                    const Float oz = ConvertDensity(ScatterPdf(y, by, Vec3(y.wo), -d, TransportMode::Importance), y, zu);
                     const Float oPrev = PdfArea(ctx_, zu, &bu, &y, zp, TransportMode::Importance);
-                    L += c / (1 + SL + SC(oz, oPrev, merging_));
+                    L += c / (1 + SL + SC(oz, oPrev, gu));
                 }
             }
         }
@@ -493,7 +513,7 @@ void VCMIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
             const Float etaU = eta[u];
             grid_.query(zu.p, std::sqrt(etaU / kernel_.piN), [&](uint32_t k, Float) {
                 const LightVertex &lv = vertices_[k];
-                if (int(lv.depth) + u - 1 > set_.maxDepth) return;
+                if (lv.inMedium() || int(lv.depth) + u - 1 > set_.maxDepth) return;  // merging on surfaces only
                 const Vec3 wi = lv.wo;  // towards y_{m-1}
                 const Spectrum f = bu.f(Vec3(zu.wo), wi, TransportMode::Radiance);
                 if (f.isBlack()) return;

@@ -61,6 +61,10 @@
 // pixel width at its first mergeable camera vertex (at most 2 r_i). Both off
 // by default: on the three SDS benchmark scenes neither lowers relMSE at equal
 // time (bench/gvcm/RESULTS.md, "Merging kernel").
+// Participating media (common/bidir.h): medium vertices on both subpaths are
+// stored and connected (their merge terms are absent from every sum: merging
+// stays on surfaces); connections carry transmittance. Modes vcm and vc with
+// the fixed kernel render media; mode vm and the varying kernels refuse them.
 // Merging is left out (the grid is not built, statistics say so) in mode vcm
 // when the scene has no specular or near-specular surface: without specular
 // chains merging adds no path that connections cannot sample.
@@ -121,7 +125,7 @@ struct VCMSettings : BidirSettings, MergeRadiusSettings {
     int iterations, photonsPerIteration, imageWriteFrequency;
 };
 
-// One stored light vertex y_i (i >= 1, non-specular BSDF). 128 bytes.
+// One stored light vertex y_i (i >= 1, non-specular BSDF or in a medium). 128 bytes.
 struct LightVertex {
     Point3 p;
     PackedVec3 ng, ns, wo;  // wo: towards y_{i-1}
@@ -134,9 +138,12 @@ struct LightVertex {
     double B;               // B_i = B + eta(y_{i-1})^beta Be (above), with the heuristic's exponent
     float Be;
     uint8_t depth;          // i (edges from the light; maxdepth <= 255 with merging)
-    uint8_t flags;          // kPrev* below
-    int16_t betaExp;        // beta's power-of-two exponent (PackThroughput, path_vertex.h)
-    static constexpr uint8_t kPrevDelta = 1, kPrevMergeable = 2, kPrevEdgeOK = 4;
+    uint8_t flags;          // kPrev*, kMedium below
+    int8_t betaExp;         // beta's exponent (PackThroughput, path_vertex.h)
+    uint8_t mediumIndex;    // PathVertex::mediumIndex
+    // kMedium: y_i is a medium vertex (connected, never merged: not in the photon grid's answers).
+    static constexpr uint8_t kPrevDelta = 1, kPrevMergeable = 2, kPrevEdgeOK = 4, kMedium = 8;
+    bool inMedium() const { return flags & kMedium; }
     Spectrum throughput() const { return UnpackThroughput(beta, betaExp); }
 };
 
@@ -150,7 +157,7 @@ struct VCMWeights {
     bool mergeable(const PathVertex &v, const BSDF *b) const { return IsMergeable(v, b) && !(roughOnly && v.delta()); }
     Float sigma(const BSDF *b) const { return kernel ? kernel->sigma(b) : Float(1); }
 };
-// Appends the stored vertices y_i (i >= 1, non-specular BSDF) of a light subpath
+// Appends the stored vertices y_i (i >= 1, non-specular BSDF or medium) of a light subpath
 // with their B_i to *out; returns how many.
 int VCMLightVertices(const BidirContext &ctx, const PathVertex *v, const BSDF *b, int n, const VCMWeights &w,
                      std::vector<LightVertex> *out);
@@ -225,6 +232,11 @@ class VCMIntegrator : public PixelSampleIntegrator, public BidirFamily {
     void runPass(PassContext &ctx) override;
     std::string statistics() const override;
     void estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const override;
+    // Medium vertices connect (vcm, vc); vm (merging only, on surfaces) and the
+    // varying kernels (their junction radius at a medium vertex) do not render media.
+    bool rendersMedia() const override {
+        return set_.mode != VCMMode::VM && !set_.adaptiveKernel && !set_.pathFootprint;
+    }
 
     // Merging radius of 1-based iteration i.
     Float radiusAt(int iteration) const;

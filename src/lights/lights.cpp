@@ -96,6 +96,179 @@ class PointLight : public Light {
 };
 
 // ---------------------------------------------------------------- spot light
+// An RGB image looked up bilinearly at (s, t) in [0,1]^2 with texel centres at
+// (i + 1/2) / n and coordinates wrapping (pbrt-v3's image maps of lights read
+// their MIP-map's finest level with the repeat wrap mode). Row 0 is t = 0.
+class LightImage {
+  public:
+    explicit LightImage(const Image &img) : w_(img.width()), h_(img.height()) {
+        Image rgb = img.layerRGB("");
+        texels_.resize(size_t(w_) * h_);
+        for (int y = 0; y < h_; ++y)
+            for (int x = 0; x < w_; ++x) {
+                Spectrum v(rgb.at(x, y, 0), rgb.at(x, y, 1), rgb.at(x, y, 2));
+                texels_[size_t(y) * w_ + x] = v;
+                sum_ += v;
+            }
+    }
+    int width() const { return w_; }
+    int height() const { return h_; }
+    Spectrum average() const { return sum_ / Float(size_t(w_) * h_); }
+    Spectrum lookup(Point2 st) const {
+        const Float x = st.x * w_ - 0.5, y = st.y * h_ - 0.5;
+        const Float fx = std::floor(x), fy = std::floor(y);
+        const Float dx = x - fx, dy = y - fy;
+        const int x0 = int(fx), y0 = int(fy);
+        return texel(x0, y0) * ((1 - dx) * (1 - dy)) + texel(x0 + 1, y0) * (dx * (1 - dy)) +
+               texel(x0, y0 + 1) * ((1 - dx) * dy) + texel(x0 + 1, y0 + 1) * (dx * dy);
+    }
+
+  private:
+    Spectrum texel(int x, int y) const {
+        x = ((x % w_) + w_) % w_;
+        y = ((y % h_) + h_) % h_;
+        return texels_[size_t(y) * w_ + x];
+    }
+    int w_, h_;
+    std::vector<Spectrum> texels_;
+    Spectrum sum_;
+};
+
+// A point light whose intensity I * S(w) varies over directions (delta position):
+// goniometric and projection lights share everything but S and its support.
+class DirectionalPointLight : public Light {
+  public:
+    DirectionalPointLight(const Transform &w, const Spectrum &I)
+        : Light(LIGHT_DELTA_POSITION, w), pos_(w.applyPoint(Point3(0, 0, 0))), lightFromWorld_(w.inverse()), I_(I) {}
+    // The scale of the intensity towards world direction w (unit).
+    virtual Spectrum scale(const Vec3 &wLight) const = 0;
+    // Emission sampling: a direction in light space and its solid-angle pdf.
+    virtual Vec3 sampleDirection(Point2 u, Float *pdf) const = 0;
+    virtual Float directionPdf(const Vec3 &wLight) const = 0;
+    Spectrum intensity(const Vec3 &wWorld) const {
+        return I_ * scale(Normalize(lightFromWorld_.applyVector(wWorld)));
+    }
+    bool sampleLi(const Interaction &ref, Point2, LightLiSample *s) const override {
+        const Vec3 d = pos_ - ref.p;
+        const Float d2 = d.lengthSquared();
+        if (d2 == 0) return false;
+        s->wi = d / std::sqrt(d2);
+        s->pdf = 1;
+        s->pLight = Interaction(pos_, Normal3(0, 0, 0), -s->wi);
+        s->L = intensity(-s->wi) / d2;
+        return !s->L.isBlack();
+    }
+    Float pdfLi(const Interaction &, const Vec3 &) const override { return 0; }
+    bool sampleLe(Point2 u1, Point2, LightLeSample *s) const override {
+        Float pdf;
+        const Vec3 wl = sampleDirection(u1, &pdf);
+        if (!(pdf > 0)) return false;
+        const Vec3 w = Normalize(worldFromLight.applyVector(wl));
+        s->ray = Ray(pos_, w);
+        s->p = pos_;
+        s->nLight = Normal3(0, 0, 0);
+        s->pdfPos = 1;
+        s->pdfDir = pdf;
+        s->L = I_ * scale(wl);
+        return !s->L.isBlack();
+    }
+    void pdfLe(const Ray &ray, const Normal3 &, Float *pdfPos, Float *pdfDir) const override {
+        *pdfPos = 0;
+        *pdfDir = directionPdf(Normalize(lightFromWorld_.applyVector(ray.d)));
+    }
+
+  protected:
+    Point3 pos_;
+    Transform lightFromWorld_;
+    Spectrum I_;
+};
+
+// pbrt-v3's "goniometric" light: S(w) from a lat-long image over the light's
+// sphere with its +y axis as the pole (theta = 0 at image row 0, phi =
+// atan2(z, x) across the columns); emission sampled uniformly over the sphere.
+class GoniometricLight : public DirectionalPointLight {
+  public:
+    GoniometricLight(const Transform &w, const Spectrum &I, std::unique_ptr<LightImage> map)
+        : DirectionalPointLight(w, I), map_(std::move(map)) {}
+    Spectrum scale(const Vec3 &wl) const override {
+        if (!map_) return Spectrum(1);
+        const Float theta = std::acos(std::clamp<Float>(wl.y, -1, 1));
+        Float phi = std::atan2(wl.z, wl.x);
+        if (phi < 0) phi += 2 * Pi;
+        return map_->lookup(Point2(phi / (2 * Pi), theta / Pi));
+    }
+    Vec3 sampleDirection(Point2 u, Float *pdf) const override {
+        *pdf = UniformSpherePdf();
+        return SampleUniformSphere(u);
+    }
+    Float directionPdf(const Vec3 &) const override { return UniformSpherePdf(); }
+    // The integral of I S over the sphere: texel values times their solid angles.
+    Spectrum power() const override {
+        if (!map_) return I_ * (4 * Pi);
+        const int w = map_->width(), h = map_->height();
+        Spectrum sum;
+        for (int y = 0; y < h; ++y) {
+            const Float t0 = Pi * y / h, t1 = Pi * (y + 1) / h;
+            const Float dOmega = (std::cos(t0) - std::cos(t1)) * 2 * Pi / w;
+            for (int x = 0; x < w; ++x) sum += map_->lookup(Point2((x + 0.5) / w, (y + 0.5) / h)) * dOmega;
+        }
+        return I_ * sum;
+    }
+
+  private:
+    std::unique_ptr<LightImage> map_;
+};
+
+// pbrt-v3's "projection" light: a pinhole projector along the light's +z with
+// field of view `fov` over the image's shorter side; S(w) is the image at the
+// projected screen point, with screen y = -1 (the light's -y side) at image
+// row 0, as pbrt-v3 reads the map (no flip). Emission is sampled uniformly in
+// the cone through the screen's corners.
+class ProjectionLight : public DirectionalPointLight {
+  public:
+    ProjectionLight(const Transform &w, const Spectrum &I, std::unique_ptr<LightImage> map, Float fovDeg)
+        : DirectionalPointLight(w, I), map_(std::move(map)) {
+        const Float aspect = map_ ? Float(map_->width()) / map_->height() : 1;
+        sx_ = aspect > 1 ? aspect : 1;
+        sy_ = aspect > 1 ? 1 : 1 / aspect;
+        tanHalf_ = std::tan(Radians(fovDeg) / 2);
+        // Corner of the screen at z = 1: (sx tan, sy tan, 1).
+        const Float cx = sx_ * tanHalf_, cy = sy_ * tanHalf_;
+        cosTotal_ = 1 / std::sqrt(1 + cx * cx + cy * cy);
+    }
+    Spectrum scale(const Vec3 &wl) const override {
+        if (wl.z < 1e-3 * wl.length()) return Spectrum(0);  // behind the projector's near plane
+        const Float x = wl.x / (wl.z * tanHalf_), y = wl.y / (wl.z * tanHalf_);
+        if (x < -sx_ || x > sx_ || y < -sy_ || y > sy_) return Spectrum(0);
+        if (!map_) return Spectrum(1);
+        return map_->lookup(Point2((x + sx_) / (2 * sx_), (y + sy_) / (2 * sy_)));
+    }
+    Vec3 sampleDirection(Point2 u, Float *pdf) const override {
+        *pdf = UniformConePdf(cosTotal_);
+        return SampleUniformCone(u, cosTotal_);
+    }
+    Float directionPdf(const Vec3 &wl) const override { return wl.z >= cosTotal_ ? UniformConePdf(cosTotal_) : 0; }
+    // The integral of I S over the screen's solid angle (midpoint rule per texel:
+    // dOmega = cos^3 dA at unit distance).
+    Spectrum power() const override {
+        const int w = map_ ? map_->width() : 64, h = map_ ? map_->height() : 64;
+        Spectrum sum;
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const Float sx = -sx_ + 2 * sx_ * (x + 0.5) / w, sy = -sy_ + 2 * sy_ * (y + 0.5) / h;
+                const Float px = sx * tanHalf_, py = sy * tanHalf_;
+                const Float dA = (2 * sx_ * tanHalf_ / w) * (2 * sy_ * tanHalf_ / h);
+                const Float c = 1 / std::sqrt(1 + px * px + py * py);
+                sum += (map_ ? map_->lookup(Point2((x + 0.5) / w, (y + 0.5) / h)) : Spectrum(1)) * (c * c * c * dA);
+            }
+        return I_ * sum;
+    }
+
+  private:
+    std::unique_ptr<LightImage> map_;
+    Float sx_, sy_, tanHalf_, cosTotal_;
+};
+
 class SpotLight : public Light {
   public:
     // gltfFalloff: KHR_lights_punctual's recommended attenuation instead of pbrt-v3's.
@@ -363,7 +536,26 @@ std::shared_ptr<Light> CreateLight(const LightDesc &desc, const SceneDesc &scene
             light = std::make_shared<InfiniteLight>(desc.worldFromLight, L, nullptr);
         }
     } else if (t == "goniometric" || t == "projection") {
-        throw UnsupportedError(desc.loc, "LightSource \"" + t + "\"");
+        Spectrum I = ps.getSpectrum("I", Spectrum(1), SpectrumKind::Illuminant) * scale;
+        const std::string map = ps.getString("mapname", "");
+        std::unique_ptr<LightImage> img;
+        if (!map.empty()) {
+            try {
+                img = std::make_unique<LightImage>(ReadImage(scene.resolve(map)));
+            } catch (const Error &e) {
+                throw Error(ps.locOf("mapname", desc.loc), e.what());
+            }
+        }
+        // pbrt-v3's goniometric light space: +y is the pole of the map (its
+        // Frame rotation); the projector looks along +z.
+        if (t == "goniometric") {
+            light = std::make_shared<GoniometricLight>(desc.worldFromLight, I, std::move(img));
+        } else {
+            const Float fov = ps.getFloat("fov", 45);
+            if (!(fov > 0 && fov < 180))
+                throw Error(ps.locOf("fov", desc.loc), "projection light: \"fov\" must lie in (0, 180) degrees");
+            light = std::make_shared<ProjectionLight>(desc.worldFromLight, I, std::move(img), fov);
+        }
     } else {
         throw Error(desc.loc, "unknown light type \"" + t +
                                   "\" (valid: point, spot, distant, infinite, goniometric, projection)");

@@ -3,6 +3,8 @@
 // pdfLe(), sampleLe()/pdfLe() agreement, and power() against numerical
 // integrals. Significance: 1% for the whole suite (Sidak-corrected per test).
 #include <gtest/gtest.h>
+#include <unistd.h>
+#include <cstdio>
 
 #include "image/image.h"
 #include "lights/light.h"
@@ -419,6 +421,93 @@ TEST(LightSampler, SpatialChoiceFavoursTheNearLight) {
     EXPECT_EQ(ls.voxelsBuilt(), 2);
     LightSampler power(lights, "power", FileLoc(), b);
     EXPECT_DOUBLE_EQ(power.pmf(Point3(-0.45, 0, 0), lights[0].get()), 0.5);
+}
+
+// ------------------------------------------------------------------ goniometric, projection
+// A 4 x 2 map whose texels are all distinct, written as EXR for CreateLight.
+std::string WriteTexelMap(const std::string &name) {
+    Image img(4, 2, {"R", "G", "B"});
+    for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 4; ++x)
+            for (int c = 0; c < 3; ++c) img.at(x, y, c) = float(1 + x + 4 * y + 10 * c);
+    const std::string path = "/tmp/gradus_lights_test_" + name + "_" + std::to_string(::getpid()) + ".exr";
+    WriteImage(path, img);
+    return path;
+}
+Float TexelValue(int x, int y, int c) { return Float(1 + x + 4 * y + 10 * c); }
+
+// Texel centres land where pbrt-v3's maps put them: goniometric theta from the
+// light's +y pole down the rows, phi = atan2(z, x) across the columns.
+TEST(GoniometricLight, MapOrientationIntensityAndPower) {
+    const std::string map = WriteTexelMap("gonio");
+    auto l = MakeLight("LightSource \"goniometric\" \"rgb I\" [2 2 2] \"string mapname\" \"" + map + "\"");
+    for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 4; ++x) {
+            const Float theta = Pi * (y + 0.5) / 2, phi = 2 * Pi * (x + 0.5) / 4;
+            const Vec3 wl(std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi));
+            // A receiver at distance 2 along wl sees I S / d^2.
+            Interaction ref(Point3(0, 0, 0) + wl * 2, Normal3(0, 0, 0), Vec3(0, 0, 1));
+            LightLiSample ls;
+            ASSERT_TRUE(l->sampleLi(ref, Point2(0.5, 0.5), &ls));
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(ls.L[c], 2 * TexelValue(x, y, c) / 4, 1e-9) << x << " " << y;
+        }
+    // Power: Monte Carlo integral of I S over the sphere (z-test at 4.4 sigma).
+    RNG rng(3);
+    double s = 0, s2 = 0;
+    const int n = 200000;
+    for (int i = 0; i < n; ++i) {
+        LightLeSample le;
+        ASSERT_TRUE(l->sampleLe(Point2(rng.uniform(), rng.uniform()), Point2(0.5, 0.5), &le));
+        Float pp, pd;
+        l->pdfLe(le.ray, le.nLight, &pp, &pd);
+        ASSERT_NEAR(pd, le.pdfDir, 1e-12);
+        const double v = le.L.g / le.pdfDir;
+        s += v;
+        s2 += v * v;
+    }
+    const double mean = s / n, se = std::sqrt((s2 / n - mean * mean) / n);
+    EXPECT_LT(std::abs(mean - l->power().g), 4.4 * se) << mean << " vs " << l->power().g;
+    std::remove(map.c_str());
+}
+
+// The projector's screen: texel (x, y) at screen point (-sx + 2 sx (x + 1/2) / w,
+// -sy + 2 sy (y + 1/2) / h) times tan(fov / 2), row 0 at the light's -y side;
+// nothing outside the screen or behind the projector.
+TEST(ProjectionLight, ScreenMappingSupportAndSampling) {
+    const std::string map = WriteTexelMap("proj");
+    auto l = MakeLight("LightSource \"projection\" \"float fov\" [30] \"rgb I\" [1 1 1] \"string mapname\" \"" + map + "\"");
+    const Float t = std::tan(Radians(15.0)), sx = 2, sy = 1;  // aspect 4/2: the screen is [-2, 2] x [-1, 1]
+    auto Li = [&](const Vec3 &wl) {
+        Interaction ref(Point3(0, 0, 0) + Normalize(wl) * 3, Normal3(0, 0, 0), Vec3(0, 0, 1));
+        LightLiSample ls;
+        return l->sampleLi(ref, Point2(0.5, 0.5), &ls) ? ls.L * 9 : Spectrum(0);
+    };
+    for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 4; ++x) {
+            const Vec3 wl((-sx + 2 * sx * (x + 0.5) / 4) * t, (-sy + 2 * sy * (y + 0.5) / 2) * t, 1);
+            const Spectrum L = Li(wl);
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(L[c], TexelValue(x, y, c), 1e-9) << x << " " << y;
+        }
+    EXPECT_EQ(Li(Vec3(2.05 * t, 0, 1)).maxComponent(), 0);
+    EXPECT_EQ(Li(Vec3(0, 1.05 * t, 1)).maxComponent(), 0);
+    EXPECT_EQ(Li(Vec3(0, 0, -1)).maxComponent(), 0);
+    // Emission sampling covers the screen: MC power against power().
+    RNG rng(5);
+    double s = 0, s2 = 0;
+    const int n = 200000;
+    for (int i = 0; i < n; ++i) {
+        LightLeSample le;
+        double v = 0;
+        if (l->sampleLe(Point2(rng.uniform(), rng.uniform()), Point2(0.5, 0.5), &le)) v = le.L.r / le.pdfDir;
+        s += v;
+        s2 += v * v;
+    }
+    const double mean = s / n, se = std::sqrt((s2 / n - mean * mean) / n);
+    EXPECT_LT(std::abs(mean - l->power().r), 4.4 * se + 2e-3 * mean) << mean << " vs " << l->power().r;
+    // Bad input.
+    EXPECT_THROW(MakeLight("LightSource \"projection\" \"float fov\" [180]"), Error);
+    EXPECT_THROW(MakeLight("LightSource \"goniometric\" \"string mapname\" \"/nonexistent/map.exr\""), Error);
+    std::remove(map.c_str());
 }
 
 }  // namespace

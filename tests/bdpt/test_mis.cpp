@@ -7,11 +7,15 @@
 //    walk samples directions from the ray, the connection code recomputes them
 //    from hit points refined from float barycentrics (angular error ~1e-5 on
 //    short edges, amplified by glossy lobes).
+//  - with participating media (medium vertices on both subpaths, interfaces
+//    without a material, a glass sphere that changes the medium) the weights
+//    still sum to one, with and without merging (merges on surfaces only).
 #include <gtest/gtest.h>
 
 #include "bdpt_test_util.h"
 #include "integrators/common/bidir.h"
 #include "lights/light_sampler.h"
+#include "media/medium.h"
 
 namespace gradus::bdpt_test {
 namespace {
@@ -21,6 +25,7 @@ struct Fixture {
     LightSampler ls;
     BidirContext ctx;
     std::unique_ptr<Sampler> sampler;
+    RNG rng;  // media (Generate reseeds it per path)
     explicit Fixture(const std::string &text, MISHeuristic h = MISHeuristic::Balance) {
         BuildOptions bo;
         bo.quiet = true;
@@ -51,6 +56,25 @@ std::string EnvScene() {
            Sphere("Material \"matte\" \"rgb Kd\" [0.5 0.5 0.5]", 0.6, 0.4, 0.3, 0.4) + "WorldEnd\n";
 }
 
+// The box filled with fog (camera, lights and walls in it), a glass sphere
+// holding vacuum and a material-less sphere holding a denser medium.
+std::string MediaScene() {
+    const std::string media =
+        "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [0.1 0.1 0.1] "
+        "\"rgb sigma_s\" [0.6 0.5 0.4] \"float g\" [0.4]\n"
+        "MakeNamedMedium \"smoke\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [0.2 0.2 0.2] "
+        "\"rgb sigma_s\" [2 2 2] \"float g\" [-0.3]\n"
+        "MediumInterface \"\" \"fog\"\n";
+    const std::string lights = "MediumInterface \"fog\" \"fog\"\n" + CeilingLight(0.3, 10) +
+                               "LightSource \"point\" \"point from\" [0 1.5 0.5] \"rgb I\" [1 1 1]\n";
+    const std::string objects =
+        Sphere("MediumInterface \"\" \"fog\"\nMaterial \"glass\"", 0.5, 0.35, 0.3, 0.35) +
+        Sphere("MediumInterface \"smoke\" \"fog\"\nMaterial \"\"", -0.4, 0.5, -0.2, 0.45) +
+        Sphere("Material \"plastic\" \"rgb Kd\" [0.3 0.3 0.3] \"rgb Ks\" [0.5 0.5 0.5] \"float roughness\" [0.1]",
+               -0.4, 1.4, 0.2, 0.25);
+    return BoxScene("bdpt", lights, objects, 16, media + "Camera \"perspective\" \"float fov\" [40]");
+}
+
 struct Subpaths {
     std::vector<PathVertex> cv, lv;
     std::vector<BSDF> cb, lb;
@@ -70,8 +94,9 @@ Subpaths Generate(Fixture &f, Arena &arena, int i, int maxDepth) {
     cs.pLens = f.sampler->get2D();
     Ray ray;
     f.job.scene->camera->generateRay(cs, &ray);
-    sp.nC = GenerateCameraSubpath(f.ctx, ray, *f.sampler, arena, maxDepth + 2, sp.cv.data(), sp.cb.data());
-    sp.nL = GenerateLightSubpath(f.ctx, *f.sampler, arena, maxDepth + 1, sp.lv.data(), sp.lb.data());
+    RNG *rng = f.job.scene->features.media ? &(f.rng = RNG(uint64_t(i))) : nullptr;
+    sp.nC = GenerateCameraSubpath(f.ctx, ray, *f.sampler, arena, maxDepth + 2, sp.cv.data(), sp.cb.data(), rng);
+    sp.nL = GenerateLightSubpath(f.ctx, *f.sampler, arena, maxDepth + 1, sp.lv.data(), sp.lb.data(), rng);
     return sp;
 }
 
@@ -164,8 +189,10 @@ void ForEachConnectedPath(Fixture &f, int maxPaths, Fn fn) {
                     if (t < 2 || EmittedRadiance(f.ctx, sp.cv[t - 1], sp.cv[t - 2]).isBlack()) continue;
                 } else {
                     ConnectResult r;
+                    ConnectSamples cu;
+                    cu.rng = &f.rng;
                     if (!ConnectBDPT(f.ctx, {sp.lv.data(), sp.lb.data(), sp.nL}, {sp.cv.data(), sp.cb.data(), sp.nC},
-                                     s, t, ConnectSamples(), &r))
+                                     s, t, cu, &r))
                         continue;
                 }
                 for (int j = 0; j < s; ++j) x.push_back(sp.lv[j]), b.push_back(sp.lb[j]);
@@ -179,26 +206,32 @@ void ForEachConnectedPath(Fixture &f, int maxPaths, Fn fn) {
     }
 }
 
-void CheckWeightSums(const std::string &scene, MISHeuristic h) {
+void CheckWeightSums(const std::string &scene, MISHeuristic h, int minMedium = 0) {
     Fixture f(scene, h);
-    int checked = 0, withDelta = 0;
+    int checked = 0, withDelta = 0, withMedium = 0, mediumEnds = 0;
     ForEachConnectedPath(f, 400, [&](const std::vector<PathVertex> &x, const std::vector<BSDF> &b, int s, int t) {
-        bool delta = false;
-        for (auto &v : x) delta |= v.delta();
+        bool delta = false, medium = false;
+        for (auto &v : x) delta |= v.delta(), medium |= v.inMedium();
         int nValid;
         double sum = WeightSum(f.ctx, f.ctx.strategies, f.ctx.strategies, x, b, &nValid);
         EXPECT_NEAR(sum, 1.0, 1e-9) << "s=" << s << " t=" << t << " valid strategies " << nValid;
         ++checked;
         withDelta += delta;
+        withMedium += medium;
+        mediumEnds += s > 0 && (x[s - 1].inMedium() || x[s].inMedium());
         return sum == sum;
     });
     EXPECT_GE(checked, 200);
     EXPECT_GT(withDelta, 0);
+    EXPECT_GE(withMedium, minMedium) << "paths with medium vertices";
+    EXPECT_GE(mediumEnds, minMedium / 4) << "connections ending at a medium vertex";
 }
 
 TEST(BDPTMIS, WeightsSumToOneBalance) { CheckWeightSums(MixedScene(), MISHeuristic::Balance); }
 TEST(BDPTMIS, WeightsSumToOnePower) { CheckWeightSums(MixedScene(), MISHeuristic::Power); }
 TEST(BDPTMIS, WeightsSumToOneEnvironmentThinLens) { CheckWeightSums(EnvScene(), MISHeuristic::Balance); }
+TEST(BDPTMIS, WeightsSumToOneWithMediaBalance) { CheckWeightSums(MediaScene(), MISHeuristic::Balance, 100); }
+TEST(BDPTMIS, WeightsSumToOneWithMediaPower) { CheckWeightSums(MediaScene(), MISHeuristic::Power, 100); }
 
 // StrategySet without light tracing (G-BDPT "lighttracing false"): the weights
 // of the strategies still evaluated sum to one. Weighted with the t = 1 terms
@@ -318,6 +351,9 @@ void CheckWeightSumsWithMerging(const std::string &scene, MISHeuristic h) {
 TEST(BDPTMIS, WeightsSumToOneWithMergingBalance) { CheckWeightSumsWithMerging(MixedScene(), MISHeuristic::Balance); }
 TEST(BDPTMIS, WeightsSumToOneWithMergingPower) { CheckWeightSumsWithMerging(MixedScene(), MISHeuristic::Power); }
 TEST(BDPTMIS, WeightsSumToOneWithMergingEnvironment) { CheckWeightSumsWithMerging(EnvScene(), MISHeuristic::Balance); }
+// Media: medium vertices connect but are never merged at (IsMergeable); the
+// merge terms of the sums count exactly the surface merges.
+TEST(BDPTMIS, WeightsSumToOneWithMergingMedia) { CheckWeightSumsWithMerging(MediaScene(), MISHeuristic::Balance); }
 
 // The random walks store pdfFwd/pdfRev; the connection code recomputes the
 // same quantities with PdfArea. They must agree, and agree with a direct
@@ -362,6 +398,56 @@ void CheckReversePdfs(const std::string &scene) {
 
 TEST(BDPTMIS, ReversePdfsMatchForwardPdfs) { CheckReversePdfs(MixedScene()); }
 TEST(BDPTMIS, ReversePdfsMatchForwardPdfsEnvironment) { CheckReversePdfs(EnvScene()); }
+
+// With media: the densities the walks store at and around medium vertices
+// equal PdfArea's, and an independent evaluation (HG phase of the scattering
+// vertex, |cos| only at a surface end, 1/d^2). Fails if a medium end took a
+// cosine or a medium vertex used a BSDF's density.
+TEST(BDPTMIS, ReversePdfsMatchForwardPdfsMedia) {
+    Fixture f(MediaScene());
+    Arena arena;
+    int checked = 0, fromMedium = 0;
+    auto rel = [](double a, double b) { return std::abs(a - b) / std::max({std::abs(a), std::abs(b), 1e-300}); };
+    for (int i = 0; i < 500; ++i) {
+        arena.reset();
+        Subpaths sp = Generate(f, arena, i, 5);
+        for (int side = 0; side < 2; ++side) {
+            const auto &v = side ? sp.lv : sp.cv;
+            const auto &b = side ? sp.lb : sp.cb;
+            const int n = side ? sp.nL : sp.nC;
+            const TransportMode mode = side ? TransportMode::Importance : TransportMode::Radiance;
+            const TransportMode rev = side ? TransportMode::Radiance : TransportMode::Importance;
+            for (int k = 2; k < n; ++k) {
+                if (v[k - 1].delta() || !v[k].scatters() || !(v[k].inMedium() || v[k - 1].inMedium())) continue;
+                // Edges below 1e-2 (a medium vertex just off a surface) carry the ray's
+                // spawn offset as a relative error of ~1e-3 / length: left out.
+                if ((v[k].p - v[k - 1].p).length() < 1e-2 || (v[k - 1].p - v[k - 2].p).length() < 1e-2 ||
+                    (k + 1 < n && (v[k + 1].p - v[k].p).length() < 1e-2))
+                    continue;
+                const double fwd = PdfArea(f.ctx, v[k - 1], &b[k - 1], &v[k - 2], v[k], mode);
+                ASSERT_LT(rel(fwd, v[k].pdfFwd), 3e-3) << "side " << side << " k " << k << " types " << int(v[k - 2].type)
+                                                         << int(v[k - 1].type) << int(v[k].type) << " d "
+                                                         << (v[k].p - v[k - 1].p).length() << " " << (v[k - 1].p - v[k - 2].p).length();
+                Vec3 wi = v[k].p - v[k - 1].p;
+                const double d2 = wi.lengthSquared();
+                wi = wi / std::sqrt(d2);
+                const Vec3 wo = Normalize(v[k - 2].p - v[k - 1].p);
+                const double dirPdf = v[k - 1].inMedium() ? HenyeyGreenstein(Dot(-wo, wi), v[k - 1].medium->phase.g)
+                                                          : b[k - 1].pdf(wo, wi, mode);
+                const double cosEnd = v[k].inMedium() ? 1.0 : AbsDot(Vec3(v[k].ng), wi);
+                ASSERT_LT(rel(dirPdf * cosEnd / d2, fwd), 1e-4) << "side " << side << " k " << k;
+                if (k + 1 < n && !v[k].delta() && v[k + 1].scatters()) {
+                    const double r = PdfArea(f.ctx, v[k], &b[k], &v[k + 1], v[k - 1], rev);
+                    ASSERT_LT(rel(r, v[k - 1].pdfRev), 3e-3) << "side " << side << " k " << k;
+                }
+                ++checked;
+                fromMedium += v[k - 1].inMedium();
+            }
+        }
+    }
+    EXPECT_GT(checked, 100);
+    EXPECT_GT(fromMedium, 30);
+}
 
 TEST(BDPTMIS, CompactVertex) {
     // Stored light vertices must stay small (M-BDPT / VCM keep one iteration's worth).

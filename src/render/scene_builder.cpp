@@ -14,7 +14,9 @@
 #include "parser/ply.h"
 #include "render/checkpoint.h"
 #include "samplers/sampling.h"
+#include "shapes/heightfield.h"
 #include "shapes/loopsubdiv.h"
+#include "shapes/nurbs.h"
 #include "shapes/quadrics.h"
 #include "shapes/sphere.h"
 
@@ -140,12 +142,16 @@ ShapeBuild CreateShape(const ShapeDesc &sd, const SceneDesc &scene, const NamedT
             throw UnsupportedError(ps.locOf("p2", sd.loc),
                                    "hyperboloid with p1.z == p2.z (a flat annulus: use a \"disk\")");
         b.analytic = std::make_shared<Hyperboloid>(xf, ro, p1, p2, phimax);
-    } else if (t == "curve" || t == "nurbs" || t == "heightfield") {
+    } else if (t == "heightfield" || t == "nurbs") {
+        MeshData m = t == "heightfield" ? CreateHeightfield(ps, sd.loc) : CreateNurbs(ps, sd.loc);
+        b.mesh = TriangleMesh::Create(xf, ro, std::move(m.P), std::move(m.indices), std::move(m.N), {},
+                                      std::move(m.uv), sd.loc);  // no alpha: pbrt-v3 reads none for these
+    } else if (t == "curve") {
         throw UnsupportedError(sd.loc, "Shape \"" + t + "\"");
     } else {
         throw Error(sd.loc, "unknown shape \"" + t +
                                 "\" (valid: trianglemesh, plymesh, loopsubdiv, sphere, disk, cylinder, cone, "
-                                "paraboloid, hyperboloid; pbrt-v3 also has curve, nurbs, heightfield)");
+                                "paraboloid, hyperboloid, heightfield, nurbs; pbrt-v3 also has curve)");
     }
     ps.checkUnused("Shape \"" + t + "\"");
     return b;

@@ -676,6 +676,10 @@ class Parser {
                 if (!stack_.empty())
                     fail(t, "WorldEnd inside the " + std::string(BlockName(stack_.back().kind)) + " block opened at " +
                                 stack_.back().loc.str());
+                // pbrt-v3 builds the camera at WorldEnd with the media of the graphics
+                // state then (a MediumInterface after Camera, even inside the world
+                // block at top level, places the camera in that medium).
+                scene_->camera.mediumName = gs_.outsideMedium;
                 state_ = State::Done;
                 break;
 

@@ -23,7 +23,7 @@ struct EntityDesc {
 
 struct CameraDesc : EntityDesc {
     Transform cameraFromWorld;   // CTM at the Camera directive (pbrt-v3: world->camera)
-    std::string mediumName;      // outside medium at the camera, if any
+    std::string mediumName;      // the camera's medium: the outside medium current at WorldEnd (pbrt-v3)
 };
 
 struct TextureDesc : EntityDesc {

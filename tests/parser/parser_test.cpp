@@ -328,6 +328,32 @@ WorldEnd
     EXPECT_EQ(s.shapes[1].outsideMedium, "fog");
 }
 
+// pbrt-v3 creates the camera at WorldEnd from the graphics state then: a
+// MediumInterface after Camera still places it (fog-spotlight's pattern);
+// one inside an attribute block does not.
+TEST(Parser, CameraMediumIsTheStateAtWorldEnd) {
+    SceneDesc a = Parse(R"(
+Camera "perspective"
+MakeNamedMedium "fog" "string type" "homogeneous"
+MediumInterface "" "fog"
+WorldBegin
+AttributeBegin
+MediumInterface "" ""
+AttributeEnd
+WorldEnd
+)");
+    EXPECT_EQ(a.camera.mediumName, "fog");
+    SceneDesc b = Parse(R"(
+MakeNamedMedium "fog" "string type" "homogeneous"
+MediumInterface "" "fog"
+Camera "perspective"
+WorldBegin
+MediumInterface "" ""
+WorldEnd
+)");
+    EXPECT_EQ(b.camera.mediumName, "");
+}
+
 TEST(Parser, UnknownMediumIsAnError) {
     EXPECT_EQ(ErrorOf("WorldBegin\nMediumInterface \"a\" \"\"\nShape \"sphere\"\nWorldEnd"),
               "t.pbrt:3:1: unknown medium \"a\" (no MakeNamedMedium of that name)");

@@ -6,6 +6,7 @@
 
 #include "materials/bssrdf.h"
 #include "materials/bxdfs.h"
+#include "materials/disney.h"
 #include "materials/gltf_pbr.h"
 #include "materials/material.h"
 #include "materials/material_util.h"
@@ -309,7 +310,7 @@ std::shared_ptr<Material> CreateMaterial(const MaterialDesc &desc, const NamedTe
     const ParamSet &p = desc.params;
     const FileLoc &loc = desc.loc;
     const std::string &t = desc.type;
-    if (t == "fourier" || t == "hair" || t == "disney")
+    if (t == "fourier" || t == "hair")
         throw UnsupportedError(loc, "material \"" + t + "\"");
     if (t == "" || t == "none" || t == "interface") return std::make_shared<InterfaceMaterial>();
     if (t == "mix") {
@@ -380,9 +381,10 @@ std::shared_ptr<Material> CreateMaterial(const MaterialDesc &desc, const NamedTe
         return m;
     }
     if (t == "gltfpbr") return CreateGltfPbrMaterial(p, tex, loc, bump);
+    if (t == "disney") return CreateDisneyMaterial(p, tex, loc, bump);
     if (t == "subsurface" || t == "kdsubsurface") return CreateSubsurfaceMaterial(t, p, tex, loc, bump);
     throw Error(loc, "unknown material type \"" + t +
-                         "\" (known: matte, plastic, metal, mirror, glass, uber, substrate, translucent, mix, gltfpbr, subsurface, kdsubsurface)");
+                         "\" (known: matte, plastic, metal, mirror, glass, uber, substrate, translucent, mix, gltfpbr, subsurface, kdsubsurface, disney)");
 }
 
 }  // namespace gradus

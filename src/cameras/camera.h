@@ -37,6 +37,10 @@ class Camera {
     // The ray from a given world-space lens point through film position pFilm
     // (the lens point held, as G-MLT's shift holds x_0); false if none.
     virtual bool rayThrough(const Point3 &lensPoint, Point2 pFilm, Ray *ray) const = 0;
+    // False when We, pdfWe's direction density and sampleWi are not defined
+    // (orthographic: a Dirac direction; environment, realistic): no light-to-
+    // camera (t = 1) connections; only integrators that do without them render it.
+    virtual bool hasImportance() const { return true; }
     Point2i fullResolution;
 };
 
@@ -62,9 +66,17 @@ class PerspectiveCamera : public Camera {
     Vec3 viewDir_;
 };
 
-// Creates the camera from the Camera directive (only "perspective" so far;
-// orthographic/realistic/environment give UnsupportedError). `resolution`
-// is the film's full resolution.
+// Creates the camera from the Camera directive (perspective, orthographic,
+// environment, realistic). `resolution` is the film's full resolution.
 std::unique_ptr<Camera> CreateCamera(const CameraDesc &desc, Point2i resolution);
+
+// pbrt-v3's screen window: from "frameaspectratio" (default the film's) or
+// "screenwindow" [x0 x1 y0 y1]; a located error when malformed.
+void ReadScreenWindow(const ParamSet &ps, const FileLoc &loc, Point2i resolution, Float sw[4]);
+// Refuses a camera placed beyond the range the ray tracer handles.
+void CheckCameraPlacement(const CameraDesc &desc);
+std::unique_ptr<Camera> CreateOrthographicCamera(const CameraDesc &desc, Point2i resolution);
+std::unique_ptr<Camera> CreateEnvironmentCamera(const CameraDesc &desc, Point2i resolution);
+std::unique_ptr<Camera> CreateRealisticCamera(const CameraDesc &desc, Point2i resolution);
 
 }  // namespace gradus

@@ -99,20 +99,10 @@ bool PerspectiveCamera::sampleWi(const Interaction &ref, Point2 u, CameraWiSampl
     return !s->We.isBlack();
 }
 
-std::unique_ptr<Camera> CreateCamera(const CameraDesc &desc, Point2i res) {
-    const ParamSet &ps = desc.params;
-    std::string type = desc.present ? desc.type : "perspective";
-    if (type != "perspective") {
-        if (type == "orthographic" || type == "realistic" || type == "environment")
-            throw UnsupportedError(desc.loc, "Camera \"" + type + "\"");
-        throw Error(desc.loc, "unknown camera type \"" + type + "\" (valid: perspective)");
-    }
-    ps.getFloat("shutteropen", 0);
-    ps.getFloat("shutterclose", 1);
-    Float lensRadius = ps.getFloat("lensradius", 0);
-    Float focalDistance = ps.getFloat("focaldistance", 1e6);
+void ReadScreenWindow(const ParamSet &ps, const FileLoc &loc, Point2i res, Float sw[4]) {
     Float aspect = ps.getFloat("frameaspectratio", Float(res.x) / Float(res.y));
-    Float sw[4];
+    if (!(aspect > 0) || !std::isfinite(aspect))
+        throw Error(ps.locOf("frameaspectratio", loc), "\"frameaspectratio\" must be > 0 and finite");
     if (aspect > 1) {
         sw[0] = -aspect; sw[1] = aspect; sw[2] = -1; sw[3] = 1;
     } else {
@@ -120,16 +110,45 @@ std::unique_ptr<Camera> CreateCamera(const CameraDesc &desc, Point2i res) {
     }
     std::vector<Float> swp = ps.getFloats("screenwindow");
     if (!swp.empty()) {
-        if (swp.size() != 4) throw Error(ps.locOf("screenwindow", desc.loc), "\"screenwindow\" needs 4 values");
+        if (swp.size() != 4) throw Error(ps.locOf("screenwindow", loc), "\"screenwindow\" needs 4 values");
         for (int i = 0; i < 4; ++i) sw[i] = swp[i];
+        if (!(std::isfinite(sw[0] + sw[1] + sw[2] + sw[3]) && sw[0] != sw[1] && sw[2] != sw[3]))
+            throw Error(ps.locOf("screenwindow", loc), "\"screenwindow\" must be finite with x0 != x1 and y0 != y1");
     }
+}
+
+void CheckCameraPlacement(const CameraDesc &desc) {
+    constexpr Float kMaxLength = 1e15;
+    Point3 eye = desc.cameraFromWorld.inverse().applyPoint(Point3(0, 0, 0));
+    if (!(std::abs(eye.x) <= kMaxLength && std::abs(eye.y) <= kMaxLength && std::abs(eye.z) <= kMaxLength))
+        throw Error(desc.loc, "the camera lies more than 1e15 scene units from the origin, beyond the range the ray "
+                              "tracer handles");
+}
+
+std::unique_ptr<Camera> CreateCamera(const CameraDesc &desc, Point2i res) {
+    const ParamSet &ps = desc.params;
+    std::string type = desc.present ? desc.type : "perspective";
+    if (type == "orthographic") return CreateOrthographicCamera(desc, res);
+    if (type == "environment") return CreateEnvironmentCamera(desc, res);
+    if (type == "realistic") return CreateRealisticCamera(desc, res);
+    if (type != "perspective")
+        throw Error(desc.loc, "unknown camera type \"" + type + "\" (valid: perspective, orthographic, environment, "
+                              "realistic)");
+    ps.getFloat("shutteropen", 0);
+    ps.getFloat("shutterclose", 1);
+    Float lensRadius = ps.getFloat("lensradius", 0);
+    Float focalDistance = ps.getFloat("focaldistance", 1e6);
+    Float aspect = ps.getFloat("frameaspectratio", Float(res.x) / Float(res.y));
+    Float sw[4];
+    ReadScreenWindow(ps, desc.loc, res, sw);
+    const bool hasWindow = ps.has("screenwindow");
     Float fov = ps.getFloat("fov", 90);
     Float halffov = ps.getFloat("halffov", -1);
     if (halffov > 0) fov = 2 * halffov;
     // Gradus extension (glTF cameras): "yfov" is the vertical field of view
     // whatever the image's aspect ratio.
     if (ps.has("yfov")) {
-        if (ps.has("fov") || ps.has("halffov") || !swp.empty())
+        if (ps.has("fov") || ps.has("halffov") || hasWindow)
             throw Error(ps.locOf("yfov", desc.loc), "\"yfov\" excludes \"fov\", \"halffov\" and \"screenwindow\"");
         fov = ps.getFloat("yfov", 60);
         sw[0] = -aspect, sw[1] = aspect, sw[2] = -1, sw[3] = 1;
@@ -142,10 +161,7 @@ std::unique_ptr<Camera> CreateCamera(const CameraDesc &desc, Point2i res) {
     if (!(focalDistance > 0 && focalDistance <= kMaxLength))
         throw Error(ps.locOf("focaldistance", desc.loc), "\"focaldistance\" must be in (0, 1e15]");
     if (lensRadius > kMaxLength) throw Error(ps.locOf("lensradius", desc.loc), "\"lensradius\" must be <= 1e15");
-    Point3 eye = desc.cameraFromWorld.inverse().applyPoint(Point3(0, 0, 0));
-    if (!(std::abs(eye.x) <= kMaxLength && std::abs(eye.y) <= kMaxLength && std::abs(eye.z) <= kMaxLength))
-        throw Error(desc.loc, "the camera lies more than 1e15 scene units from the origin, beyond the range the ray "
-                              "tracer handles");
+    CheckCameraPlacement(desc);
     ps.checkUnused("Camera \"perspective\"");
     return std::make_unique<PerspectiveCamera>(desc.cameraFromWorld.inverse(), res, sw, fov, lensRadius,
                                                focalDistance);

@@ -53,6 +53,10 @@ class Integrator {
     // with media or BSSRDFs, at the Integrator directive, when these are false).
     virtual bool rendersMedia() const { return false; }
     virtual bool rendersSubsurface() const { return false; }
+    // Cameras without an importance function (Camera::hasImportance false:
+    // orthographic, environment, realistic) need an integrator that makes no
+    // light-to-camera (t = 1) connections, or drops them (bdpt).
+    virtual bool rendersCamerasWithoutImportance() const { return false; }
 };
 
 // An integrator that estimates independent camera samples: each pass is

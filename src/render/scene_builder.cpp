@@ -213,6 +213,11 @@ static void RefuseUnhandledParts(const Integrator &integrator, const Scene &scen
         throw Error(at, "Integrator \"" + idesc.type + "\" does not render subsurface scattering (material made at " +
                             mloc.str() + "); BSSRDFs render with path");
     }
+    if (!scene.camera->hasImportance() && !integrator.rendersCamerasWithoutImportance())
+        throw Error(idesc.present ? idesc.loc : desc.camera.loc,
+                    "Integrator \"" + idesc.type + "\" does not render Camera \"" + desc.camera.type + "\" (made at " +
+                        desc.camera.loc.str() + "), which has no importance function for light-to-camera "
+                        "connections; it renders with path and bdpt (bdpt without its light-tracing strategies)");
 }
 
 std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {

@@ -17,6 +17,9 @@ BDPTIntegrator::BDPTIntegrator(const EntityDesc &desc)
 void BDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     // One light subpath per camera sample (the splat scale: see LightTracingSplatScale).
     preprocessBidir(scene, film, set_, loc_);
+    // A camera without importance (orthographic, environment, realistic) has no
+    // t = 1 strategies; they leave the MIS sums too, so the others stay unbiased.
+    ctx_.strategies.lightTracing = scene.camera->hasImportance();
 }
 
 void BDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const {

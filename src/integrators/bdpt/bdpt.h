@@ -27,6 +27,7 @@ class BDPTIntegrator : public PixelSampleIntegrator, public BidirFamily {
     void preprocess(const Scene &scene, Film &film) override;
     void estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const override;
     bool rendersMedia() const override { return true; }  // medium vertices (common/bidir.h)
+    bool rendersCamerasWithoutImportance() const override { return true; }  // without t = 1 (bdpt.cpp)
     int maxDepth() const { return set_.maxDepth; }
     static std::string LayerName(int s, int t) { return StrategyLayerName("bdpt", s, t); }
 

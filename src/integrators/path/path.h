@@ -42,6 +42,7 @@ class PathIntegrator : public PixelSampleIntegrator {
     int maxDepth() const { return set_.maxDepth; }
     bool rendersMedia() const override { return true; }
     bool rendersSubsurface() const override { return true; }
+    bool rendersCamerasWithoutImportance() const override { return true; }
 
   private:
     // Next-event estimation at a surface (bsdf) or medium (phase) vertex, the

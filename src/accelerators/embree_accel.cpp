@@ -81,6 +81,19 @@ void AlphaFilter(const RTCFilterFunctionNArguments *args, bool shadow) {
         if (cut) args->valid[i] = 0;
     }
 }
+// Tubes (round curves) are seen from outside only: a hit whose geometric normal
+// (outward) faces along the ray is where a ray leaves a fibre; it is ignored,
+// so rays spawned inwards off a fibre pass through it (shapes/curve.h).
+void TubeExitFilter(const RTCFilterFunctionNArguments *args) {
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        const float dn = RTCRayN_dir_x(args->ray, args->N, i) * RTCHitN_Ng_x(args->hit, args->N, i) +
+                         RTCRayN_dir_y(args->ray, args->N, i) * RTCHitN_Ng_y(args->hit, args->N, i) +
+                         RTCRayN_dir_z(args->ray, args->N, i) * RTCHitN_Ng_z(args->hit, args->N, i);
+        if (dn > 0) args->valid[i] = 0;
+    }
+}
+
 void AlphaIntersectFilter(const RTCFilterFunctionNArguments *args) { AlphaFilter(args, false); }
 void AlphaOccludedFilter(const RTCFilterFunctionNArguments *args) { AlphaFilter(args, true); }
 
@@ -185,6 +198,45 @@ int EmbreeAccel::addAnalytic(std::shared_ptr<const AnalyticShape> shape) {
     rtcSetGeometryIntersectFunction(g, AnalyticIntersect);
     rtcSetGeometryOccludedFunction(g, AnalyticOccluded);
     analytic_.push_back(std::move(shape));
+    return attachTop(g, 1);
+}
+
+int EmbreeAccel::addCurve(std::shared_ptr<const CurveShape> curve) {
+    const CurveType type = curve->type();
+    RTCGeometry g = rtcNewGeometry(device_, type == CurveType::Cylinder ? RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE
+                                            : type == CurveType::Flat   ? RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE
+                                                                        : RTC_GEOMETRY_TYPE_NORMAL_ORIENTED_BEZIER_CURVE);
+    const auto &segs = curve->segments();
+    const size_t ns = segs.size();
+    auto *v = static_cast<float *>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 4 * ns));
+    auto *idx = static_cast<unsigned *>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, sizeof(unsigned), ns));
+    float *nb = nullptr;
+    if (type == CurveType::Ribbon)
+        nb = static_cast<float *>(
+            rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_NORMAL, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 4 * ns));
+    for (size_t s = 0; s < ns; ++s) {
+        idx[s] = unsigned(4 * s);
+        for (int i = 0; i < 4; ++i) {
+            float *q = v + 4 * (4 * s + i);
+            const Point3 &p = segs[s].cp[i];
+            q[0] = float(p.x), q[1] = float(p.y), q[2] = float(p.z);
+            // Bezier control radii in arithmetic progression: radius linear in u.
+            q[3] = float(Lerp(i / 3.0, segs[s].r0, segs[s].r1));
+            if (nb) {
+                const Normal3 n = curve->ribbonNormal(int(s), i / 3.0);
+                float *m = nb + 3 * (4 * s + i);
+                m[0] = float(n.x), m[1] = float(n.y), m[2] = float(n.z);
+            }
+        }
+    }
+    if (type == CurveType::Flat) rtcSetGeometryTessellationRate(g, 16);
+    if (type == CurveType::Cylinder) {
+        rtcSetGeometryIntersectFilterFunction(g, TubeExitFilter);
+        rtcSetGeometryOccludedFilterFunction(g, TubeExitFilter);
+    }
+    curves_.push_back(std::move(curve));
     return attachTop(g, 1);
 }
 

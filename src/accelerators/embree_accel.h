@@ -12,6 +12,7 @@
 
 #include "core/geometry.h"
 #include "shapes/analytic.h"
+#include "shapes/curve.h"
 #include "shapes/triangle.h"
 
 struct RTCDeviceTy;
@@ -22,7 +23,7 @@ namespace gradus {
 struct RayHit {
     int geomId = -1, primId = -1;  // record id, triangle (or 0)
     Float t = 0;
-    Float b1 = 0, b2 = 0;  // barycentrics for triangles
+    Float b1 = 0, b2 = 0;  // barycentrics for triangles; (u, v) for curves
 };
 
 class EmbreeAccel {
@@ -36,6 +37,8 @@ class EmbreeAccel {
     int addMesh(std::shared_ptr<const TriangleMesh> mesh);
     int addAnalytic(std::shared_ptr<const AnalyticShape> shape);
     int addSphere(std::shared_ptr<const AnalyticShape> sphere) { return addAnalytic(std::move(sphere)); }
+    // Embree curve geometry (one primitive per segment; RayHit::b1 = segment u).
+    int addCurve(std::shared_ptr<const CurveShape> curve);
     // An instanceable object: a scene of meshes (in the object's space, no
     // alpha cut-outs), built once however often it is instanced.
     int newObject();
@@ -69,6 +72,7 @@ class EmbreeAccel {
     std::vector<Object> objects_;
     std::vector<std::shared_ptr<const AnalyticShape>> analytic_;  // kept alive for user callbacks
     std::vector<std::shared_ptr<const TriangleMesh>> alphaMeshes_;  // kept alive for filter callbacks
+    std::vector<std::shared_ptr<const CurveShape>> curves_;
 };
 
 }  // namespace gradus

@@ -27,6 +27,8 @@ bool Scene::intersect(const Ray &r, SurfaceInteraction *si) const {
         Float b1 = h.b1, b2 = h.b2;
         g.mesh->refineBarycentrics(h.primId, r, &b1, &b2, g.placement);
         g.meshInteraction(h.primId, b1, b2, wo, si);
+    } else if (g.curve) {
+        g.curve->interaction(h.primId, h.b1, r(h.t), wo, si);
     } else {
         // Refine the analytic hit in double precision along the original ray.
         Float t;
@@ -88,7 +90,8 @@ std::string SceneFeatures::describe() const {
     auto yn = [](bool b) { return b ? "yes" : "no"; };
     os << "Scene features:\n"
        << "  triangles: " << numTriangles << " (stored: " << numStoredTriangles << ", in " << numInstances
-       << " instances: " << numInstancedTriangles << "), spheres: " << numSpheres << ", other analytic shapes: " << numAnalytic << ", lights: " << numLights << "\n"
+       << " instances: " << numInstancedTriangles << "), spheres: " << numSpheres << ", other analytic shapes: " << numAnalytic
+       << ", curve segments: " << numCurveSegments << ", lights: " << numLights << "\n"
        << "  specular surfaces: " << yn(specularSurfaces) << "\n"
        << "  near-specular surfaces (roughness < 0.001): " << yn(nearSpecularSurfaces) << "\n"
        << "  lowest material roughness: " << minRoughness << "\n"

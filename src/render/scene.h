@@ -30,6 +30,7 @@ struct SceneFeatures {
     int64_t numTriangles = 0;
     int numSpheres = 0;
     int numAnalytic = 0;  // analytic shapes other than spheres (disk, cylinder, ...)
+    int numCurveSegments = 0;  // Shape "curve" segments (Embree curve primitives)
     int numInstances = 0;            // Embree instances (objects used more than once)
     int64_t numInstancedTriangles = 0;  // triangles of those instances, counted once per instance
     int64_t numStoredTriangles = 0;     // triangles held in memory (an instanced object's once)
@@ -47,6 +48,8 @@ struct GeometryRecord {
     std::shared_ptr<const AnalyticShape> analytic;  // sphere, disk, cylinder, cone, paraboloid, hyperboloid
     // Same object as `analytic` (older name, kept while callers move to `analytic`).
     std::shared_ptr<const AnalyticShape> sphere;
+    // Shape "curve" (primitive = segment); interaction() rebuilds a hit from its point.
+    std::shared_ptr<const CurveShape> curve;
     const Material *material = nullptr;
     std::vector<const AreaLight *> areaLights;  // per primitive; empty if not emissive
     MediumInterface mediumInterface;            // the shape's (no media: both null)

@@ -14,6 +14,7 @@
 #include "parser/ply.h"
 #include "render/checkpoint.h"
 #include "samplers/sampling.h"
+#include "shapes/curve.h"
 #include "shapes/heightfield.h"
 #include "shapes/loopsubdiv.h"
 #include "shapes/nurbs.h"
@@ -27,6 +28,7 @@ namespace {
 struct ShapeBuild {
     std::shared_ptr<TriangleMesh> mesh;
     std::shared_ptr<AnalyticShape> analytic;
+    std::shared_ptr<CurveShape> curve;
     bool subdivision = false;
 };
 
@@ -147,11 +149,11 @@ ShapeBuild CreateShape(const ShapeDesc &sd, const SceneDesc &scene, const NamedT
         b.mesh = TriangleMesh::Create(xf, ro, std::move(m.P), std::move(m.indices), std::move(m.N), {},
                                       std::move(m.uv), sd.loc);  // no alpha: pbrt-v3 reads none for these
     } else if (t == "curve") {
-        throw UnsupportedError(sd.loc, "Shape \"" + t + "\"");
+        b.curve = CreateCurveShape(ps, xf, ro, sd.loc);
     } else {
         throw Error(sd.loc, "unknown shape \"" + t +
                                 "\" (valid: trianglemesh, plymesh, loopsubdiv, sphere, disk, cylinder, cone, "
-                                "paraboloid, hyperboloid, heightfield, nurbs; pbrt-v3 also has curve)");
+                                "paraboloid, hyperboloid, heightfield, nurbs, curve)");
     }
     ps.checkUnused("Shape \"" + t + "\"");
     return b;
@@ -358,6 +360,11 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
             for (const auto &p : b.mesh->p) sb.expand(p);
             CheckTraceableBounds(sb, sd.loc);
             scene->bounds.expand(sb);
+        } else if (b.curve) {
+            rec.curve = b.curve;
+            feat.numCurveSegments += b.curve->numSegments();
+            CheckTraceableBounds(b.curve->worldBound(), sd.loc);
+            scene->bounds.expand(b.curve->worldBound());
         } else {
             rec.analytic = b.analytic;
             rec.sphere = b.analytic;
@@ -366,6 +373,9 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
             CheckTraceableBounds(b.analytic->worldBound(), sd.loc);
             scene->bounds.expand(b.analytic->worldBound());
         }
+        if (sd.areaLight >= 0 && b.curve)  // pbrt-v3 allows it (rarely used); not supported here
+            throw UnsupportedError(desc.areaLights[sd.areaLight].loc, "an area light on a \"curve\" shape (made at " +
+                                                                          sd.loc.str() + ")");
         if (sd.areaLight >= 0) {
             const EntityDesc &ad = desc.areaLights[sd.areaLight];
             if (ad.type != "diffuse" && ad.type != "area")
@@ -425,7 +435,9 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
             }
             feat.areaLights = true;
         }
-        int id = b.mesh ? scene->accel.addMesh(b.mesh) : scene->accel.addAnalytic(b.analytic);
+        int id = b.mesh    ? scene->accel.addMesh(b.mesh)
+                 : b.curve ? scene->accel.addCurve(b.curve)
+                           : scene->accel.addAnalytic(b.analytic);
         if (id != int(scene->geometry.size())) throw Error("internal: geometry ids out of order");
         scene->geometry.push_back(std::move(rec));
     }

@@ -551,6 +551,8 @@ BSDF RebuildBSDF(const BidirContext &ctx, const PathVertex &v, TransportMode mod
     SurfaceInteraction si;
     if (g.mesh) {
         g.meshInteraction(v.primId, v.b1, v.b2, v.wo, &si);
+    } else if (g.curve) {  // h (hair) from the point and wo, as at the hit
+        g.curve->interaction(v.primId, -1, v.p, v.wo, &si);
     } else {
         Vec3 wo = v.wo;
         g.sphere->interaction(Ray(v.p + wo, -wo), 1, &si);

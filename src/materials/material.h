@@ -31,9 +31,11 @@ class Material {
 // Creates a material of pbrt-v3 type `desc.type` ("matte", ...). Reads its
 // parameters (textures resolved through `textures`); unknown types and known
 // but unsupported pbrt-v3 materials throw located errors. The caller runs
-// desc.params.checkUnused() afterwards. `named` resolves "mix" components.
+// desc.params.checkUnused() afterwards. `named` resolves "mix" components; `scene`
+// (when given) resolves relative file names such as "fourier"'s bsdffile.
 std::shared_ptr<Material> CreateMaterial(const MaterialDesc &desc, const NamedTextures &textures,
-                                         const std::map<std::string, std::shared_ptr<Material>> &named);
+                                         const std::map<std::string, std::shared_ptr<Material>> &named,
+                                         const SceneDesc *scene = nullptr);
 
 // Creates a texture of class desc.type ("constant", "imagemap", "checkerboard", ...).
 // Adds it to `textures` under desc.name (float or spectrum by desc.valueType).

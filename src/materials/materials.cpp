@@ -7,6 +7,7 @@
 #include "materials/bssrdf.h"
 #include "materials/bxdfs.h"
 #include "materials/disney.h"
+#include "materials/fourier.h"
 #include "materials/gltf_pbr.h"
 #include "materials/material.h"
 #include "materials/material_util.h"
@@ -306,11 +307,12 @@ Roughness ReadRoughness(const ParamSet &p, const NamedTextures &tex, const FileL
 }  // namespace
 
 std::shared_ptr<Material> CreateMaterial(const MaterialDesc &desc, const NamedTextures &tex,
-                                         const std::map<std::string, std::shared_ptr<Material>> &named) {
+                                         const std::map<std::string, std::shared_ptr<Material>> &named,
+                                         const SceneDesc *scene) {
     const ParamSet &p = desc.params;
     const FileLoc &loc = desc.loc;
     const std::string &t = desc.type;
-    if (t == "fourier" || t == "hair")
+    if (t == "hair")
         throw UnsupportedError(loc, "material \"" + t + "\"");
     if (t == "" || t == "none" || t == "interface") return std::make_shared<InterfaceMaterial>();
     if (t == "mix") {
@@ -383,8 +385,9 @@ std::shared_ptr<Material> CreateMaterial(const MaterialDesc &desc, const NamedTe
     if (t == "gltfpbr") return CreateGltfPbrMaterial(p, tex, loc, bump);
     if (t == "disney") return CreateDisneyMaterial(p, tex, loc, bump);
     if (t == "subsurface" || t == "kdsubsurface") return CreateSubsurfaceMaterial(t, p, tex, loc, bump);
+    if (t == "fourier") return CreateFourierMaterial(p, scene, loc, bump);
     throw Error(loc, "unknown material type \"" + t +
-                         "\" (known: matte, plastic, metal, mirror, glass, uber, substrate, translucent, mix, gltfpbr, subsurface, kdsubsurface, disney)");
+                         "\" (known: matte, plastic, metal, mirror, glass, uber, substrate, translucent, mix, gltfpbr, subsurface, kdsubsurface, disney, fourier)");
 }
 
 }  // namespace gradus

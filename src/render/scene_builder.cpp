@@ -266,7 +266,7 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
             md.params.checkUnused("Material \"" + md.type + "\"");
             continue;
         }
-        auto m = CreateMaterial(md, textures, named);
+        auto m = CreateMaterial(md, textures, named, &desc);
         md.params.checkUnused("Material \"" + md.type + "\"");
         if (!md.name.empty()) named[md.name] = m;
         matByIndex[i] = m.get();

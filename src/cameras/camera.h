@@ -68,7 +68,9 @@ class PerspectiveCamera : public Camera {
 
 // Creates the camera from the Camera directive (perspective, orthographic,
 // environment, realistic). `resolution` is the film's full resolution.
-std::unique_ptr<Camera> CreateCamera(const CameraDesc &desc, Point2i resolution);
+// `scene` (optional) resolves the realistic camera's lens file and gives the
+// Film's "diagonal".
+std::unique_ptr<Camera> CreateCamera(const CameraDesc &desc, Point2i resolution, const SceneDesc *scene = nullptr);
 
 // pbrt-v3's screen window: from "frameaspectratio" (default the film's) or
 // "screenwindow" [x0 x1 y0 y1]; a located error when malformed.
@@ -77,6 +79,6 @@ void ReadScreenWindow(const ParamSet &ps, const FileLoc &loc, Point2i resolution
 void CheckCameraPlacement(const CameraDesc &desc);
 std::unique_ptr<Camera> CreateOrthographicCamera(const CameraDesc &desc, Point2i resolution);
 std::unique_ptr<Camera> CreateEnvironmentCamera(const CameraDesc &desc, Point2i resolution);
-std::unique_ptr<Camera> CreateRealisticCamera(const CameraDesc &desc, Point2i resolution);
+std::unique_ptr<Camera> CreateRealisticCamera(const CameraDesc &desc, Point2i resolution, const SceneDesc *scene);
 
 }  // namespace gradus

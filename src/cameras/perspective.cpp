@@ -125,12 +125,12 @@ void CheckCameraPlacement(const CameraDesc &desc) {
                               "tracer handles");
 }
 
-std::unique_ptr<Camera> CreateCamera(const CameraDesc &desc, Point2i res) {
+std::unique_ptr<Camera> CreateCamera(const CameraDesc &desc, Point2i res, const SceneDesc *scene) {
     const ParamSet &ps = desc.params;
     std::string type = desc.present ? desc.type : "perspective";
     if (type == "orthographic") return CreateOrthographicCamera(desc, res);
     if (type == "environment") return CreateEnvironmentCamera(desc, res);
-    if (type == "realistic") return CreateRealisticCamera(desc, res);
+    if (type == "realistic") return CreateRealisticCamera(desc, res, scene);
     if (type != "perspective")
         throw Error(desc.loc, "unknown camera type \"" + type + "\" (valid: perspective, orthographic, environment, "
                               "realistic)");

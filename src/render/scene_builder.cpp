@@ -497,7 +497,7 @@ std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution) {
     feat.specularSurfaces = feat.minRoughness == 0;
     feat.nearSpecularSurfaces = feat.minRoughness < kDefaultShiftThreshold;
 
-    scene->camera = CreateCamera(desc.camera, resolution);
+    scene->camera = CreateCamera(desc.camera, resolution, &desc);
     scene->cameraMedium = mediumNamed(desc.camera.mediumName);
 
     // Are emitters directly visible? Probe a coarse grid of camera rays.

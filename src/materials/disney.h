@@ -94,8 +94,8 @@ class DisneyClearcoat : public BxDF {
 };
 
 // Specular reflection: Trowbridge-Reitz (GTR2, anisotropic; Burley 2012, Appendix B,
-// Eq. 13) with separable Smith masking G1(o) G1(i), scaled by R (pbrt-v3 passes the base
-// color) and the Disney Fresnel lerp(metallic, F_dielectric(eta), Schlick(R0)).
+// Eq. 13) with separable Smith masking G1(o) G1(i), scaled by R and the Disney Fresnel
+// lerp(metallic, F_dielectric(eta), Schlick(R0)).
 // The Fresnel cosine is taken against the half vector turned to +z (pbrt-v3).
 class DisneySpecular : public BxDF {
   public:

@@ -104,15 +104,47 @@ bool SampleFourierPhi(const double *a, int m, Float u, Float *phiOut) {
     return true;
 }
 
+// The mu_o nodes a query at mu_o interpolates between: those of wo's hemisphere
+// (sign of zero included) when each side has at least two, else all of them. The
+// tabulated function jumps at mu_o = 0 (reflection above, transmission below); a
+// Catmull-Rom stencil across the jump mixes the two tables and can go negative near
+// grazing angles, where sample() and pdf() would then disagree. pbrt-v3 interpolates
+// across it; Gradus differs only for |mu_o| below the first node of a side, where the
+// side's nearest node row is used.
+struct RowRange {
+    int start, count;
+    Float muO;  // mu_o clamped to the range
+};
+RowRange RowsFor(const FourierTable &t, Float muO) {
+    RowRange r{0, t.nMu, muO};
+    int neg = t.posStart, pos = t.nMu - t.posStart;
+    if (neg >= 2 && pos >= 2) {
+        if (std::signbit(muO)) r.count = neg;
+        else r.start = neg, r.count = pos;
+        r.muO = Clamp<Float>(muO, t.mu[r.start], t.mu[r.start + r.count - 1]);
+    }
+    return r;
+}
+
 // Catmull-Rom weights of both cosines (Jakob et al. 2014, Sec. 6: the coefficients
 // are splines in mu_i and mu_o); false when either lies outside the node range.
 struct Weights {
-    int offI, offO;
+    int offI, offO;  // offO is absolute (row index into the tables)
     Float wI[4], wO[4];
 };
+bool MuOWeights(const FourierTable &t, Float muO, Weights *w) {
+    RowRange r = RowsFor(t, muO);
+    if (!CatmullRomWeights(r.count, t.mu.data() + r.start, r.muO, &w->offO, w->wO)) return false;
+    w->offO += r.start;
+    // Nodes outside the side get weight 0 (as outside the table).
+    for (int b = 0; b < 4; ++b) {
+        int o = w->offO + b;
+        if (o < r.start || o >= r.start + r.count) w->wO[b] = 0;
+    }
+    return true;
+}
 bool LookupWeights(const FourierTable &t, Float muI, Float muO, Weights *w) {
-    return CatmullRomWeights(t.nMu, t.mu.data(), muI, &w->offI, w->wI) &&
-           CatmullRomWeights(t.nMu, t.mu.data(), muO, &w->offO, w->wO);
+    return CatmullRomWeights(t.nMu, t.mu.data(), muI, &w->offI, w->wI) && MuOWeights(t, muO, w);
 }
 
 // Per-thread scratch space for interpolated coefficients (the order is only known per file).
@@ -237,6 +269,10 @@ std::shared_ptr<const FourierTable> FourierTable::Read(const std::string &path, 
         if (!ok || t->mu[0] >= t->mu[1] || t->mu[n - 2] >= t->mu[n - 1])
             throw fail("mu nodes are not increasing at node " + std::to_string(i + 1));
     }
+    for (int64_t i = 0; i + 1 < n; ++i)
+        if (std::signbit(t->mu[i + 1]) && !std::signbit(t->mu[i]))
+            throw fail("mu node " + std::to_string(i + 1) + " (-0) follows +0");
+    t->posStart = int(std::count_if(t->mu.begin(), t->mu.end(), [](Float m) { return std::signbit(m); }));
     for (int64_t i = 0; i < n2; ++i) {
         float c = r.f32();
         if (!std::isfinite(c)) throw fail("cdf entry " + std::to_string(i) + " is not finite");
@@ -331,10 +367,12 @@ bool FourierBxDF::sample(const Vec3 &wo, Float, Point2 u, TransportMode mode, BS
     // mu_i from the Catmull-Rom spline of a_0 over mu_i at mu_o (the row's integral must
     // be positive: SampleCatmullRom2D's failure value -1 is also a valid cosine).
     Weights w;
-    if (!CatmullRomWeights(t.nMu, t.mu.data(), muO, &w.offO, w.wO) || !(RowIntegral(t, w) > 0)) return false;
+    if (!MuOWeights(t, muO, &w) || !(RowIntegral(t, w) > 0)) return false;
+    RowRange rows = RowsFor(t, muO);
+    const size_t first = size_t(rows.start) * t.nMu;
     Float pdfMu = 0;
-    Float muI = SampleCatmullRom2D(t.nMu, t.nMu, t.mu.data(), t.mu.data(), t.a0.data(), t.cdf.data(), muO, u[1],
-                                   nullptr, &pdfMu);
+    Float muI = SampleCatmullRom2D(rows.count, t.nMu, t.mu.data() + rows.start, t.mu.data(), t.a0.data() + first,
+                                   t.cdf.data() + first, rows.muO, u[1], nullptr, &pdfMu);
     if (!(pdfMu > 0) || !Allowed(t, muI, muO) || !LookupWeights(t, muI, muO, &w)) return false;
     // phi from the luminance series at (mu_i, mu_o).
     double *ak = Scratch(t.mMax);

@@ -25,6 +25,7 @@ struct FourierTable {
     int nMu = 0, nChannels = 1;
     int mMax = 0;               // longest series present in the file
     std::vector<Float> mu;      // nMu non-decreasing nodes in [-1, 1] (+-0 may both appear)
+    int posStart = 0;           // first node with a clear sign bit (the upper hemisphere)
     std::vector<Float> a0;      // nMu * nMu luminance a_0, row o (mu_o) column i (mu_i)
     std::vector<Float> cdf;     // per row: Catmull-Rom integral of a0 up to mu_i (recomputed)
     std::vector<int> offset, length;  // nMu * nMu: where each series starts, its order count

@@ -6,6 +6,10 @@
 
 namespace gradus {
 
+namespace {
+constexpr uint64_t kLightMediaTag = 0x7375627061746831ULL;  // light subpaths' media RNG
+}  // namespace
+
 void ImageSubpaths::init(const TileGrid &tiles) {
     tiles_ = tiles;
     tileStart_.assign(1, 0);
@@ -52,6 +56,13 @@ void ImageSubpaths::generate(PassContext &ctx, const BidirContext &bidir, int ma
                     int nC = 0, nL = 0;
                     for (auto &b : camB) b = BSDF();
                     for (auto &b : lightB) b = BSDF();
+                    // Media: the camera subpath's distances from the camera sample's RNG, the
+                    // light subpath's from one keyed by (seed, pixel, sample).
+                    RNG camRng, lightRng;
+                    const bool media = scene.features.media;
+                    if (media)
+                        lightRng = RNG(Hash(smp.seed() ^ kLightMediaTag, uint64_t(x) << 32 | uint32_t(y),
+                                            uint64_t(sampleIndex)));
                     if (withCamera) {
                         CameraSample cs;
                         Point2 u = smp.get2D();
@@ -60,21 +71,23 @@ void ImageSubpaths::generate(PassContext &ctx, const BidirContext &bidir, int ma
                         Ray ray;
                         Float w = scene.camera->generateRay(cs, &ray);
                         if (w > 0)
-                            nC = GenerateCameraSubpath(bidir, ray, smp, wk.arena, maxCam, camV.data(), camB.data());
+                            nC = GenerateCameraSubpath(bidir, ray, smp, wk.arena, maxCam, camV.data(), camB.data(),
+                                                       media ? &(camRng = CameraSampleMediaRNG(smp, cs)) : nullptr);
                         pFilm[p] = cs.pFilm;
                         camWeight[p] = float(w);
                     }
                     if (lightDimension >= 0) smp.startPixelSample({x, y}, sampleIndex, lightDimension);
                     if (!scene.lights.empty())
-                        nL = GenerateLightSubpath(bidir, smp, *lightArena, maxLight, lightV.data(), lightB.data());
+                        nL = GenerateLightSubpath(bidir, smp, *lightArena, maxLight, lightV.data(), lightB.data(),
+                                                  media ? &lightRng : nullptr);
                     for (int i = 0; i < nC; ++i) {
                         o.cv.push_back(camV[i]);
-                        o.cc.push_back(camV[i].type == VertexType::Surface && IsConnectible(camV[i], &camB[i]));
+                        o.cc.push_back(camV[i].scatters() && IsConnectible(camV[i], &camB[i]));
                     }
                     for (int i = 0; i < nL; ++i) {
                         if (keepLightBSDFs) o.lb.push_back(lightB[i]);
                         o.lv.push_back(lightV[i]);
-                        o.lc.push_back(lightV[i].type == VertexType::Surface && IsConnectible(lightV[i], &lightB[i]));
+                        o.lc.push_back(lightV[i].scatters() && IsConnectible(lightV[i], &lightB[i]));
                     }
                     o.nc.push_back(uint32_t(nC));
                     o.nl.push_back(uint32_t(nL));

@@ -43,6 +43,7 @@ std::unique_ptr<Integrator> CreateMBDPTIntegrator(const EntityDesc &d) { return 
 namespace {
 
 constexpr uint64_t kConnectTag = 0x6d62647074000001ULL;
+constexpr uint64_t kMediaTag = 0x6d62647074000002ULL;  // transmittance of the connections
 constexpr uint64_t kMatrixTag = 0x6d62647074000002ULL;
 constexpr uint64_t kRowTag = 0x6d62647074000003ULL;
 // Sampler dimensions of "matrixsampler" "pixel" (per pixel sample; camera
@@ -210,7 +211,9 @@ void MBDPTIntegrator::connect(PassContext &ctx) {
                 Ray ray;
                 w = scene.camera->generateRay(cs, &ray);
                 for (auto &b : camB) b = BSDF();
-                nC = w > 0 ? GenerateCameraSubpath(ctx_, ray, smp, wk.arena, maxCam, camV.data(), camB.data()) : 0;
+                RNG camRng;
+                RNG *crng = scene.features.media ? &(camRng = CameraSampleMediaRNG(smp, cs)) : nullptr;
+                nC = w > 0 ? GenerateCameraSubpath(ctx_, ray, smp, wk.arena, maxCam, camV.data(), camB.data(), crng) : 0;
                 pFilm = cs.pFilm;
                 cv = camV.data();
             } else {
@@ -223,6 +226,8 @@ void MBDPTIntegrator::connect(PassContext &ctx) {
             }
             SampleRecorder rec(tile, pixel, pFilm);
             RNG rng(Hash(seed ^ kConnectTag, uint64_t(pixel.x) << 32 | uint32_t(pixel.y), uint64_t(iteration)));
+            // Media: the row's transmittance estimates (its own stream; unused without media).
+            RNG mediaRng(Hash(seed ^ kMediaTag, uint64_t(pixel.x) << 32 | uint32_t(pixel.y), uint64_t(iteration)));
             const int nL = light.count(p);
             const PathVertex *lv = light.path(p);
             const BSDF *lb = light.bsdfs(p);  // kept from generation, or rebuilt here
@@ -243,6 +248,7 @@ void MBDPTIntegrator::connect(PassContext &ctx) {
             };
             auto run = [&](SubpathView lightView, int s, int t, Float scale) {
                 ConnectSamples u;
+                u.rng = &mediaRng;
                 // Next-event and lens samples: the pixel sample's next dimensions
                 // (as bdpt) in pixel mode, else a per-row generator.
                 if (s == 1) {
@@ -281,7 +287,7 @@ void MBDPTIntegrator::connect(PassContext &ctx) {
                 for (int t = 2; t <= std::min(nC, maxDepth); ++t) {
                     int32_t rank = -1;
                     if (pixelMode) {
-                        if (cv[t - 1].type != VertexType::Surface || !IsConnectible(cv[t - 1], &camB[t - 1])) continue;
+                        if (!cv[t - 1].scatters() || !IsConnectible(cv[t - 1], &camB[t - 1])) continue;
                     } else if ((rank = rank_[t][p]) < 0) {
                         continue;
                     }
@@ -402,7 +408,10 @@ void MBDPTIntegrator::visualizeMatrix(PassContext &ctx) {
                     colB[s - 1] = RebuildBSDF(ctx_, zv[s - 1], TransportMode::Importance, wk.arena);
                     ConnectResult r;
                     Spectrum v(0);
-                    if (ConnectBDPT(ctx_, SubpathView{zv, colB.data(), s}, camView, s, t, ConnectSamples(), &r))
+                    RNG mediaRng(Hash(seed ^ kMediaTag, uint64_t(i) << 32 | uint32_t(j), uint64_t(s) << 32 | uint32_t(t)));
+                    ConnectSamples cu;
+                    cu.rng = &mediaRng;
+                    if (ConnectBDPT(ctx_, SubpathView{zv, colB.data(), s}, camView, s, t, cu, &r))
                         v = r.L * camWeight[p];
                     for (int c = 0; c < 3; ++c) img.at(int(j), int(i), c) = float(v[c]);
                 }

@@ -27,6 +27,9 @@
 // come from the sampler as in bdpt.
 // Random numbers are addressed by (pixel, iteration) and the seed; the
 // result does not depend on the thread count.
+// Participating media: the stored subpaths hold medium vertices (common/bidir.h),
+// connections carry transmittance (a per-row RNG); the reordering treats a
+// medium vertex as any connectible end vertex.
 //
 // Parameters (bidirectional family, integrators/common/bidir_family.h):
 //   integer maxdepth 5              maximum path depth (edges - 1)
@@ -78,6 +81,7 @@ class MBDPTIntegrator : public Integrator, public BidirFamily {
   public:
     explicit MBDPTIntegrator(const EntityDesc &desc);
     std::string name() const override { return "mbdpt"; }
+    bool rendersMedia() const override { return true; }  // medium vertices of the shared core
     void preprocess(const Scene &scene, Film &film) override;
     int samplesPerPass(const RenderOptions &) const override { return 1; }  // one iteration = 1 spp
     void runPass(PassContext &ctx) override;

@@ -1,0 +1,201 @@
+// The bidirectional integrators with participating media (medium vertices in
+// the shared core, integrators/common/bidir.h):
+//  - an absorbing slab (sigma_s = 0) between the camera and an emitter: the
+//    images of bdpt, vcm and mbdpt against the analytic transmittance exp(-sigma_t d);
+//  - bdpt, vcm, mbdpt and path agree in expectation on scenes/media/fog-box.pbrt
+//    (fog, spot and area light, a material-less smoke sphere) by Welch t-tests
+//    on the image mean and six blocks, with a power check (a 2% bias is detected);
+//  - gbdpt refuses a scene with media: a located error and exit status 1.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "common/render_test_util.h"
+#include "conformance/conformance_util.h"
+
+namespace gradus {
+namespace {
+
+using conformance::StudentCritical;
+using conformance::Welch;
+using conformance::WelchTest;
+
+std::string ReadFile(const std::string &path) {
+    std::ifstream f(path);
+    std::stringstream s;
+    s << f.rdbuf();
+    return s.str();
+}
+
+// ---------------------------------------------------------------- absorbing slab
+// Camera at z = -5 looking along +z (fov 4: rays within 2.9 degrees of the
+// axis), a material-less box z in [-0.5, 0.5] holding an absorbing medium, an
+// emitter (L = 1, two-sided) at z = 2 filling the view. A pixel's expectation
+// is exp(-sigma_t T / cos(theta)) with T = 1 and theta its ray's angle to the axis.
+constexpr double kSigmaA[3] = {0.5, 1.0, 1.5};
+constexpr int kRes = 16;
+constexpr double kFovDeg = 4;
+
+// A face of the box with its geometric normal pointing outwards (pbrt's
+// triangle normal: cross(p0 - p2, p1 - p2)).
+std::string Face(Vec3 c, Vec3 u, Vec3 v) {
+    Vec3 p[4] = {c - u - v, c + u - v, c + u + v, c - u + v};
+    const Vec3 n = Cross(p[0] - p[2], p[1] - p[2]);
+    if (Dot(n, c) < 0) std::swap(p[1], p[3]);  // the box is centred at the origin: outwards = along c
+    std::ostringstream o;
+    o << "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [";
+    for (const Vec3 &q : p) o << q.x << " " << q.y << " " << q.z << " ";
+    o << "]\n";
+    return o.str();
+}
+
+std::string SlabScene(const std::string &integrator) {
+    std::ostringstream s;
+    s << "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" [" << kFovDeg << "]\n"
+      << "Sampler \"random\" \"integer pixelsamples\" [16]\nPixelFilter \"box\"\n"
+      << "Film \"image\" \"integer xresolution\" [" << kRes << "] \"integer yresolution\" [" << kRes
+      << "] \"string filename\" [\"unused.exr\"]\n"
+      << "Integrator \"" << integrator << "\" \"integer maxdepth\" [3]\n"
+      << "MakeNamedMedium \"absorber\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [" << kSigmaA[0] << " "
+      << kSigmaA[1] << " " << kSigmaA[2] << "] \"rgb sigma_s\" [0 0 0]\n"
+      << "WorldBegin\nAttributeBegin\nMediumInterface \"absorber\" \"\"\nMaterial \"\"\n"
+      << Face(Vec3(0, 0, -0.5), Vec3(1, 0, 0), Vec3(0, 1, 0)) << Face(Vec3(0, 0, 0.5), Vec3(1, 0, 0), Vec3(0, 1, 0))
+      << Face(Vec3(-1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 0.5)) << Face(Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 0.5))
+      << Face(Vec3(0, -1, 0), Vec3(1, 0, 0), Vec3(0, 0, 0.5)) << Face(Vec3(0, 1, 0), Vec3(1, 0, 0), Vec3(0, 0, 0.5))
+      << "AttributeEnd\nAttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" true\n"
+      << "Material \"matte\" \"rgb Kd\" [0 0 0]\n"
+      << Face(Vec3(0, 0, 2), Vec3(3, 0, 0), Vec3(0, 3, 0)) << "AttributeEnd\nWorldEnd\n";
+    return s.str();
+}
+
+// Image mean of channel c expected from the pixel centres' path lengths.
+double SlabExpectation(int c) {
+    const double tanHalf = std::tan(kFovDeg / 2 * Pi / 180);
+    double sum = 0;
+    for (int y = 0; y < kRes; ++y)
+        for (int x = 0; x < kRes; ++x) {
+            const double sx = (2 * (x + 0.5) / kRes - 1) * tanHalf, sy = (2 * (y + 0.5) / kRes - 1) * tanHalf;
+            const double invCos = std::sqrt(1 + sx * sx + sy * sy);
+            sum += std::exp(-kSigmaA[c] * invCos);
+        }
+    return sum / (kRes * kRes);
+}
+
+void CheckSlab(const std::string &integrator) {
+    // K runs; per channel a t-test of the run means against the expectation.
+    // False positives: alpha = 1e-4 per integrator, Bonferroni over 3 channels.
+    // The per-pixel-centre expectation differs from the pixel-area average by
+    // less than 1e-5 relative (second order in the pixel's 0.25-degree width).
+    constexpr int K = 12, kSpp = 256;
+    std::vector<double> runs[3];
+    for (int k = 0; k < K; ++k) {
+        const Image img = test::RenderTestDesc(ParseString(SlabScene(integrator)), kSpp, 1000 + k, 2).image;
+        for (int c = 0; c < 3; ++c) {
+            double s = 0;
+            for (int y = 0; y < kRes; ++y)
+                for (int x = 0; x < kRes; ++x) s += img.at(x, y, c);
+            runs[c].push_back(s / (kRes * kRes));
+        }
+    }
+    const double crit = StudentCritical(1e-4 / 3, K - 1);
+    for (int c = 0; c < 3; ++c) {
+        const test::RunStats st = test::Stats(runs[c]);
+        const double se = std::sqrt(st.var / K), expected = SlabExpectation(c);
+        std::cout << "[ slab ] " << integrator << " channel " << c << ": mean " << st.mean << " +- " << se
+                  << ", exp(-sigma_t d) " << expected << ", t " << (st.mean - expected) / se << "\n";
+        EXPECT_LT(std::abs(st.mean - expected), crit * se) << integrator << " channel " << c;
+        // Power: an expectation 2% off is rejected.
+        EXPECT_GT(std::abs(st.mean - 1.02 * expected), crit * se) << integrator << " channel " << c;
+        EXPECT_GT(std::abs(st.mean - expected / 1.02), crit * se) << integrator << " channel " << c;
+    }
+}
+
+TEST(MediaBidir, AbsorbingSlabBDPT) { CheckSlab("bdpt"); }
+TEST(MediaBidir, AbsorbingSlabVCM) { CheckSlab("vcm"); }
+TEST(MediaBidir, AbsorbingSlabMBDPT) { CheckSlab("mbdpt"); }
+
+// ---------------------------------------------------------------- agreement
+// K runs of S spp per integrator (disjoint seeds), each reduced to the mean
+// luminance of the image and of six 8x9 blocks (path, noisier here: 2K runs).
+// Welch's t of vcm, mbdpt and path against bdpt per set; false positives:
+// alpha = 1e-4 in all,
+// Bonferroni over the 3 pairs and their 7 sets (the union bound holds for any
+// correlation). Power: X's runs scaled to a mean 2% above and below bdpt's
+// must be rejected on the image mean of each pair.
+struct Runs {
+    std::vector<std::vector<double>> sets;  // [set][run]
+};
+
+Runs RenderRuns(const SceneDesc &desc, const std::string &integrator, int K, int spp, uint64_t seed0) {
+    Runs r;
+    r.sets.resize(7);
+    for (int k = 0; k < K; ++k) {
+        const Image img = test::RenderTestDesc(desc, spp, seed0 + k, 2, integrator).image;
+        EXPECT_EQ(img.width(), 24);
+        EXPECT_EQ(img.height(), 18);
+        r.sets[0].push_back(test::BlockMean(img, 0, 0, 24, 18));
+        for (int b = 0; b < 6; ++b) {
+            const int x0 = (b % 3) * 8, y0 = (b / 3) * 9;
+            r.sets[1 + b].push_back(test::BlockMean(img, x0, y0, x0 + 8, y0 + 9));
+        }
+    }
+    return r;
+}
+
+TEST(MediaBidir, BdptVcmPathAgreeOnFogBox) {
+    const SceneDesc desc = ParseString(ReadFile(std::string(GRADUS_SOURCE_DIR) + "/scenes/media/fog-box.pbrt"));
+    constexpr int K = 16, kSpp = 128;
+    const Runs bdpt = RenderRuns(desc, "bdpt", K, kSpp, 100);
+    const Runs vcm = RenderRuns(desc, "vcm", K, kSpp, 200);
+    const Runs mbdpt = RenderRuns(desc, "mbdpt", K, kSpp, 300);
+    const Runs path = RenderRuns(desc, "path", 2 * K, kSpp, 400);
+    const double alpha = 1e-4 / 3 / 7;
+    struct Pair {
+        const char *name;
+        const Runs *x, *ref;
+    };
+    for (const Pair &p : {Pair{"vcm", &vcm, &bdpt}, Pair{"mbdpt", &mbdpt, &bdpt}, Pair{"path", &path, &bdpt}}) {
+        const char *name = p.name;
+        const Runs *x = p.x;
+        const Runs &ref = *p.ref;
+        for (int set = 0; set < 7; ++set) {
+            const Welch w = WelchTest(x->sets[set], ref.sets[set]);
+            const double crit = StudentCritical(alpha, w.dof);
+            if (set == 0)
+                std::cout << "[ agree ] " << name << " vs bdpt, image mean: " << w.meanA << " +- " << w.seA << " vs "
+                          << w.meanB << " +- " << w.seB << ", t " << w.t << " (critical " << crit << ")\n";
+            EXPECT_LT(std::abs(w.t), crit) << name << " vs bdpt, set " << set << ": " << w.meanA << " vs " << w.meanB;
+            if (set != 0) continue;
+            for (double bias : {1.02, 1 / 1.02}) {
+                // X's runs scaled so that their mean is bdpt's times `bias` (the
+                // chance difference of these runs taken out).
+                std::vector<double> scaled = x->sets[0];
+                for (double &v : scaled) v *= bias * w.meanB / w.meanA;
+                const Welch ws = WelchTest(scaled, ref.sets[0]);
+                EXPECT_GT(std::abs(ws.t), StudentCritical(alpha, ws.dof))
+                    << "power check: " << name << " biased by x" << bias << " not detected (t " << ws.t << ")";
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------- refusal
+TEST(MediaBidir, GBDPTRefusesMediaWithALocatedError) {
+    const std::string scene = std::string(GRADUS_SOURCE_DIR) + "/scenes/media/fog-box.pbrt";
+    const auto dir = std::filesystem::temp_directory_path() / ("gradus_media_refusal_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    const conformance::ProcResult r =
+        conformance::RunGradus({scene, "--integrator", "gbdpt", "--spp", "1", "--outfile", "x.exr", "--quiet"}, dir);
+    std::filesystem::remove_all(dir);
+    EXPECT_TRUE(r.exited);
+    EXPECT_EQ(r.exitCode, 1) << r.describe();
+    // The Integrator directive's location (line 16 of the scene), the integrator and the medium.
+    EXPECT_NE(r.err.find("fog-box.pbrt:16:1"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("\"gbdpt\""), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("\"fog\""), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace gradus

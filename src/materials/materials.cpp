@@ -9,6 +9,7 @@
 #include "materials/disney.h"
 #include "materials/fourier.h"
 #include "materials/gltf_pbr.h"
+#include "materials/hair.h"
 #include "materials/material.h"
 #include "materials/material_util.h"
 
@@ -312,8 +313,7 @@ std::shared_ptr<Material> CreateMaterial(const MaterialDesc &desc, const NamedTe
     const ParamSet &p = desc.params;
     const FileLoc &loc = desc.loc;
     const std::string &t = desc.type;
-    if (t == "hair")
-        throw UnsupportedError(loc, "material \"" + t + "\"");
+    if (t == "hair") return CreateHairMaterial(p, tex, loc);  // no bumpmap in pbrt-v3's hair
     if (t == "" || t == "none" || t == "interface") return std::make_shared<InterfaceMaterial>();
     if (t == "mix") {
         std::vector<std::string> names = p.getStrings("materials");
@@ -387,7 +387,7 @@ std::shared_ptr<Material> CreateMaterial(const MaterialDesc &desc, const NamedTe
     if (t == "subsurface" || t == "kdsubsurface") return CreateSubsurfaceMaterial(t, p, tex, loc, bump);
     if (t == "fourier") return CreateFourierMaterial(p, scene, loc, bump);
     throw Error(loc, "unknown material type \"" + t +
-                         "\" (known: matte, plastic, metal, mirror, glass, uber, substrate, translucent, mix, gltfpbr, subsurface, kdsubsurface, disney, fourier)");
+                         "\" (known: matte, plastic, metal, mirror, glass, uber, substrate, translucent, mix, gltfpbr, subsurface, kdsubsurface, disney, fourier, hair)");
 }
 
 }  // namespace gradus

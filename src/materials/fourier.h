@@ -9,7 +9,9 @@
 // Conventions as pbrt-v3: mu_i = cos(-wi), mu_o = cos(wo), so mu_i mu_o < 0 is
 // reflection; phi is the azimuth of -wi relative to wo. Three-channel files hold
 // luminance, red and blue. Transmission in radiance transport is scaled by
-// (eta_o / eta_i)^2.
+// (eta_o / eta_i)^2. One deviation from pbrt-v3: the mu_o stencil stays within wo's
+// hemisphere (see RowsFor in fourier.cpp), so that sample() and pdf() agree at
+// grazing wo, where pbrt-v3 blends the reflection and transmission tables.
 #pragma once
 #include <memory>
 #include <string>

@@ -98,12 +98,24 @@ struct KernelCase {
     double eta;    // fixed: eta at every vertex
     double shrink; // adaptive (eta < 0): G-VCM Sec. 6 with this exponent
 };
-void CheckRecursiveWeights(MISHeuristic h) {
+// media: the box filled with fog, a material-less sphere of denser smoke
+// (medium vertices on both subpaths, connected, never merged at); only the
+// fixed kernels, as vcm renders media only with them.
+void CheckRecursiveWeights(MISHeuristic h, bool media = false) {
     using namespace bdpt_test;
     std::string objects = Sphere("Material \"mirror\"", 0.5, 0.35, 0.3, 0.35) +
                           Sphere("Material \"plastic\" \"rgb Kd\" [0.3 0.3 0.3] \"rgb Ks\" [0.5 0.5 0.5] \"float roughness\" [0.1]",
                                  -0.4, 0.5, -0.2, 0.5);
-    std::string text = BoxScene("bdpt", CeilingLight(0.3, 10), objects, 16, "Camera \"perspective\" \"float fov\" [40]", true);
+    std::string cameraLine = "Camera \"perspective\" \"float fov\" [40]", lights = CeilingLight(0.3, 10);
+    if (media) {
+        cameraLine = "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [0.1 0.1 0.1] "
+                 "\"rgb sigma_s\" [0.6 0.5 0.4] \"float g\" [0.4]\n"
+                 "MakeNamedMedium \"smoke\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [0.2 0.2 0.2] "
+                 "\"rgb sigma_s\" [2 2 2] \"float g\" [-0.3]\nMediumInterface \"\" \"fog\"\n" + cameraLine;
+        lights = "MediumInterface \"fog\" \"fog\"\n" + lights;
+        objects += Sphere("MediumInterface \"smoke\" \"fog\"\nMaterial \"\"", 0.1, 1.3, 0.2, 0.3);
+    }
+    std::string text = BoxScene("bdpt", lights, objects, 16, cameraLine, true);
     BuildOptions bo;
     bo.quiet = true;
     RenderJob job = BuildRenderJob(ParseString(text), bo);
@@ -117,6 +129,7 @@ void CheckRecursiveWeights(MISHeuristic h) {
                           KernelCase{"fixed 100", 100, 0}, KernelCase{"adaptive s=10", -1, 10},
                           KernelCase{"adaptive s=1", -1, 1}, KernelCase{"footprint s=0", -1, 0}}) {
         const bool adaptive = kc.eta < 0;
+        if (media && adaptive) continue;
         MergeKernel k;
         k.piN = 1;
         k.r2 = adaptive ? 1e-3 : kc.eta;
@@ -133,7 +146,10 @@ void CheckRecursiveWeights(MISHeuristic h) {
         set.mergeFactor = adaptive ? 0 : kc.eta;
         set.kernel = adaptive ? &k : nullptr;
         const VCMWeights w{set.merging ? &k : nullptr, set.merging, true, h == MISHeuristic::Power};
-        int checked = 0, withSpecular = 0, lightTraced = 0, shrunk = 0;
+        int checked = 0, withSpecular = 0, lightTraced = 0, shrunk = 0, mediumEnds = 0;
+        RNG rng;
+        ConnectSamples cu;
+        cu.rng = &rng;
         Arena arena;
         for (int i = 0; i < 1500; ++i) {
             arena.reset();
@@ -146,8 +162,10 @@ void CheckRecursiveWeights(MISHeuristic h) {
             cs.pLens = sampler->get2D();
             Ray ray;
             camera.generateRay(cs, &ray);
-            const int nC = GenerateCameraSubpath(ctx, ray, *sampler, arena, maxDepth + 2, cv.data(), cb.data());
-            const int nL = GenerateLightSubpath(ctx, *sampler, arena, maxDepth + 1, lv.data(), lb.data());
+            rng = RNG(uint64_t(i));
+            RNG *mrng = media ? &rng : nullptr;
+            const int nC = GenerateCameraSubpath(ctx, ray, *sampler, arena, maxDepth + 2, cv.data(), cb.data(), mrng);
+            const int nL = GenerateLightSubpath(ctx, *sampler, arena, maxDepth + 1, lv.data(), lb.data(), mrng);
             std::vector<LightVertex> recs;
             VCMLightVertices(ctx, lv.data(), lb.data(), nL, w, &recs);
             std::vector<Float> B(nC), eta(nC);
@@ -186,12 +204,12 @@ void CheckRecursiveWeights(MISHeuristic h) {
                     EXPECT_NEAR(rec, ref, 1e-9 * (1 + ref)) << "s=0 t=" << t << " " << kc.name;
                     ++checked;
                 }
-                if (z.type != VertexType::Surface || !IsConnectible(z, &cb[uu])) continue;
+                if (!z.scatters() || !IsConnectible(z, &cb[uu])) continue;
                 const VCMCameraTerms terms = VCMCameraAt(ctx, cv.data(), cb.data(), uu, B[uu], eta.data(), w);
                 for (const LightVertex &y : recs) {
                     const int s = y.depth + 1;
                     ConnectResult r;
-                    if (!ConnectBDPT(ctx, light, cam, s, t, ConnectSamples(), &r)) continue;
+                    if (!ConnectBDPT(ctx, light, cam, s, t, cu, &r)) continue;
                     const PathVertex &yv = lv[s - 1];
                     const Float ref = MISWeight(ctx, set, light, cam, s, t, nullptr);
                     const Float oi = PdfArea(ctx, z, &cb[uu], &cv[uu - 1], yv, TransportMode::Radiance);
@@ -199,12 +217,13 @@ void CheckRecursiveWeights(MISHeuristic h) {
                     const Float oz = PdfArea(ctx, yv, &lb[s - 1], &lv[s - 2], z, TransportMode::Importance);
                     const Float op = PdfArea(ctx, z, &cb[uu], &yv, cv[uu - 1], TransportMode::Importance);
                     const Float rec = 1 / (1 + VCMLightSum(y, oi, oim1, terms.H, w.sigma(&lb[s - 1]), w) +
-                                           VCMCameraSum(terms, oz, op, w.merging, false, w));
+                                           VCMCameraSum(terms, oz, op, w.merging && !z.inMedium(), false, w));
                     EXPECT_NEAR(rec, ref, 1e-6 * (1 + ref)) << "s=" << s << " t=" << t << " " << kc.name;
                     bool spec = false;
                     for (int q = 1; q < s - 1; ++q) spec |= lv[q].delta();
                     for (int q = 1; q < uu; ++q) spec |= cv[q].delta();
                     withSpecular += spec;
+                    mediumEnds += z.inMedium() || yv.inMedium();
                     ++checked;
                 }
             }
@@ -212,6 +231,9 @@ void CheckRecursiveWeights(MISHeuristic h) {
         EXPECT_GE(checked, 1000) << kc.name;
         EXPECT_GE(lightTraced, 300) << kc.name;
         EXPECT_GE(withSpecular, 30) << "connections with a specular interior vertex, " << kc.name;
+        if (media) {
+            EXPECT_GE(mediumEnds, 300) << "connections at a medium vertex, " << kc.name;
+        }
         if (adaptive && kc.shrink > 0) {
             EXPECT_GE(shrunk, 300) << "camera vertices with a shrunk radius, " << kc.name;
         }
@@ -219,6 +241,8 @@ void CheckRecursiveWeights(MISHeuristic h) {
 }
 TEST(VCMWeights, RecursiveEqualsReferenceBalance) { CheckRecursiveWeights(MISHeuristic::Balance); }
 TEST(VCMWeights, RecursiveEqualsReferencePower) { CheckRecursiveWeights(MISHeuristic::Power); }
+TEST(VCMWeights, RecursiveEqualsReferenceMediaBalance) { CheckRecursiveWeights(MISHeuristic::Balance, true); }
+TEST(VCMWeights, RecursiveEqualsReferenceMediaPower) { CheckRecursiveWeights(MISHeuristic::Power, true); }
 
 // Settings that another choice would silently ignore are located errors.
 TEST(MergeKernel, IgnoredSettingsAreLocatedErrors) {

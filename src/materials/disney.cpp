@@ -167,7 +167,7 @@ Spectrum DisneySpecular::f(const Vec3 &wo, const Vec3 &wi, TransportMode) const 
     Float cosO = AbsCosTheta(wo), cosI = AbsCosTheta(wi);
     Vec3 wh;
     if (cosO == 0 || cosI == 0 || !SameHemisphere(wo, wi) || !HalfUp(wo, wi, &wh)) return Spectrum(0);
-    Float DG = d_.D(wh) * d_.G1(wo) * d_.G1(wi);
+    Float DG = d_.D(wh) * d_.G(wo, wi);
     return R_ * fresnel(Dot(wi, wh)) * (DG / (4 * cosO * cosI));
 }
 
@@ -199,7 +199,7 @@ Spectrum DisneyTransmission::f(const Vec3 &wo, const Vec3 &wi, TransportMode mod
     Float denom = Sqr(ih + oh / etap);
     if (!(denom > 0)) return Spectrum(0);
     Float F = FrDielectric(oh, eta_);
-    Float G = separable_ ? d_.G1(wo) * d_.G1(wi) : d_.G(wo, wi);
+    Float G = d_.G(wo, wi);
     // Walter et al. 2007, Eq. 21 divided through by eta_o^2; radiance is compressed by
     // 1/etap^2 across the interface, importance is not (Veach 1997, Sec. 5.2).
     Float ft = d_.D(wh) * G * (1 - F) * std::abs(ih * oh) / (AbsCosTheta(wi) * AbsCosTheta(wo) * denom);
@@ -303,14 +303,14 @@ DisneyBxDF::DisneyBxDF(const DisneyParams &p) : BxDF(BSDF_NONE) {
             smoothTrans_ = SpecularTransmission(T, eta);
             c_.add(&smoothTrans_);
         } else if (p.thin) {
-            // Thin: roughness scaled with the IOR (Burley 2015, Fig. 15), plain Trowbridge-Reitz.
+            // Thin: roughness scaled with the IOR (Burley 2015, Fig. 15).
             Float tx, ty;
             Alphas((0.65 * eta - 0.35) * rough, p.anisotropic, &tx, &ty);
             trans_ = DisneyTransmission(T, MicrofacetDistribution(MicrofacetDistribution::TrowbridgeReitz, tx, ty),
-                                        eta, false);
+                                        eta);
             c_.add(&trans_);
         } else {
-            trans_ = DisneyTransmission(T, distrib, eta, true);
+            trans_ = DisneyTransmission(T, distrib, eta);
             c_.add(&trans_);
         }
     }

@@ -94,8 +94,10 @@ class DisneyClearcoat : public BxDF {
 };
 
 // Specular reflection: Trowbridge-Reitz (GTR2, anisotropic; Burley 2012, Appendix B,
-// Eq. 13) with separable Smith masking G1(o) G1(i), scaled by R and the Disney Fresnel
-// lerp(metallic, F_dielectric(eta), Schlick(R0)).
+// Eq. 13) with height-correlated Smith masking, scaled by R and the Disney Fresnel
+// lerp(metallic, F_dielectric(eta), Schlick(R0)). (pbrt-v3 declares Burley's separable
+// G1(o) G1(i) in its Disney distribution, but G is not virtual in its base class, so the
+// lobes it renders use the height-correlated G: so do these.)
 // The Fresnel cosine is taken against the half vector turned to +z (pbrt-v3).
 class DisneySpecular : public BxDF {
   public:
@@ -115,12 +117,11 @@ class DisneySpecular : public BxDF {
 };
 
 // Rough transmission only (Walter et al. 2007, Eq. 21, T (1 - F)), eta = eta_inside /
-// eta_outside. `separable`: Smith G1(o) G1(i) (pbrt-v3's Disney distribution) instead of
-// the height-correlated G (pbrt-v3's plain Trowbridge-Reitz, used in thin mode).
+// eta_outside, height-correlated Smith masking (see DisneySpecular).
 class DisneyTransmission : public BxDF {
   public:
-    DisneyTransmission(const Spectrum &T, const MicrofacetDistribution &d, Float eta, bool separable)
-        : BxDF(BSDF_TRANSMISSION | BSDF_GLOSSY), T_(T), d_(d), eta_(eta), separable_(separable) {}
+    DisneyTransmission(const Spectrum &T, const MicrofacetDistribution &d, Float eta)
+        : BxDF(BSDF_TRANSMISSION | BSDF_GLOSSY), T_(T), d_(d), eta_(eta) {}
     Spectrum f(const Vec3 &wo, const Vec3 &wi, TransportMode mode) const override;
     bool sample(const Vec3 &wo, Float uc, Point2 u, TransportMode mode, BSDFSample *s) const override;
     Float pdf(const Vec3 &wo, const Vec3 &wi, TransportMode mode) const override;
@@ -131,7 +132,6 @@ class DisneyTransmission : public BxDF {
     Spectrum T_;
     MicrofacetDistribution d_;
     Float eta_;
-    bool separable_;
 };
 
 // The material's inputs at one point (pbrt-v3 names; textures already evaluated).
@@ -175,8 +175,7 @@ class DisneyBxDF : public BxDF {
     DisneySpecular spec_{Spectrum(0), MicrofacetDistribution(MicrofacetDistribution::TrowbridgeReitz, 1, 1),
                          Spectrum(0), 0, 1};
     DisneyClearcoat clearcoat_{0, 0.1};
-    DisneyTransmission trans_{Spectrum(0), MicrofacetDistribution(MicrofacetDistribution::TrowbridgeReitz, 1, 1), 1,
-                              true};
+    DisneyTransmission trans_{Spectrum(0), MicrofacetDistribution(MicrofacetDistribution::TrowbridgeReitz, 1, 1), 1};
     SpecularTransmission smoothTrans_{Spectrum(0), 1};
     LambertianTransmission diffTrans_{Spectrum(0)};
     CompositeBxDF c_;

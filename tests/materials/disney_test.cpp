@@ -269,7 +269,7 @@ TEST(Disney, SampleConsistentWithEval) {
 }
 
 // White furnace. Configurations where pbrt-v3's Disney model conserves energy: metal
-// (a Fresnel-weighted GGX with separable masking), spectrans = 1 (a rough dielectric),
+// (a Fresnel-weighted GGX), spectrans = 1 (a rough dielectric),
 // and the diffuse lobes alone (eta = 1 removes the specular lobe) at roughness <= 0.25
 // (then FD90 = 0.5 + 2 r cos^2 <= 1); thin diffuse reflection + transmission only at
 // roughness 0 (pbrt-v3 does not scale the retro-reflection lobe by 1 - difftrans/2, so the
@@ -320,7 +320,7 @@ TEST(Disney, WhiteFurnaceAtMostOneWhereConserving) {
             }
         }
     }
-    // The rough dielectric is nearly lossless at normal incidence (separable masking
+    // The rough dielectric is nearly lossless at normal incidence (single scattering
     // loses a little): a 1% gain would exceed 1.
     DisneyParams p = Base(Spectrum(1));
     p.specTrans = 1;
@@ -451,6 +451,39 @@ TEST(Disney, SheenAndClearcoatClosedForm) {
         DisneyClearcoat cc(0.8, a);
         EXPECT_NEAR(cc.f(v, l, TransportMode::Radiance).r, expect, 1e-12 * expect) << gloss;
         EXPECT_NEAR(cc.roughness(), a, 1e-15);
+    }
+}
+
+// Specular: a white metal has F = 1 (Schlick with R0 = 1), so f = D G / (4 cos o cos i)
+// with the anisotropic GGX D (Burley 2012, Appendix B, Eq. 13; ax = r^2 / aspect,
+// ay = r^2 aspect, aspect = sqrt(1 - 0.9 anisotropic)) and the height-correlated Smith G
+// that pbrt-v3's lobes evaluate. The dielectric lobe's Fresnel is the exact one at eta.
+TEST(Disney, SpecularClosedForm) {
+    const double r = 0.6, an = 0.7, aspect = std::sqrt(1 - 0.9 * an);
+    const double ax = r * r / aspect, ay = r * r * aspect;
+    auto D = [&](const Vec3 &h) { return 1 / (Pi * ax * ay * Sqr(Sqr(h.x / ax) + Sqr(h.y / ay) + h.z * h.z)); };
+    auto Lambda = [&](const Vec3 &w) {
+        return (-1 + std::sqrt(1 + (ax * ax * w.x * w.x + ay * ay * w.y * w.y) / (w.z * w.z))) / 2;
+    };
+    DisneyParams p = Base(Spectrum(1));
+    p.metallic = 1;
+    p.roughness = r;
+    p.anisotropic = an;
+    DisneyBxDF metal(p);
+    p.metallic = 0;
+    p.color = Spectrum(0);  // only the specular lobe has weight
+    p.eta = 1.7;
+    DisneyBxDF dielectric(p);
+    const std::pair<Vec3, Vec3> pairs[] = {{Dir(0.8, 0.3), Dir(0.6, 0.3 + Pi)}, {Dir(0.9, 0.1), Dir(0.4, 2.0)},
+                                           {Dir(0.3, 1.0), Dir(0.95, 5.0)}};
+    for (auto [v, l] : pairs) {
+        Vec3 h = Normalize(v + l);
+        double expect = D(h) / (1 + Lambda(v) + Lambda(l)) / (4 * v.z * l.z);
+        EXPECT_NEAR(metal.f(v, l, TransportMode::Radiance).g, expect, 1e-10 * expect) << v << l;
+        // Exact dielectric Fresnel at cos(theta_d), eta 1.7.
+        double c = Dot(l, h), g = std::sqrt(1.7 * 1.7 - 1 + c * c);
+        double F = 0.5 * Sqr((g - c) / (g + c)) * (1 + Sqr((c * (g + c) - 1) / (c * (g - c) + 1)));
+        EXPECT_NEAR(dielectric.f(v, l, TransportMode::Radiance).g, F * expect, 1e-10 * expect) << v << l;
     }
 }
 

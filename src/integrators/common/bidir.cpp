@@ -47,9 +47,6 @@ void Barycentrics(const GeometryRecord &g, int tri, const Point3 &p, float *b1, 
     *b2 = float((d11 * dd2 - d12 * dd1) / den);
 }
 
-// Random walk shared by both subpaths (Veach 1997, Sec. 10.2): path[n-1] is the
-// origin; fills vertices n.. up to maxVertices, setting pdfFwd of each new
-// vertex and pdfRev of its predecessor.
 // What a ray met in a scene with media.
 enum class MediaStep { Miss, Surface, Medium, Absorbed, Stuck };
 
@@ -75,6 +72,11 @@ MediaStep TraceThroughMedia(const Scene &scene, Ray *ray, const Medium **medium,
     }
 }
 
+// Random walk shared by both subpaths (Veach 1997, Sec. 10.2): path[n-1] is the
+// origin; fills vertices n.. up to maxVertices, setting pdfFwd of each new
+// vertex and pdfRev of its predecessor.
+// With media, each segment samples a scattering distance in its medium
+// (`medium`, distances from *rng); a scattering there is a medium vertex.
 int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sampler &sampler, Arena &arena,
                TransportMode mode, int n, int maxVertices, PathVertex *path, BSDF *bsdfs, const Medium *medium,
                RNG *rng) {
@@ -85,6 +87,21 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
     GRADUS_CHECK(!media || rng);
     Float pdfFwd = pdfDir;
     const Float beta0 = beta.maxComponent();
+    // Russian roulette on the throughput relative to the subpath's start, after
+    // vertex v (the n-th); false: the subpath ends.
+    auto roulette = [&](PathVertex &v) {
+        if (ctx.rrDepth >= 0 && n > ctx.rrDepth + 1 && n < maxVertices) {
+            Float uRR = sampler.get1D();
+            Float rel = beta0 > 0 ? beta.maxComponent() / beta0 : 1;
+            if (rel < 1) {
+                Float q = std::max<Float>(0.05, 1 - rel);
+                if (uRR < q) return false;
+                beta = beta / (1 - q);
+                v.rrScale = float(1 / (1 - q));
+            }
+        }
+        return true;
+    };
     while (n < maxVertices) {
         SurfaceInteraction isect;
         bool hit;
@@ -124,16 +141,7 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
                 if (!(pdf > 0)) break;
                 pdfFwd = pdf;
                 prev.pdfRev = ConvertDensity(pdf, v, prev);  // HG is symmetric: p(wi, wo) = p(wo, wi)
-                if (ctx.rrDepth >= 0 && n > ctx.rrDepth + 1 && n < maxVertices) {
-                    Float uRR = sampler.get1D();
-                    Float rel = beta0 > 0 ? beta.maxComponent() / beta0 : 1;
-                    if (rel < 1) {
-                        Float q = std::max<Float>(0.05, 1 - rel);
-                        if (uRR < q) break;
-                        beta = beta / (1 - q);
-                        v.rrScale = float(1 / (1 - q));
-                    }
-                }
+                if (!roulette(v)) break;
                 ray = Ray(v.p, wi, Infinity);
                 continue;
             }
@@ -195,17 +203,7 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
         if (mode == TransportMode::Importance) beta *= ShadingCorrection(v, wo, bs.wi);
         prev.pdfRev = ConvertDensity(pdfRev, v, prev);
         if (beta.isBlack() || !beta.isFinite()) break;
-        // Russian roulette on the throughput relative to the subpath's start.
-        if (ctx.rrDepth >= 0 && n > ctx.rrDepth + 1 && n < maxVertices) {
-            Float uRR = sampler.get1D();
-            Float rel = beta0 > 0 ? beta.maxComponent() / beta0 : 1;
-            if (rel < 1) {
-                Float q = std::max<Float>(0.05, 1 - rel);
-                if (uRR < q) break;
-                beta = beta / (1 - q);
-                v.rrScale = float(1 / (1 - q));
-            }
-        }
+        if (!roulette(v)) break;
         if (media) medium = isect.mediumAfter(bs.wi, medium);
         ray = isect.spawnRay(bs.wi);
     }
@@ -244,7 +242,7 @@ uint8_t MediumIndexOf(const Scene &scene, const Medium *m) {
     if (!m) return 0;
     for (size_t i = 0; i < scene.media.size() && i < 255; ++i)
         if (scene.media[i].get() == m) return uint8_t(i + 1);
-    GRADUS_CHECK(false);  // more than 255 media: refused by the integrators (CheckMediaCount)
+    GRADUS_CHECK(false);  // more than 255 media: refused by BidirFamily::preprocessBidir
     return 0;
 }
 

@@ -282,9 +282,8 @@ DisneyBxDF::DisneyBxDF(const DisneyParams &p) : BxDF(BSDF_NONE) {
     const MicrofacetDistribution distrib(MicrofacetDistribution::TrowbridgeReitz, ax, ay);
     const Float r0 = Sqr((eta - 1) / (eta + 1));  // Schlick's F0 of a dielectric seen from air
     const Spectrum Cspec0 = LerpS(metallic, LerpS(Clamp01(p.specularTint), Spectrum(1), tint) * r0, c);
-    // Unit scale: the pbrt-v3 build behind the shared references does not multiply the
-    // specular lobe by the color again (its metal sphere is c, not c^2, times the F0 = c
-    // reflection; some pbrt-v3 revisions pass the color here).
+    // Unit scale, as pbrt-v3 since its issue #224 (earlier revisions multiplied the lobe by
+    // the color again); the shared references show it (the zoo's metal sphere is c, not c^2).
     spec_ = DisneySpecular(Spectrum(1), distrib, Cspec0, metallic, eta);
     c_.add(&spec_);
 

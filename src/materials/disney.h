@@ -98,7 +98,8 @@ class DisneyClearcoat : public BxDF {
 // lerp(metallic, F_dielectric(eta), Schlick(R0)). (pbrt-v3 declares Burley's separable
 // G1(o) G1(i) in its Disney distribution, but G is not virtual in its base class, so the
 // lobes it renders use the height-correlated G: so do these.)
-// The Fresnel cosine is taken against the half vector turned to +z (pbrt-v3).
+// The Fresnel cosine is taken against the half vector turned to +z, so that reflection
+// inside a refracting surface totally reflects (pbrt-v3 since its issue #254).
 class DisneySpecular : public BxDF {
   public:
     DisneySpecular(const Spectrum &R, const MicrofacetDistribution &d, const Spectrum &R0, Float metallic, Float eta)

@@ -75,10 +75,11 @@ Spectrum ExpNeg(const Spectrum &x) { return Spectrum(std::exp(-x.r), std::exp(-x
 
 }  // namespace
 
-HairBxDF::HairBxDF(Float h, Float eta, const Spectrum &sigmaA, Float betaM, Float betaN, Float alphaDegrees)
+HairBxDF::HairBxDF(Float h, Float eta, const Spectrum &sigmaA, Float betaM, Float betaN, Float alphaDegrees,
+                   bool hFromDirection)
     : BxDF(BSDF_GLOSSY | BSDF_REFLECTION | BSDF_TRANSMISSION),
       h_(Clamp<Float>(h, -1, 1)),
-      gammaO_(std::asin(h_)),
+      tube_(hFromDirection),
       eta_(std::max<Float>(eta, 1)),
       betaM_(Clamp<Float>(betaM, 0, 1)),
       betaN_(Clamp<Float>(betaN, 0, 1)) {
@@ -115,17 +116,23 @@ void HairBxDF::tiltO(int p, Float sinThetaO, Float cosThetaO, Float *s, Float *c
 
 Float HairBxDF::roughness() const { return std::max(std::min(betaM_, betaN_), kDefaultShiftThreshold); }
 
-std::array<Spectrum, HairBxDF::pMax + 1> HairBxDF::attenuation(Float cosThetaO) const {
+Float HairBxDF::hOf(const Vec3 &w) const {
+    if (!tube_) return h_;
+    const Float len = std::sqrt(w.y * w.y + w.z * w.z);
+    return len > 0 ? Clamp<Float>(-w.y / len, -1, 1) : 0;
+}
+
+std::array<Spectrum, HairBxDF::pMax + 1> HairBxDF::attenuation(Float cosThetaO, Float h) const {
     const Float sinThetaO = SafeSqrt(1 - cosThetaO * cosThetaO);
     // Refracted direction: longitudinal (Snell) and azimuthal (Bravais' modified index).
     const Float cosThetaT = SafeSqrt(1 - Sqr(sinThetaO / eta_));
     const Float etap = std::sqrt(eta_ * eta_ - sinThetaO * sinThetaO) / std::max<Float>(cosThetaO, 1e-12);
-    const Float cosGammaT = SafeSqrt(1 - Sqr(h_ / etap));
+    const Float cosGammaT = SafeSqrt(1 - Sqr(h / etap));
     // Chiang Eq. 4: transmittance of one internal chord.
     const Spectrum T = ExpNeg(sigmaA_ * (2 * cosGammaT / std::max<Float>(cosThetaT, 1e-12)));
     std::array<Spectrum, pMax + 1> ap;
     // Chiang Eq. 3: Fresnel at the angle between the ray and the fibre normal.
-    const Float f = FrDielectric(cosThetaO * SafeSqrt(1 - h_ * h_), eta_);
+    const Float f = FrDielectric(cosThetaO * SafeSqrt(1 - h * h), eta_);
     ap[0] = Spectrum(f);
     ap[1] = T * Sqr(1 - f);
     for (int p = 2; p < pMax; ++p) ap[p] = ap[p - 1] * T * f;
@@ -136,8 +143,8 @@ std::array<Spectrum, HairBxDF::pMax + 1> HairBxDF::attenuation(Float cosThetaO) 
     return ap;
 }
 
-std::array<Float, HairBxDF::pMax + 1> HairBxDF::lobePdf(Float cosThetaO) const {
-    const auto ap = attenuation(cosThetaO);
+std::array<Float, HairBxDF::pMax + 1> HairBxDF::lobePdf(Float cosThetaO, Float h) const {
+    const auto ap = attenuation(cosThetaO, h);
     std::array<Float, pMax + 1> pdf;
     Float sum = 0;
     for (int p = 0; p <= pMax; ++p) sum += ap[p].y();
@@ -145,19 +152,23 @@ std::array<Float, HairBxDF::pMax + 1> HairBxDF::lobePdf(Float cosThetaO) const {
     return pdf;
 }
 
-Spectrum HairBxDF::f(const Vec3 &wo, const Vec3 &wi, TransportMode) const {
+Spectrum HairBxDF::f(const Vec3 &wo, const Vec3 &wi, TransportMode mode) const {
+    // Not reciprocal: the adjoint is the radiance BSDF with the directions swapped
+    // (h then belongs to wi, the side the radiance leaves to).
+    if (mode == TransportMode::Importance) return f(wi, wo, TransportMode::Radiance);
+    const Float h = hOf(wo), gammaO = std::asin(h);
     const Float sinThetaO = Clamp<Float>(wo.x, -1, 1), cosThetaO = SafeSqrt(1 - sinThetaO * sinThetaO);
     const Float sinThetaI = Clamp<Float>(wi.x, -1, 1), cosThetaI = SafeSqrt(1 - sinThetaI * sinThetaI);
     if (cosThetaO < 1e-9) return Spectrum(0);  // along the fibre: no azimuth
     const Float phi = std::atan2(wi.z, wi.y) - std::atan2(wo.z, wo.y);
     const Float etap = std::sqrt(eta_ * eta_ - sinThetaO * sinThetaO) / cosThetaO;
-    const Float gammaT = std::asin(Clamp<Float>(h_ / etap, -1, 1));
-    const auto ap = attenuation(cosThetaO);
+    const Float gammaT = std::asin(Clamp<Float>(h / etap, -1, 1));
+    const auto ap = attenuation(cosThetaO, h);
     Spectrum sum(0);
     for (int p = 0; p < pMax; ++p) {
         Float sp, cp;
         tiltO(p, sinThetaO, cosThetaO, &sp, &cp);
-        sum += ap[p] * (Mp(cosThetaI, cp, sinThetaI, sp, v_[p]) * Np(phi, p, s_, gammaO_, gammaT));
+        sum += ap[p] * (Mp(cosThetaI, cp, sinThetaI, sp, v_[p]) * Np(phi, p, s_, gammaO, gammaT));
     }
     sum += ap[pMax] * (Mp(cosThetaI, cosThetaO, sinThetaI, sinThetaO, v_[pMax]) / (2 * Pi));
     // The integrators multiply by |cos| to the shading normal; the hair lobes are
@@ -168,18 +179,19 @@ Spectrum HairBxDF::f(const Vec3 &wo, const Vec3 &wi, TransportMode) const {
 }
 
 Float HairBxDF::pdf(const Vec3 &wo, const Vec3 &wi, TransportMode) const {
+    const Float h = hOf(wo), gammaO = std::asin(h);
     const Float sinThetaO = Clamp<Float>(wo.x, -1, 1), cosThetaO = SafeSqrt(1 - sinThetaO * sinThetaO);
     const Float sinThetaI = Clamp<Float>(wi.x, -1, 1), cosThetaI = SafeSqrt(1 - sinThetaI * sinThetaI);
     if (cosThetaO < 1e-9) return 0;
     const Float phi = std::atan2(wi.z, wi.y) - std::atan2(wo.z, wo.y);
     const Float etap = std::sqrt(eta_ * eta_ - sinThetaO * sinThetaO) / cosThetaO;
-    const Float gammaT = std::asin(Clamp<Float>(h_ / etap, -1, 1));
-    const auto w = lobePdf(cosThetaO);
+    const Float gammaT = std::asin(Clamp<Float>(h / etap, -1, 1));
+    const auto w = lobePdf(cosThetaO, h);
     Float pdf = 0;
     for (int p = 0; p < pMax; ++p) {
         Float sp, cp;
         tiltO(p, sinThetaO, cosThetaO, &sp, &cp);
-        pdf += w[p] * Mp(cosThetaI, cp, sinThetaI, sp, v_[p]) * Np(phi, p, s_, gammaO_, gammaT);
+        pdf += w[p] * Mp(cosThetaI, cp, sinThetaI, sp, v_[p]) * Np(phi, p, s_, gammaO, gammaT);
     }
     pdf += w[pMax] * Mp(cosThetaI, cosThetaO, sinThetaI, sinThetaO, v_[pMax]) / (2 * Pi);
     return std::isfinite(pdf) ? pdf : 0;
@@ -188,8 +200,9 @@ Float HairBxDF::pdf(const Vec3 &wo, const Vec3 &wi, TransportMode) const {
 bool HairBxDF::sample(const Vec3 &wo, Float uc, Point2 u, TransportMode mode, BSDFSample *s) const {
     const Float sinThetaO = Clamp<Float>(wo.x, -1, 1), cosThetaO = SafeSqrt(1 - sinThetaO * sinThetaO);
     if (cosThetaO < 1e-9) return false;
+    const Float h = hOf(wo), gammaO = std::asin(h);
     // Lobe p by A_p's luminance; uc is reused within the chosen interval for N_p.
-    const auto w = lobePdf(cosThetaO);
+    const auto w = lobePdf(cosThetaO, h);
     int p = 0;
     while (p < pMax && uc >= w[p]) uc -= w[p++];
     if (w[p] <= 0) return false;
@@ -205,8 +218,8 @@ bool HairBxDF::sample(const Vec3 &wo, Float uc, Point2 u, TransportMode mode, BS
     const Float cosThetaI = SafeSqrt(1 - sinThetaI * sinThetaI);
     // N_p: trimmed logistic around Phi(p); uniform for the tail.
     const Float etap = std::sqrt(eta_ * eta_ - sinThetaO * sinThetaO) / cosThetaO;
-    const Float gammaT = std::asin(Clamp<Float>(h_ / etap, -1, 1));
-    const Float dphi = p < pMax ? PhiP(p, gammaO_, gammaT) + SampleTrimmedLogistic(uPhi, s_) : 2 * Pi * uPhi;
+    const Float gammaT = std::asin(Clamp<Float>(h / etap, -1, 1));
+    const Float dphi = p < pMax ? PhiP(p, gammaO, gammaT) + SampleTrimmedLogistic(uPhi, s_) : 2 * Pi * uPhi;
     const Float phiI = std::atan2(wo.z, wo.y) + dphi;
     s->wi = Vec3(sinThetaI, cosThetaI * std::cos(phiI), cosThetaI * std::sin(phiI));
     s->pdf = pdf(wo, s->wi, mode);
@@ -245,7 +258,15 @@ class HairMaterial : public Material {
             sa = HairBxDF::SigmaAFromConcentration(std::max<Float>(0, eumelanin ? eumelanin->evaluate(si) : 0),
                                                    std::max<Float>(0, pheomelanin ? pheomelanin->evaluate(si) : 0));
         const Float h = -1 + 2 * si.uv.y;
-        return BSDF(si, arena.make<HairBxDF>(h, eta->evaluate(si), sa, betaM->evaluate(si), bn, alpha->evaluate(si)));
+        // On a tube (shapes/curve.h: a curving normal, dndv != 0) the offset is
+        // the one each direction's line has across the fibre; the hit's own h is
+        // then that of wo. Elsewhere h is pbrt-v3's, fixed by the hit.
+        bool tube = false;
+        const Vec3 across = Cross(si.wo, si.shading.dpdu);
+        if (si.dndv != Normal3(0, 0, 0) && across.lengthSquared() > 0)
+            tube = std::abs(Dot(si.shading.n, across) / across.length() - h) < 1e-3;
+        return BSDF(si, arena.make<HairBxDF>(h, eta->evaluate(si), sa, betaM->evaluate(si), bn, alpha->evaluate(si),
+                                             tube));
     }
     Float minRoughness() const override {
         const Float m = matutil::ConstantOr(betaM, -1), n = matutil::ConstantOr(betaN, -1);

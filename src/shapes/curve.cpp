@@ -118,6 +118,9 @@ void CurveShape::interaction(int seg, Float uHint, const Point3 &pHit, const Vec
     si->dpdu = dpdu;
     si->dpdv = Normalize(Cross(n, dpdu)) * (2 * std::max<Float>(r, 1e-12));
     si->dndu = si->dndv = Normal3(0, 0, 0);
+    // A tube's normal turns with the circumference (Weingarten: dn = dp / r along
+    // it; the axis' own curvature is ignored). Hair reads it as "a tube".
+    if (type_ == CurveType::Cylinder && r > 0) si->dndv = si->dpdv / r;
     si->setShadingGeometry(si->dpdu, si->dpdv, Normal3(0, 0, 0), Normal3(0, 0, 0), true);
     si->shading.dnhatdu = si->shading.dnhatdv = Normal3(0, 0, 0);
 }

@@ -20,7 +20,7 @@
 // u = segment parameter of the closest point on the axis, dpdu along the curve,
 // n = outward tube normal (cylinder), the direction to the viewer projected
 // normal to the curve (flat), the interpolated ribbon normal (ribbon); dpdv =
-// 2 r (n x dpdu)/|.|; v = (1 + h)/2 with h the signed offset of the hit from the
+// 2 r (n x dpdu)/|.|, dndv = dpdv / r on tubes (0 otherwise); v = (1 + h)/2 with h the signed offset of the hit from the
 // axis across the ray, in units of r: h = ((p - c(u)) . (wo x T)/|wo x T|) / r,
 // sin(gamma_o) of Chiang et al. 2016 on a tube; hair reads h = -1 + 2 v as in
 // pbrt-v3. (Its sign makes R reflect to phi = -2 gamma_o in the BSDF frame.)

@@ -212,6 +212,44 @@ TEST(Hair, ReflectionPeakFollowsTheTubeNormal) {
     }
 }
 
+std::unique_ptr<Scene> Build(const std::string &world);
+
+// On a tube the offset belongs to the direction (the line through the point):
+// at a hit the material's BSDF equals Chiang's with the hit's h for wo; its
+// Importance mode is the radiance value with the directions swapped, with h of
+// the other direction (what a camera path arriving along it would use).
+TEST(Hair, TubeOffsetsAndAdjoint) {
+    auto s = Build("Material \"hair\" \"float eumelanin\" 0.8\nShape \"curve\" \"string type\" \"cylinder\" "
+                   "\"point P\" [-1 0 0 -0.3 0 0 0.3 0 0 1 0 0] \"float width\" 0.4");
+    RNG rng(4);
+    Arena arena;
+    const Spectrum sigma = HairBxDF::SigmaAFromConcentration(0.8, 0);
+    int checked = 0;
+    for (int i = 0; i < 200; ++i) {
+        const Point3 o(0.4 * rng.uniform() - 0.2, 0.5 * rng.uniform() - 0.25, 3);
+        SurfaceInteraction si;
+        if (!s->intersect(Ray(o, Vec3(0.1, 0.05, -1)), &si)) continue;
+        BSDF bsdf = si.material->getBSDF(si, arena, TransportMode::Radiance);
+        ASSERT_TRUE(bsdf);
+        const Vec3 wi = Normalize(Vec3(2 * rng.uniform() - 1, 2 * rng.uniform() - 1, 2 * rng.uniform() - 1));
+        const Float hWo = -1 + 2 * si.uv.y;
+        HairBxDF fixedWo(hWo, 1.55, sigma, 0.3, 0.3, 2);
+        const Spectrum f = bsdf.f(si.wo, wi, TransportMode::Radiance);
+        const Spectrum expect = fixedWo.f(bsdf.toLocal(si.wo), bsdf.toLocal(wi), TransportMode::Radiance);
+        EXPECT_NEAR(f.g, expect.g, 1e-9 * (1 + expect.g));
+        // The offset of the line along wi, from the geometry (shapes/curve.h's formula).
+        const Vec3 T = Normalize(si.dpdu), across = Normalize(Cross(wi, T));
+        const Float hWi = Dot(si.p - Point3(si.p.x, 0, 0), across) / 0.2;
+        HairBxDF fixedWi(hWi, 1.55, sigma, 0.3, 0.3, 2);
+        const Spectrum fa = bsdf.f(si.wo, wi, TransportMode::Importance);
+        const Spectrum ea = fixedWi.f(bsdf.toLocal(wi), bsdf.toLocal(si.wo), TransportMode::Radiance);
+        EXPECT_NEAR(fa.g, ea.g, 1e-6 * (1 + ea.g));
+        ++checked;
+        arena.reset();
+    }
+    EXPECT_GT(checked, 100);
+}
+
 std::unique_ptr<Scene> Build(const std::string &world) {
     std::string text = "LookAt 0 0 5 0 0 0 0 1 0\nCamera \"perspective\"\nWorldBegin\n" + world + "\nWorldEnd\n";
     return BuildScene(ParseString(text, "test.pbrt"), Point2i{8, 8});

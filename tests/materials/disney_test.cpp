@@ -518,6 +518,54 @@ TEST(Disney, RoughnessReported) {
     }
 }
 
+// Textured parameters: minRoughness falls back to a lower bound valid at every point
+// (0.001, pbrt-v3's alpha floor; 0 when a textured eta may pass straight through), values
+// outside the valid ranges are clamped per point (no NaN), and hasTextures() reports it.
+TEST(Disney, TexturedParameters) {
+    struct Ramp : FloatTexture {  // u * scale + offset: leaves [0, 1] on purpose
+        Float scale, offset;
+        Ramp(Float s, Float o) : scale(s), offset(o) {}
+        Float evaluate(const SurfaceInteraction &si) const override { return si.uv.x * scale + offset; }
+    };
+    NamedTextures tex;
+    tex.floats["r"] = std::make_shared<Ramp>(2, -0.5);   // roughness in [-0.5, 1.5]
+    tex.floats["e"] = std::make_shared<Ramp>(3, -1);     // eta in [-1, 2]
+    tex.floats["a"] = std::make_shared<Ramp>(3, -1);     // anisotropic in [-1, 2]
+    auto make = [&](const std::string &params) {
+        MaterialDesc d = ParseMaterial("Material \"disney\" " + params);
+        auto m = CreateMaterial(d, tex, {});
+        d.params.checkUnused("Material");
+        return m;
+    };
+    auto m1 = make("\"texture roughness\" \"r\" \"texture anisotropic\" \"a\"");
+    EXPECT_EQ(m1->minRoughness(), 0.001);
+    EXPECT_TRUE(m1->hasTextures());
+    auto m2 = make("\"texture eta\" \"e\" \"float spectrans\" [0.5]");
+    EXPECT_EQ(m2->minRoughness(), 0);
+    auto m3 = make("\"texture eta\" \"e\" \"texture roughness\" \"r\" \"texture anisotropic\" \"a\" "
+                   "\"float spectrans\" [0.5] \"float clearcoat\" [1] \"bool thin\" \"true\"");
+    for (auto *m : {m1.get(), m2.get(), m3.get()}) {
+        for (int i = 0; i <= 20; ++i) {
+            SurfaceInteraction si = FlatHit();
+            si.uv = Point2(i / 20.0, 0.5);
+            Arena arena;
+            BSDF b = m->getBSDF(si, arena, TransportMode::Radiance);
+            ASSERT_TRUE(b);
+            EXPECT_GE(b.roughness(), m->minRoughness());
+            RNG rng(i);
+            for (int k = 0; k < 200; ++k) {
+                Vec3 wo = Dir(2 * rng.uniform() - 1, 2 * Pi * rng.uniform());
+                BSDFSample s;
+                if (b.sample(wo, rng.uniform(), {rng.uniform(), rng.uniform()}, TransportMode::Radiance, &s)) {
+                    ASSERT_TRUE(s.f.isFinite() && s.pdf > 0 && std::isfinite(s.pdf)) << i;
+                    Spectrum f = b.f(wo, s.wi);
+                    ASSERT_TRUE(f.isFinite() && f.r >= 0) << i;
+                }
+            }
+        }
+    }
+}
+
 // The zoo scene's parameter sets are consumed, and the refracting sphere reports its eta.
 TEST(Disney, ZooParameterSetsAndDefaults) {
     const char *sets[] = {

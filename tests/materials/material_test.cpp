@@ -84,10 +84,7 @@ TEST(Material, UnknownAndUnsupportedTypesAreLocatedErrors) {
         EXPECT_NE(w.find("test.pbrt:2:"), std::string::npos) << w;
         EXPECT_NE(w.find("mattte"), std::string::npos) << w;
     }
-    for (const char *t : {"hair"}) {
-        MaterialDesc u = ParseMaterial(std::string("Material \"") + t + "\"");
-        EXPECT_THROW(Make(u), UnsupportedError) << t;
-    }
+    // Every pbrt-v3 material is implemented now (hair was the last refused).
 }
 
 TEST(Material, MisspeltParameterStaysUnused) {

@@ -109,7 +109,8 @@ TEST_F(CliTest, MalformedNumberIsLocated) {
 }
 
 TEST_F(CliTest, UnsupportedFeatureIsNamed) {
-    write("bad.pbrt", "WorldBegin\nShape \"curve\" \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0]\nWorldEnd\n");
+    // An area light on a curve (pbrt-v3 allows it; Gradus does not).
+    write("bad.pbrt", "WorldBegin\nAreaLightSource \"diffuse\"\nShape \"curve\" \"point P\" [0 0 0 1 0 0 2 0 0 3 0 0]\nWorldEnd\n");
     RunResult r = run("bad.pbrt --quiet");
     EXPECT_EQ(r.status, 1);
     EXPECT_NE(r.err.find("bad.pbrt:2:1"), std::string::npos) << r.err;

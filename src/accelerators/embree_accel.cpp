@@ -94,6 +94,40 @@ void TubeExitFilter(const RTCFilterFunctionNArguments *args) {
     }
 }
 
+// Shadow rays are made symmetric: a segment that ends on a tube, arriving from
+// behind it, would be blocked by that tube's own near wall (within a chord of
+// the end) while the reverse segment leaves through the (ignored) inside. Such hits
+// are ignored too, so bdpt's connections see what path's next-event rays see.
+// The segment's end travels in an extended context (the filter's tfar is the
+// candidate hit's distance).
+struct OcclusionContext {
+    RTCIntersectContext ctx;  // first member: Embree passes &ctx
+    float segmentEnd;         // the ray's tfar before tracing (inf: no end point)
+};
+
+void TubeOccludedFilter(const RTCFilterFunctionNArguments *args) {
+    TubeExitFilter(args);
+    auto *curve = static_cast<const CurveShape *>(args->geometryUserPtr);
+    const float end = reinterpret_cast<const OcclusionContext *>(args->context)->segmentEnd;
+    if (!std::isfinite(end)) return;
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        const float t = RTCRayN_tfar(args->ray, args->N, i);
+        const float dx = RTCRayN_dir_x(args->ray, args->N, i), dy = RTCRayN_dir_y(args->ray, args->N, i),
+                    dz = RTCRayN_dir_z(args->ray, args->N, i);
+        const double len = std::sqrt(double(dx) * dx + double(dy) * dy + double(dz) * dz);
+        const int prim = int(RTCHitN_primID(args->hit, args->N, i));
+        const double u = Clamp<double>(RTCHitN_u(args->hit, args->N, i), 0, 1), r = curve->radius(prim, u);
+        // A chord of the tube is at most 2 r / sin(angle to the axis) long.
+        Vec3 T;
+        curve->point(prim, u, &T);
+        const double tl = T.length(), sinA = tl > 0 && len > 0 ? Cross(Vec3(dx, dy, dz), T).length() / (len * tl) : 1;
+        // Spawned segments stop 1e-4 of their length short of the end point.
+        if ((double(end) - t) * len <= 2.05 * r / std::max(sinA, 0.05) + 2e-4 * double(end) * len)
+            args->valid[i] = 0;
+    }
+}
+
 void AlphaIntersectFilter(const RTCFilterFunctionNArguments *args) { AlphaFilter(args, false); }
 void AlphaOccludedFilter(const RTCFilterFunctionNArguments *args) { AlphaFilter(args, true); }
 
@@ -233,8 +267,9 @@ int EmbreeAccel::addCurve(std::shared_ptr<const CurveShape> curve) {
     }
     if (type == CurveType::Flat) rtcSetGeometryTessellationRate(g, 16);
     if (type == CurveType::Cylinder) {
+        rtcSetGeometryUserData(g, const_cast<CurveShape *>(curve.get()));
         rtcSetGeometryIntersectFilterFunction(g, TubeExitFilter);
-        rtcSetGeometryOccludedFilterFunction(g, TubeExitFilter);
+        rtcSetGeometryOccludedFilterFunction(g, TubeOccludedFilter);
     }
     curves_.push_back(std::move(curve));
     return attachTop(g, 1);
@@ -311,10 +346,12 @@ bool EmbreeAccel::intersect(const Ray &r, RayHit *hit) const {
 }
 
 bool EmbreeAccel::occluded(const Ray &r) const {
-    RTCIntersectContext ctx;
+    OcclusionContext octx;
+    RTCIntersectContext &ctx = octx.ctx;
     rtcInitIntersectContext(&ctx);
     RTCRay ray;
     ToRTCRay(r, &ray);
+    octx.segmentEnd = ray.tfar;
     if (!Traceable(ray)) {
         GRADUS_STAT_COUNTER("Embree/Untraceable rays dropped", nBad);
         ++nBad;

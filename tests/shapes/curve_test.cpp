@@ -102,6 +102,23 @@ TEST(Curve, SweptEndsAndInside) {
     EXPECT_FALSE(s->intersect(si.spawnRay(Vec3(0, 0, -1)), &si));
 }
 
+// Shadow segments are symmetric: one ending on a tube from behind is not
+// blocked by that tube's near wall (the reverse one leaves through the inside),
+// while a segment through the tube to a point beyond it is blocked.
+TEST(Curve, ShadowSegmentsToATubeAreSymmetric) {
+    auto s = Build(std::string("Shape \"curve\" \"string type\" \"cylinder\" ") + kStraight);
+    SurfaceInteraction top;
+    ASSERT_TRUE(s->intersect(Ray(Point3(0.1, 0.02, 3), Vec3(0, 0, -1)), &top));
+    for (const Point3 &q : {Point3(0.1, 0, -2), Point3(0.5, 0.3, -1.5), Point3(-0.4, -0.2, -0.5)}) {
+        const Interaction below(q, Normal3(0, 0, 0), Vec3(0, 0, 1));
+        EXPECT_TRUE(s->unoccluded(below, top)) << q;
+        EXPECT_TRUE(s->unoccluded(top, below)) << q;
+        const Interaction beyond(top.p + (top.p - q) * 0.5, Normal3(0, 0, 0), Vec3(0, 0, 1));
+        EXPECT_FALSE(s->unoccluded(below, beyond)) << q;
+        EXPECT_FALSE(s->unoccluded(beyond, below)) << q;
+    }
+}
+
 TEST(Curve, FlatFacesTheRay) {
     auto s = Build(std::string("Shape \"curve\" ") + kStraight);  // pbrt-v3's default type: flat
     RNG rng(3);

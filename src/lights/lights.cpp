@@ -59,6 +59,27 @@ void AreaLight::pdfLe(const Ray &ray, const Normal3 &n, Float *pdfPos, Float *pd
 
 namespace {
 
+// Lights at a point: the direction from ref (s->wi, pdf 1, s->pLight) and the
+// squared distance; false at the light's own position.
+bool PointLiGeometry(const Point3 &pos, const Interaction &ref, LightLiSample *s, Float *d2) {
+    const Vec3 d = pos - ref.p;
+    *d2 = d.lengthSquared();
+    if (*d2 == 0) return false;
+    s->wi = d / std::sqrt(*d2);
+    s->pdf = 1;
+    s->pLight = Interaction(pos, Normal3(0, 0, 0), -s->wi);
+    return true;
+}
+// Lights at a point: an emitted ray from pos along w (unit) with solid-angle density pdfDir.
+void PointLeRecord(const Point3 &pos, const Vec3 &w, Float pdfDir, const Spectrum &L, LightLeSample *s) {
+    s->ray = Ray(pos, w);
+    s->p = pos;
+    s->nLight = Normal3(0, 0, 0);
+    s->pdfPos = 1;
+    s->pdfDir = pdfDir;
+    s->L = L;
+}
+
 // ---------------------------------------------------------------- point light
 class PointLight : public Light {
   public:
@@ -66,23 +87,14 @@ class PointLight : public Light {
         : Light(LIGHT_DELTA_POSITION, w), pos_(w.applyPoint(Point3(0, 0, 0))), I_(I) {}
     Spectrum power() const override { return I_ * (4 * Pi); }
     bool sampleLi(const Interaction &ref, Point2, LightLiSample *s) const override {
-        Vec3 d = pos_ - ref.p;
-        Float d2 = d.lengthSquared();
-        if (d2 == 0) return false;
-        s->wi = d / std::sqrt(d2);
-        s->pdf = 1;
-        s->pLight = Interaction(pos_, Normal3(0, 0, 0), -s->wi);
+        Float d2;
+        if (!PointLiGeometry(pos_, ref, s, &d2)) return false;
         s->L = I_ / d2;
         return true;
     }
     Float pdfLi(const Interaction &, const Vec3 &) const override { return 0; }
     bool sampleLe(Point2 u1, Point2, LightLeSample *s) const override {
-        s->ray = Ray(pos_, SampleUniformSphere(u1));
-        s->p = pos_;
-        s->nLight = Normal3(0, 0, 0);
-        s->pdfPos = 1;
-        s->pdfDir = UniformSpherePdf();
-        s->L = I_;
+        PointLeRecord(pos_, SampleUniformSphere(u1), UniformSpherePdf(), I_, s);
         return true;
     }
     void pdfLe(const Ray &, const Normal3 &, Float *pdfPos, Float *pdfDir) const override {
@@ -149,12 +161,8 @@ class DirectionalPointLight : public Light {
         return I_ * scale(Normalize(lightFromWorld_.applyVector(wWorld)));
     }
     bool sampleLi(const Interaction &ref, Point2, LightLiSample *s) const override {
-        const Vec3 d = pos_ - ref.p;
-        const Float d2 = d.lengthSquared();
-        if (d2 == 0) return false;
-        s->wi = d / std::sqrt(d2);
-        s->pdf = 1;
-        s->pLight = Interaction(pos_, Normal3(0, 0, 0), -s->wi);
+        Float d2;
+        if (!PointLiGeometry(pos_, ref, s, &d2)) return false;
         s->L = intensity(-s->wi) / d2;
         return !s->L.isBlack();
     }
@@ -163,13 +171,7 @@ class DirectionalPointLight : public Light {
         Float pdf;
         const Vec3 wl = sampleDirection(u1, &pdf);
         if (!(pdf > 0)) return false;
-        const Vec3 w = Normalize(worldFromLight.applyVector(wl));
-        s->ray = Ray(pos_, w);
-        s->p = pos_;
-        s->nLight = Normal3(0, 0, 0);
-        s->pdfPos = 1;
-        s->pdfDir = pdf;
-        s->L = I_ * scale(wl);
+        PointLeRecord(pos_, Normalize(worldFromLight.applyVector(wl)), pdf, I_ * scale(wl), s);
         return !s->L.isBlack();
     }
     void pdfLe(const Ray &ray, const Normal3 &, Float *pdfPos, Float *pdfDir) const override {
@@ -295,25 +297,16 @@ class SpotLight : public Light {
         return I_ * (2 * Pi * ((1 - cosFalloffStart_) + ramp));
     }
     bool sampleLi(const Interaction &ref, Point2, LightLiSample *s) const override {
-        Vec3 d = pos_ - ref.p;
-        Float d2 = d.lengthSquared();
-        if (d2 == 0) return false;
-        s->wi = d / std::sqrt(d2);
-        s->pdf = 1;
-        s->pLight = Interaction(pos_, Normal3(0, 0, 0), -s->wi);
+        Float d2;
+        if (!PointLiGeometry(pos_, ref, s, &d2)) return false;
         s->L = I_ * (falloff(-s->wi) / d2);
         return !s->L.isBlack();
     }
     Float pdfLi(const Interaction &, const Vec3 &) const override { return 0; }
     bool sampleLe(Point2 u1, Point2, LightLeSample *s) const override {
         Vec3 wl = SampleUniformCone(u1, cosTotal_);
-        Vec3 w = frame_.toWorld(wl);
-        s->ray = Ray(pos_, w);
-        s->p = pos_;
-        s->nLight = Normal3(0, 0, 0);
-        s->pdfPos = 1;
-        s->pdfDir = UniformConePdf(cosTotal_);
-        s->L = I_ * falloff(w);
+        const Vec3 w = frame_.toWorld(wl);
+        PointLeRecord(pos_, w, UniformConePdf(cosTotal_), I_ * falloff(w), s);
         return !s->L.isBlack();
     }
     void pdfLe(const Ray &ray, const Normal3 &, Float *pdfPos, Float *pdfDir) const override {

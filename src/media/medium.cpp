@@ -38,6 +38,14 @@ Float HGPhase::sample(const Vec3 &wo, Point2 u, Vec3 *wi) const {
     return HenyeyGreenstein(cosTheta, g);
 }
 
+void Medium::ScatterAt(const Ray &ray, Float dist, Float len, MediumInteraction *mi) const {
+    mi->p = ray.o + ray.d * (dist / len);
+    mi->n = Normal3(0, 0, 0);
+    mi->wo = -ray.d / len;
+    mi->medium = this;
+    mi->phase = phase;
+}
+
 // ---------------------------------------------------------------- homogeneous
 HomogeneousMedium::HomogeneousMedium(const Spectrum &sa, const Spectrum &ss, Float g)
     : sigmaA(sa), sigmaS(ss), sigmaT(sa + ss) {
@@ -71,11 +79,7 @@ Spectrum HomogeneousMedium::sample(const Ray &ray, RNG &rng, MediumInteraction *
     const Float pdf = density.average();
     if (pdf <= 0) return Spectrum(0);
     if (scattered) {
-        mi->p = ray.o + ray.d * (d / len);
-        mi->n = Normal3(0, 0, 0);
-        mi->wo = -ray.d / len;
-        mi->medium = this;
-        mi->phase = phase;
+        ScatterAt(ray, d, len, mi);
         return tr * sigmaS / pdf;
     }
     return tr / pdf;
@@ -238,12 +242,7 @@ Spectrum GridMedium::sample(const Ray &ray, RNG &rng, MediumInteraction *mi) con
         }
     });
     if (tHit < 0) return Spectrum(1);
-    const Float len = ray.d.length();
-    mi->p = ray.o + ray.d * (tHit / len);
-    mi->n = Normal3(0, 0, 0);
-    mi->wo = -ray.d / len;
-    mi->medium = this;
-    mi->phase = phase;
+    ScatterAt(ray, tHit, ray.d.length(), mi);
     return sigmaS_ / sigmaT_;
 }
 

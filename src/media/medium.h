@@ -58,6 +58,10 @@ class Medium {
     virtual bool greySigmaT() const = 0;
     HGPhase phase;
     std::string name;
+
+  protected:
+    // Fills *mi for a scattering at world distance dist along ray (len = |ray.d|).
+    void ScatterAt(const Ray &ray, Float dist, Float len, MediumInteraction *mi) const;
 };
 
 class HomogeneousMedium : public Medium {

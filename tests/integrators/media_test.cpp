@@ -5,7 +5,8 @@
 //  - bdpt, vcm, mbdpt and path agree in expectation on scenes/media/fog-box.pbrt
 //    (fog, spot and area light, a material-less smoke sphere) by Welch t-tests
 //    on the image mean and six blocks, with a power check (a 2% bias is detected);
-//  - gbdpt refuses a scene with media: a located error and exit status 1.
+//  - gbdpt refuses a scene with media: a located error and exit status 1; so
+//    do vcm's variants that cannot render them (mode vm, varying kernels).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -195,6 +196,32 @@ TEST(MediaBidir, GBDPTRefusesMediaWithALocatedError) {
     EXPECT_NE(r.err.find("fog-box.pbrt:16:1"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("\"gbdpt\""), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("\"fog\""), std::string::npos) << r.err;
+}
+
+// vcm's merging-only mode (merges on surfaces only) and its varying kernels
+// refuse media at the Integrator directive; modes vcm and vc render them.
+TEST(MediaBidir, VCMVariantsWithoutMediaRefuse) {
+    const std::string text = ReadFile(std::string(GRADUS_SOURCE_DIR) + "/scenes/media/fog-box.pbrt");
+    const std::string line = "Integrator \"bdpt\" \"integer maxdepth\" [5]";
+    ASSERT_NE(text.find(line), std::string::npos);
+    for (const char *params : {"\"string mode\" \"vm\"", "\"string kernel\" \"adaptive\"",
+                               "\"string footprint\" \"path\"", "\"string mode\" \"vc\"", "\"string mode\" \"vcm\""}) {
+        std::string s = text;
+        s.replace(s.find(line), line.size(), std::string("Integrator \"vcm\" ") + params);
+        const bool renders = std::string(params).find("\"vc") != std::string::npos;
+        std::string err;
+        try {
+            test::MakeTestJob(ParseString(s, "fog.pbrt", "."), 1, 0);
+        } catch (const Error &e) {
+            err = e.what();
+        }
+        if (renders) {
+            EXPECT_EQ(err, "") << params;
+        } else {
+            EXPECT_NE(err.find("fog.pbrt:16:1"), std::string::npos) << params << ": " << err;
+            EXPECT_NE(err.find("\"fog\""), std::string::npos) << params << ": " << err;
+        }
+    }
 }
 
 }  // namespace

@@ -52,8 +52,9 @@ std::unique_ptr<Integrator> CreateIntegrator(const EntityDesc &desc) {
     std::string valid;
     for (const auto &info : IntegratorRegistry()) valid += (valid.empty() ? "" : ", ") + info.name;
     // pbrt-v3 integrators Gradus lacks are named as such, not reported like typos.
-    // (pbrt-v3's "sppm" reaches here only without vcm: the scene builder maps it to vcm's mode vm.)
-    for (const char *pbrt : {"whitted", "directlighting", "volpath", "sppm", "ambientocclusion", "mlt"})
+    // (pbrt-v3's "sppm" reaches here only without vcm: the scene builder maps it to vcm's mode vm;
+    // "volpath" always maps to path.)
+    for (const char *pbrt : {"whitted", "directlighting", "sppm", "ambientocclusion", "mlt"})
         if (desc.type == pbrt)
             throw UnsupportedError(desc.loc, "Integrator \"" + desc.type + "\" (available: " + valid + ")");
     throw Error(desc.loc, "unknown integrator \"" + desc.type + "\" (available: " + valid + ")");

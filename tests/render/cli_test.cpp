@@ -254,15 +254,20 @@ TEST_F(CliTest, HostileNumbersAreLocatedErrors) {
 }
 
 // pbrt-v3 features Gradus lacks are located errors, never dropped silently.
-TEST_F(CliTest, MediaAndMotionBlurAreNamedErrors) {
+// Media render with path; an integrator without media support refuses them at
+// the medium (no Integrator directive here), naming itself. Motion blur is a
+// named error.
+TEST_F(CliTest, MediaRefusalsAndMotionBlurAreNamedErrors) {
     write("media.pbrt",
-          "LookAt 0 0 -3  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n"
+          "LookAt 0 0 -3  0 0 0  0 1 0\nCamera \"perspective\"\nFilm \"image\" \"integer xresolution\" [8] "
+          "\"integer yresolution\" [8] \"string filename\" [\"media.exr\"]\nWorldBegin\n"
           "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n"
-          "MediumInterface \"fog\" \"\"\nShape \"sphere\"\nWorldEnd\n");
-    RunResult r = run("media.pbrt --quiet");
+          "MediumInterface \"fog\" \"\"\nMaterial \"\"\nShape \"sphere\"\nWorldEnd\n");
+    EXPECT_EQ(run("media.pbrt --quiet --spp 1").status, 0);
+    RunResult r = run("media.pbrt --quiet --spp 1 --integrator gpt");
     EXPECT_EQ(r.status, 1);
-    EXPECT_NE(r.err.find("media.pbrt:4:1"), std::string::npos) << r.err;
-    EXPECT_NE(r.err.find("participating media"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("media.pbrt:5:1"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("\"gpt\" does not render participating media"), std::string::npos) << r.err;
     write("motion.pbrt",
           "LookAt 0 0 -3  0 0 0  0 1 0\nCamera \"perspective\"\nTransformTimes 0 1\nWorldBegin\n"
           "ActiveTransform EndTime\nTranslate 0 1 0\nActiveTransform All\nShape \"sphere\"\nWorldEnd\n");

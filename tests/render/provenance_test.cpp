@@ -145,12 +145,17 @@ TEST_F(Provenance, PbrtIntegratorsWeLackAndRestrictingPixelBoundsAreNamed) {
     write("lights.pbrt", "LightSource \"point\" \"point from\" [0 0 -3] \"rgb I\" [5 5 5]\n");
     std::string s = kScene;
     const std::string line = "Integrator \"bdpt\" \"integer maxdepth\" [3] \"string misheuristic\" \"power\"";
-    s.replace(s.find(line), line.size(), "Integrator \"volpath\"");
-    write("volpath.pbrt", s);
-    Run r = run("volpath.pbrt --spp 1 --quiet");
+    std::string v = s;
+    s.replace(s.find(line), line.size(), "Integrator \"directlighting\"");
+    write("direct.pbrt", s);
+    Run r = run("direct.pbrt --spp 1 --quiet");
     EXPECT_EQ(r.status, 1);
-    EXPECT_NE(r.err.find("volpath.pbrt:4:1"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("direct.pbrt:4:1"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("pbrt-v3 feature that Gradus does not support"), std::string::npos) << r.err;
+    // pbrt-v3's volpath renders with path.
+    v.replace(v.find(line), line.size(), "Integrator \"volpath\" \"integer maxdepth\" [3]");
+    write("volpath.pbrt", v);
+    EXPECT_EQ(run("volpath.pbrt --spp 1 --quiet").status, 0);
     std::string pb = kScene;
     pb.replace(pb.find("\"string misheuristic\" \"power\""), 29, "\"integer pixelbounds\" [0 10 0 16]");
     write("pb.pbrt", pb);

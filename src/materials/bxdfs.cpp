@@ -6,12 +6,6 @@
 namespace gradus {
 using namespace bxdfutil;
 
-namespace {
-TransportMode Reverse(TransportMode m) {
-    return m == TransportMode::Radiance ? TransportMode::Importance : TransportMode::Radiance;
-}
-}  // namespace
-
 // ---------------------------------------------------------------- Lambertian
 Spectrum LambertianReflection::f(const Vec3 &wo, const Vec3 &wi, TransportMode) const {
     return SameHemisphere(wo, wi) ? R_ * InvPi : Spectrum(0);
@@ -174,13 +168,7 @@ bool MicrofacetReflection::sample(const Vec3 &wo, Float, Point2 u, TransportMode
     Vec3 wh = d_.sampleWh(wo, u);
     Vec3 wi = Reflect(wo, wh);
     if (!SameHemisphere(wo, wi)) return false;
-    *s = BSDFSample();
-    s->wi = wi;
-    s->f = f(wo, wi, mode);
-    s->pdf = pdf(wo, wi, mode);
-    s->pdfRev = pdf(wi, wo, Reverse(mode));
-    s->flags = flags();
-    return s->pdf > 0;
+    return SampleFromEval(*this, wo, wi, mode, flags(), 1, s);
 }
 Float MicrofacetReflection::pdf(const Vec3 &wo, const Vec3 &wi, TransportMode) const {
     Vec3 wh;
@@ -263,15 +251,9 @@ bool MicrofacetDielectric::sample(const Vec3 &wo, Float uc, Point2 u, TransportM
         Float etap = wo.z > 0 ? eta_ : 1 / eta_;
         if (!Refract(wo, wo.z > 0 ? wh : -wh, etap, &wi) || wi.z * wo.z >= 0) return false;
     }
-    *s = BSDFSample();
-    s->wi = wi;
-    s->f = f(wo, wi, mode);
-    s->pdf = pdf(wo, wi, mode);
-    s->pdfRev = pdf(wi, wo, Reverse(mode));
     bool refl = wo.z * wi.z > 0;
-    s->flags = (refl ? BSDF_REFLECTION : BSDF_TRANSMISSION) | BSDF_GLOSSY;
-    s->eta = refl ? 1 : (wo.z > 0 ? eta_ : 1 / eta_);
-    return s->pdf > 0;
+    return SampleFromEval(*this, wo, wi, mode, (refl ? BSDF_REFLECTION : BSDF_TRANSMISSION) | BSDF_GLOSSY,
+                          refl ? 1 : (wo.z > 0 ? eta_ : 1 / eta_), s);
 }
 
 // ---------------------------------------------------------------- Ashikhmin-Shirley
@@ -302,13 +284,7 @@ bool FresnelBlend::sample(const Vec3 &wo, Float uc, Point2 u, TransportMode mode
         wi = Reflect(wo, d_.sampleWh(wo, u));
         if (!SameHemisphere(wo, wi)) return false;
     }
-    *s = BSDFSample();
-    s->wi = wi;
-    s->f = f(wo, wi, mode);
-    s->pdf = pdf(wo, wi, mode);
-    s->pdfRev = pdf(wi, wo, Reverse(mode));
-    s->flags = flags();
-    return s->pdf > 0;
+    return SampleFromEval(*this, wo, wi, mode, flags(), 1, s);
 }
 Float FresnelBlend::pdf(const Vec3 &wo, const Vec3 &wi, TransportMode) const {
     if (!SameHemisphere(wo, wi)) return 0;

@@ -9,9 +9,6 @@ using namespace bxdfutil;
 using namespace matutil;
 
 namespace {
-TransportMode Reverse(TransportMode m) {
-    return m == TransportMode::Radiance ? TransportMode::Importance : TransportMode::Radiance;
-}
 Float Clamp01(Float x) { return std::isnan(x) ? 0 : Clamp<Float>(x, 0, 1); }
 Float NonNeg(Float x) { return std::isnan(x) ? 0 : std::max<Float>(x, 0); }
 Spectrum LerpS(Float t, const Spectrum &a, const Spectrum &b) { return a * (1 - t) + b * t; }
@@ -22,33 +19,6 @@ bool CosThetaD(const Vec3 &wo, const Vec3 &wi, Float *cosD) {
     Float l2 = h.lengthSquared();
     if (!(l2 > 0)) return false;
     *cosD = Dot(wi, h) / std::sqrt(l2);
-    return true;
-}
-
-// Half vector of a reflection pair, turned to z > 0.
-bool HalfUp(const Vec3 &wo, const Vec3 &wi, Vec3 *wh) {
-    Vec3 h = wo + wi;
-    Float l2 = h.lengthSquared();
-    if (!(l2 > 0)) return false;
-    h = h / std::sqrt(l2);
-    if (h.z < 0) h = -h;
-    *wh = h;
-    return h.z > 0;
-}
-
-// Generalized half vector of a refraction pair (Walter et al. 2007, Eq. 16) turned to
-// z > 0, with etap = eta on wi's side / eta on wo's side. False when degenerate or when
-// either direction would see the microfacet from behind.
-bool RefractHalf(const Vec3 &wo, const Vec3 &wi, Float eta, Vec3 *wh, Float *etap) {
-    if (wo.z * wi.z >= 0) return false;
-    *etap = wo.z > 0 ? eta : 1 / eta;
-    Vec3 h = wo + wi * *etap;
-    Float l2 = h.lengthSquared();
-    if (!(l2 > 0)) return false;
-    h = h / std::sqrt(l2);
-    if (h.z < 0) h = -h;
-    if (!(h.z > 0) || Dot(h, wo) * wo.z <= 0 || Dot(h, wi) * wi.z <= 0) return false;
-    *wh = h;
     return true;
 }
 
@@ -124,7 +94,7 @@ Float DisneyClearcoat::GTR1(Float c, Float a) {
 
 Spectrum DisneyClearcoat::f(const Vec3 &wo, const Vec3 &wi, TransportMode) const {
     Vec3 wh;
-    if (!SameHemisphere(wo, wi) || !HalfUp(wo, wi, &wh)) return Spectrum(0);
+    if (!SameHemisphere(wo, wi) || !ReflectionHalf(wo, wi, &wh)) return Spectrum(0);
     Float D = GTR1(wh.z, alpha_);
     Float F = 0.04 + 0.96 * SchlickWeight(AbsDot(wo, wh));
     Float G = SmithGOverTwoCos(AbsCosTheta(wo), 0.25) * SmithGOverTwoCos(AbsCosTheta(wi), 0.25);
@@ -140,18 +110,12 @@ bool DisneyClearcoat::sample(const Vec3 &wo, Float, Point2 u, TransportMode mode
     Vec3 wh = SphericalDirection(sinT, cosT, 2 * Pi * u.y);
     Vec3 wi = Reflect(wo, wh);
     if (!SameHemisphere(wo, wi)) return false;
-    *s = BSDFSample();
-    s->wi = wi;
-    s->f = f(wo, wi, mode);
-    s->pdf = pdf(wo, wi, mode);
-    s->pdfRev = pdf(wi, wo, Reverse(mode));
-    s->flags = flags();
-    return s->pdf > 0;
+    return SampleFromEval(*this, wo, wi, mode, flags(), 1, s);
 }
 
 Float DisneyClearcoat::pdf(const Vec3 &wo, const Vec3 &wi, TransportMode) const {
     Vec3 wh;
-    if (!SameHemisphere(wo, wi) || !HalfUp(wo, wi, &wh)) return 0;
+    if (!SameHemisphere(wo, wi) || !ReflectionHalf(wo, wi, &wh)) return 0;
     // D(h) cos(theta_h) over the reflection Jacobian 4 |wo . h|.
     return GTR1(wh.z, alpha_) * wh.z / (4 * AbsDot(wo, wh));
 }
@@ -166,7 +130,7 @@ Spectrum DisneySpecular::fresnel(Float cosI) const {
 Spectrum DisneySpecular::f(const Vec3 &wo, const Vec3 &wi, TransportMode) const {
     Float cosO = AbsCosTheta(wo), cosI = AbsCosTheta(wi);
     Vec3 wh;
-    if (cosO == 0 || cosI == 0 || !SameHemisphere(wo, wi) || !HalfUp(wo, wi, &wh)) return Spectrum(0);
+    if (cosO == 0 || cosI == 0 || !SameHemisphere(wo, wi) || !ReflectionHalf(wo, wi, &wh)) return Spectrum(0);
     Float DG = d_.D(wh) * d_.G(wo, wi);
     return R_ * fresnel(Dot(wi, wh)) * (DG / (4 * cosO * cosI));
 }
@@ -175,18 +139,12 @@ bool DisneySpecular::sample(const Vec3 &wo, Float, Point2 u, TransportMode mode,
     if (wo.z == 0) return false;
     Vec3 wi = Reflect(wo, d_.sampleWh(wo, u));
     if (!SameHemisphere(wo, wi)) return false;
-    *s = BSDFSample();
-    s->wi = wi;
-    s->f = f(wo, wi, mode);
-    s->pdf = pdf(wo, wi, mode);
-    s->pdfRev = pdf(wi, wo, Reverse(mode));
-    s->flags = flags();
-    return s->pdf > 0;
+    return SampleFromEval(*this, wo, wi, mode, flags(), 1, s);
 }
 
 Float DisneySpecular::pdf(const Vec3 &wo, const Vec3 &wi, TransportMode) const {
     Vec3 wh;
-    if (!SameHemisphere(wo, wi) || !HalfUp(wo, wi, &wh)) return 0;
+    if (!SameHemisphere(wo, wi) || !ReflectionHalf(wo, wi, &wh)) return 0;
     return d_.pdf(wo, wh) / (4 * AbsDot(wo, wh));
 }
 
@@ -194,7 +152,7 @@ Float DisneySpecular::pdf(const Vec3 &wo, const Vec3 &wi, TransportMode) const {
 Spectrum DisneyTransmission::f(const Vec3 &wo, const Vec3 &wi, TransportMode mode) const {
     Vec3 wh;
     Float etap;
-    if (!RefractHalf(wo, wi, eta_, &wh, &etap)) return Spectrum(0);
+    if (!RefractionHalf(wo, wi, eta_, &wh, &etap)) return Spectrum(0);
     Float oh = Dot(wo, wh), ih = Dot(wi, wh);
     Float denom = Sqr(ih + oh / etap);
     if (!(denom > 0)) return Spectrum(0);
@@ -213,20 +171,13 @@ bool DisneyTransmission::sample(const Vec3 &wo, Float, Point2 u, TransportMode m
     Float etap = wo.z > 0 ? eta_ : 1 / eta_;
     Vec3 wi;
     if (!Refract(wo, wo.z > 0 ? wh : -wh, etap, &wi) || wi.z * wo.z >= 0) return false;
-    *s = BSDFSample();
-    s->wi = wi;
-    s->f = f(wo, wi, mode);
-    s->pdf = pdf(wo, wi, mode);
-    s->pdfRev = pdf(wi, wo, Reverse(mode));
-    s->flags = flags();
-    s->eta = etap;
-    return s->pdf > 0;
+    return SampleFromEval(*this, wo, wi, mode, flags(), etap, s);
 }
 
 Float DisneyTransmission::pdf(const Vec3 &wo, const Vec3 &wi, TransportMode) const {
     Vec3 wh;
     Float etap;
-    if (!RefractHalf(wo, wi, eta_, &wh, &etap)) return 0;
+    if (!RefractionHalf(wo, wi, eta_, &wh, &etap)) return 0;
     Float denom = Sqr(Dot(wi, wh) + Dot(wo, wh) / etap);
     if (!(denom > 0)) return 0;
     // Walter et al. 2007, Eq. 17: dwh/dwi = |wi . h| / (wi . h + wo . h / etap)^2.

@@ -10,6 +10,7 @@
 
 #include "core/error.h"
 #include "materials/bssrdf.h"  // Catmull-Rom weights, integration and 2-D sampling
+#include "materials/bxdf_util.h"
 #include "materials/material_util.h"
 
 namespace gradus {
@@ -385,15 +386,9 @@ bool FourierBxDF::sample(const Vec3 &wo, Float, Point2 u, TransportMode mode, BS
     Float sinI = SafeSqrt(1 - muI * muI), c = std::cos(phi), sn = std::sin(phi);
     Vec3 wi = -Normalize(Vec3(sinI * (c * ox - sn * oy), sinI * (sn * ox + c * oy), muI));
     if (wi.z == 0) return false;
-    *s = BSDFSample();
-    s->wi = wi;
-    s->f = f(wo, wi, mode);
-    s->pdf = pdf(wo, wi, mode);
-    s->pdfRev = pdf(wi, wo, mode == TransportMode::Radiance ? TransportMode::Importance : TransportMode::Radiance);
     bool transmit = wi.z * wo.z < 0;
-    s->flags = (transmit ? BSDF_TRANSMISSION : BSDF_REFLECTION) | BSDF_GLOSSY;
-    s->eta = transmit ? (wo.z > 0 ? t.eta : 1 / t.eta) : 1;
-    return s->pdf > 0;
+    unsigned lobe = (transmit ? BSDF_TRANSMISSION : BSDF_REFLECTION) | BSDF_GLOSSY;
+    return bxdfutil::SampleFromEval(*this, wo, wi, mode, lobe, transmit ? (wo.z > 0 ? t.eta : 1 / t.eta) : 1, s);
 }
 
 namespace {

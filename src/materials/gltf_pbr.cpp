@@ -13,35 +13,6 @@ inline Spectrum Clamp01(const Spectrum &s) {
     return {Clamp<Float>(s.r, 0, 1), Clamp<Float>(s.g, 0, 1), Clamp<Float>(s.b, 0, 1)};
 }
 inline Float Clamp01(Float x) { return std::isnan(x) ? 0 : Clamp<Float>(x, 0, 1); }
-TransportMode Reverse(TransportMode m) {
-    return m == TransportMode::Radiance ? TransportMode::Importance : TransportMode::Radiance;
-}
-
-// Half vector of a reflection pair, flipped to z > 0; false if degenerate.
-bool ReflectionHalf(const Vec3 &wo, const Vec3 &wi, Vec3 *wh) {
-    Vec3 h = wo + wi;
-    Float l2 = h.lengthSquared();
-    if (!(l2 > 0)) return false;
-    h = h / std::sqrt(l2);
-    if (h.z < 0) h = -h;
-    *wh = h;
-    return h.z > 0;
-}
-
-// Generalized half vector of a refraction pair (Walter et al. 2007, Eq. 16), flipped to
-// z > 0, and etap = eta on wi's side / eta on wo's side. False if degenerate or if the
-// microfacet would face away from either direction.
-bool RefractionHalf(const Vec3 &wo, const Vec3 &wi, Float eta, Vec3 *wh, Float *etap) {
-    *etap = wo.z > 0 ? eta : 1 / eta;
-    Vec3 h = wo + wi * *etap;
-    Float l2 = h.lengthSquared();
-    if (!(l2 > 0)) return false;
-    h = h / std::sqrt(l2);
-    if (h.z < 0) h = -h;
-    if (!(h.z > 0) || Dot(h, wo) * wo.z <= 0 || Dot(h, wi) * wi.z <= 0) return false;
-    *wh = h;
-    return true;
-}
 }  // namespace
 
 // ---------------------------------------------------------------- BxDF
@@ -146,6 +117,7 @@ bool GltfPbrBxDF::sample(const Vec3 &wo, Float uc, Point2 u, TransportMode mode,
     LobeProbs p = lobeProbs(wo);
     Vec3 wi;
     unsigned lobe;
+    Float eta = 1;
     *s = BSDFSample();
     if (uc < p.diffuse) {
         wi = CosineHemisphere(u);
@@ -182,15 +154,10 @@ bool GltfPbrBxDF::sample(const Vec3 &wo, Float uc, Point2 u, TransportMode mode,
         Vec3 wh = d_.sampleWh(wo, u);
         if (!Refract(wo, wo.z > 0 ? wh : -wh, etap, &wi) || wi.z * wo.z >= 0) return false;
         lobe = BSDF_TRANSMISSION | BSDF_GLOSSY;
-        s->eta = etap;
+        eta = etap;
     }
     if (wi.z == 0) return false;
-    s->wi = wi;
-    s->f = f(wo, wi, mode);
-    s->pdf = pdf(wo, wi, mode);
-    s->pdfRev = pdf(wi, wo, Reverse(mode));
-    s->flags = lobe;
-    return s->pdf > 0;
+    return SampleFromEval(*this, wo, wi, mode, lobe, eta, s);
 }
 
 // ---------------------------------------------------------------- normal map

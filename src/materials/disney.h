@@ -15,10 +15,11 @@ namespace gradus {
 Float SchlickWeight(Float cosTheta);
 
 // Reflection lobes sampled from the cosine-weighted hemisphere on wo's side; the
-// subclass supplies the value for a same-hemisphere pair.
+// subclass supplies the value for a same-hemisphere pair from the lobe's scale R and
+// (for the lobes that depend on theta_d) the roughness.
 class DisneyCosineLobe : public BxDF {
   public:
-    DisneyCosineLobe() : BxDF(BSDF_REFLECTION | BSDF_DIFFUSE) {}
+    DisneyCosineLobe(const Spectrum &R, Float rough) : BxDF(BSDF_REFLECTION | BSDF_DIFFUSE), R_(R), rough_(rough) {}
     Spectrum f(const Vec3 &wo, const Vec3 &wi, TransportMode mode) const override;
     bool sample(const Vec3 &wo, Float uc, Point2 u, TransportMode mode, BSDFSample *s) const override;
     Float pdf(const Vec3 &wo, const Vec3 &wi, TransportMode mode) const override;
@@ -26,16 +27,17 @@ class DisneyCosineLobe : public BxDF {
 
   protected:
     virtual Spectrum eval(const Vec3 &wo, const Vec3 &wi) const = 0;
+    Spectrum R_;
+    Float rough_;
 };
 
 // Burley 2015, Eq. 4 without its retro-reflection term: R/pi (1 - Fo/2)(1 - Fi/2).
 class DisneyDiffuse : public DisneyCosineLobe {
   public:
-    explicit DisneyDiffuse(const Spectrum &R) : R_(R) {}
+    explicit DisneyDiffuse(const Spectrum &R) : DisneyCosineLobe(R, 0) {}
 
   protected:
     Spectrum eval(const Vec3 &wo, const Vec3 &wi) const override;
-    Spectrum R_;
 };
 
 // Burley 2015, Eq. 4's retro-reflection term: R/pi RR (Fo + Fi + Fo Fi (RR - 1)),
@@ -43,12 +45,10 @@ class DisneyDiffuse : public DisneyCosineLobe {
 // (Sec. 5.3): R/pi (1 + (FD90 - 1) Fo)(1 + (FD90 - 1) Fi), FD90 = 0.5 + RR.
 class DisneyRetro : public DisneyCosineLobe {
   public:
-    DisneyRetro(const Spectrum &R, Float rough) : R_(R), rough_(rough) {}
+    using DisneyCosineLobe::DisneyCosineLobe;
 
   protected:
     Spectrum eval(const Vec3 &wo, const Vec3 &wi) const override;
-    Spectrum R_;
-    Float rough_;
 };
 
 // The thin-surface "fake subsurface" lobe (Burley 2012, Sec. 5.3: the Hanrahan-Krueger
@@ -56,22 +56,19 @@ class DisneyRetro : public DisneyCosineLobe {
 // Fss = (1 + (Fss90 - 1) Fo)(1 + (Fss90 - 1) Fi), Fss90 = roughness cos^2(theta_d).
 class DisneyFakeSS : public DisneyCosineLobe {
   public:
-    DisneyFakeSS(const Spectrum &R, Float rough) : R_(R), rough_(rough) {}
+    using DisneyCosineLobe::DisneyCosineLobe;
 
   protected:
     Spectrum eval(const Vec3 &wo, const Vec3 &wi) const override;
-    Spectrum R_;
-    Float rough_;
 };
 
 // Burley 2012, Sec. 5.3 sheen: R (1 - cos theta_d)^5.
 class DisneySheen : public DisneyCosineLobe {
   public:
-    explicit DisneySheen(const Spectrum &R) : R_(R) {}
+    explicit DisneySheen(const Spectrum &R) : DisneyCosineLobe(R, 0) {}
 
   protected:
     Spectrum eval(const Vec3 &wo, const Vec3 &wi) const override;
-    Spectrum R_;
 };
 
 // Burley 2012, Sec. 5.4 and Appendix B clear coat: GTR1 distribution (Eq. 4 with

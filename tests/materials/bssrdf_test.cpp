@@ -15,26 +15,16 @@
 #include "render/scene_builder.h"
 #include "samplers/chi2_test.h"
 #include "samplers/rng.h"
+#include "material_test_util.h"
 
 using namespace gradus;
+using namespace gradus::mattest;
 
 namespace {
 
 const BSSRDFTable &Table() {
     static const BSSRDFTable t = ComputeBeamDiffusionTable(0, 1.33);
     return t;
-}
-
-SurfaceInteraction FlatHit() {
-    SurfaceInteraction si;
-    si.p = Point3(0, 0, 0);
-    si.n = Normal3(0, 0, 1);
-    si.dpdu = Vec3(1, 0, 0);
-    si.dpdv = Vec3(0, 1, 0);
-    si.shading.n = si.n;
-    si.shading.dpdu = si.dpdu;
-    si.shading.dpdv = si.dpdv;
-    return si;
 }
 
 // A grey BSSRDF with albedo rho and extinction sigmaT.
@@ -342,12 +332,6 @@ TEST(SubsurfaceExit, ExitsOnSameMaterialSphereOnly) {
 // --- Parameters and errors -------------------------------------------------------
 
 namespace {
-
-MaterialDesc ParseMaterial(const std::string &text) {
-    SceneDesc s = ParseString("WorldBegin\n" + text + "\nWorldEnd\n", "test.pbrt");
-    EXPECT_FALSE(s.materials.empty());
-    return s.materials.at(0);
-}
 
 void ExpectLocatedError(const std::string &text, const std::string &what) {
     MaterialDesc d = ParseMaterial(text);

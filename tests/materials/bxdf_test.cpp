@@ -11,8 +11,10 @@
 #include "materials/bxdfs.h"
 #include "materials/gltf_pbr.h"
 #include "samplers/chi2_test.h"
+#include "material_test_util.h"
 
 using namespace gradus;
+using namespace gradus::mattest;
 
 namespace {
 
@@ -124,72 +126,6 @@ std::vector<Case> Cases() {
     return cs;
 }
 
-// Outgoing directions: three elevations above, and one below the surface. (At
-// more grazing angles the refracted lobes get peaks that the midpoint-rule
-// integration of the expected counts cannot resolve at test-suite cost.)
-std::vector<Vec3> Wos() {
-    std::vector<Vec3> w;
-    for (Float c : {0.95, 0.5, 0.2}) w.push_back(SphericalDirection(std::sqrt(1 - c * c), c, 0.7));
-    w.push_back(SphericalDirection(std::sqrt(1 - 0.6 * 0.6), -0.6, 2.1));
-    return w;
-}
-
-
-// Chi-square test over directions binned per hemisphere in (s, phi) with
-// |cos theta| = 1 - s^2: bins shrink towards the poles, where specular-like
-// lobes concentrate, and the midpoint rule in (s, phi) resolves those peaks.
-// Invalid samples form one more bin expecting N (1 - integral of the pdf).
-template <typename SampleFn, typename PdfFn>
-chi2::Result HemisphereChi2(SampleFn sample, PdfFn pdf, int64_t n, uint64_t seed, double alpha) {
-    const int ns = 12, np = 24;
-    auto bin = [&](const Vec3 &w) {
-        int h = w.z < 0;
-        double sv = std::sqrt(std::max(0.0, 1 - std::abs(w.z)));
-        int i = Clamp(int(sv * ns), 0, ns - 1), j = Clamp(int(SphericalPhi(w) * Inv2Pi * np), 0, np - 1);
-        return (h * ns + i) * np + j;
-    };
-    std::vector<double> obs(2 * ns * np + 1, 0.0), exp(2 * ns * np + 1, 0.0);
-    RNG rng(seed);
-    for (int64_t k = 0; k < n; ++k) {
-        Vec3 w;
-        if (!sample(rng, &w)) obs.back() += 1;
-        else obs[bin(w)] += 1;
-    }
-    // Adaptive midpoint rule per bin: the sub-grid doubles until the expected
-    // count changes by less than a small fraction of its Poisson deviation.
-    auto integrate = [&](int h, int i, int j, int sub) {
-        double sum = 0;
-        for (int a = 0; a < sub; ++a)
-            for (int b = 0; b < sub; ++b) {
-                double sv = (i + (a + 0.5) / sub) / ns, phi = 2 * Pi * (j + (b + 0.5) / sub) / np;
-                double ct = (1 - sv * sv) * (h ? -1 : 1);
-                sum += 2 * sv * pdf(SphericalDirection(SafeSqrt(1 - ct * ct), ct, phi));
-            }
-        return sum * (1.0 / (ns * sub)) * (2 * Pi / (np * sub));
-    };
-    double total = 0;
-    for (int h = 0; h < 2; ++h)
-        for (int i = 0; i < ns; ++i)
-            for (int j = 0; j < np; ++j) {
-                int sub = 16;
-                double prev = integrate(h, i, j, sub), e = prev;
-                while (sub < 384) {
-                    sub *= 2;
-                    e = integrate(h, i, j, sub);
-                    double dCount = std::abs(e - prev) * n;
-                    if (dCount < std::max(0.1, 0.01 * std::sqrt(e * n))) break;
-                    prev = e;
-                }
-                exp[(h * ns + i) * np + j] = e * n;
-                total += e;
-            }
-    // The integral is accurate to ~1e-5; a lost mass below that is not resolvable.
-    exp.back() = std::max(1e-5, 1 - total) * n;
-    auto r = chi2::TestCounts(obs, exp, alpha);
-    r.message += ", invalid = " + std::to_string(int64_t(obs.back())) + ", pdf integral = " + std::to_string(total);
-    return r;
-}
-
 int NumChi2Tests() { return int(Cases().size() * Wos().size()); }
 
 }  // namespace
@@ -202,17 +138,7 @@ TEST(BxDF, ChiSquareSampleMatchesPdf) {
     for (const Case &c : Cases()) {
         auto b = c.make();
         for (const Vec3 &wo : Wos()) {
-            auto r = HemisphereChi2(
-                [&](RNG &rng, Vec3 *w) {
-                    BSDFSample s;
-                    Float uc = rng.uniform();
-                    Point2 u(rng.uniform(), rng.uniform());
-                    if (!b->sample(wo, uc, u, TransportMode::Radiance, &s)) return false;
-                    *w = s.wi;
-                    return true;
-                },
-                [&](const Vec3 &wi) { return b->pdf(wo, wi, TransportMode::Radiance); }, 100000, 1000 + idx++,
-                alpha);
+            auto r = BxDFChi2(*b, wo, 100000, 1000 + idx++, alpha);
             EXPECT_TRUE(r.pass) << c.name << " wo=" << wo << ": " << r.message;
         }
     }
@@ -262,8 +188,7 @@ TEST(BxDF, PdfIntegratesToSampledMass) {
                     for (int j = 0; j < np; ++j) {
                         double sv = (i + 0.5) / ns, ct = (1 - sv * sv) * (h ? -1 : 1);
                         double phi = 2 * Pi * (j + 0.5) / np;
-                        integral += 2 * sv * b->pdf(wo, SphericalDirection(SafeSqrt(1 - ct * ct), ct, phi),
-                                                    TransportMode::Radiance);
+                        integral += 2 * sv * b->pdf(wo, Dir(ct, phi), TransportMode::Radiance);
                     }
             integral *= (1.0 / ns) * (2 * Pi / np);
             RNG rng(11);
@@ -287,8 +212,8 @@ TEST(BxDF, Reciprocity) {
         for (int i = 0; i < 2000; ++i) {
             Vec3 wo = SphericalDirection(0, 0, 0), wi;
             Float c1 = 2 * rng.uniform() - 1, c2 = 2 * rng.uniform() - 1;
-            wo = SphericalDirection(SafeSqrt(1 - c1 * c1), c1, 2 * Pi * rng.uniform());
-            wi = SphericalDirection(SafeSqrt(1 - c2 * c2), c2, 2 * Pi * rng.uniform());
+            wo = Dir(c1, 2 * Pi * rng.uniform());
+            wi = Dir(c2, 2 * Pi * rng.uniform());
             if (std::abs(wo.z) < 1e-3 || std::abs(wi.z) < 1e-3) continue;
             Spectrum a = b->f(wo, wi, TransportMode::Radiance);
             // Adjoint BSDF: importance-mode f equals radiance-mode f with directions swapped
@@ -337,7 +262,7 @@ TEST(BxDF, WhiteFurnaceAlbedoAtMostOne) {
                 for (int i = 0; i < ns; ++i)
                     for (int j = 0; j < np; ++j) {
                         double sv = (i + 0.5) / ns, ct = (1 - sv * sv) * (h ? -1 : 1);
-                        Vec3 wi = SphericalDirection(SafeSqrt(1 - ct * ct), ct, 2 * Pi * (j + 0.5) / np);
+                        Vec3 wi = Dir(ct, 2 * Pi * (j + 0.5) / np);
                         integral += b->f(wo, wi, TransportMode::Importance) * (2 * sv * std::abs(ct));
                     }
             integral *= (1.0 / ns) * (2 * Pi / np);
@@ -445,7 +370,7 @@ TEST(Microfacet, NormalizedProjectedArea) {
                 for (int j = 0; j < np; ++j) {
                     // Substitute cos = 1 - s^2 to resolve the peak at the pole.
                     double sv = (i + 0.5) / nc, ct = 1 - sv * sv, phi = 2 * Pi * (j + 0.5) / np;
-                    Vec3 wh = SphericalDirection(SafeSqrt(1 - ct * ct), ct, phi);
+                    Vec3 wh = Dir(ct, phi);
                     double jac = 2 * sv * (1.0 / nc) * (2 * Pi / np);
                     sumD += d.D(wh) * ct * jac;
                     sumV += d.pdf(wo, wh) * jac;

@@ -15,8 +15,10 @@
 #include "materials/material.h"
 #include "parser/scene_desc.h"
 #include "samplers/chi2_test.h"
+#include "material_test_util.h"
 
 using namespace gradus;
+using namespace gradus::mattest;
 
 namespace {
 
@@ -84,66 +86,6 @@ std::vector<Config> Configs() {
     return cs;
 }
 
-std::vector<Vec3> Wos() {
-    std::vector<Vec3> w;
-    for (Float c : {0.95, 0.5, 0.2}) w.push_back(SphericalDirection(std::sqrt(1 - c * c), c, 0.7));
-    w.push_back(SphericalDirection(std::sqrt(1 - 0.6 * 0.6), -0.6, 2.1));
-    return w;
-}
-
-Vec3 Dir(double cosTheta, double phi) { return SphericalDirection(SafeSqrt(1 - cosTheta * cosTheta), cosTheta, phi); }
-
-// Chi-square over the sphere in bins of (hemisphere, s, phi) with |cos theta| = 1 - s^2
-// (bins shrink towards the poles); expected counts by an adaptive midpoint rule; failed
-// samples form one more bin expecting N (1 - integral of the pdf).
-chi2::Result SphereChi2(const BxDF &b, const Vec3 &wo, int64_t n, uint64_t seed, double alpha) {
-    const int ns = 12, np = 24;
-    auto bin = [&](const Vec3 &w) {
-        int h = w.z < 0;
-        double sv = std::sqrt(std::max(0.0, 1 - std::abs(w.z)));
-        int i = Clamp(int(sv * ns), 0, ns - 1), j = Clamp(int(SphericalPhi(w) * Inv2Pi * np), 0, np - 1);
-        return (h * ns + i) * np + j;
-    };
-    std::vector<double> obs(2 * ns * np + 1, 0.0), exp(2 * ns * np + 1, 0.0);
-    RNG rng(seed);
-    for (int64_t k = 0; k < n; ++k) {
-        BSDFSample s;
-        Float uc = rng.uniform();
-        Point2 u(rng.uniform(), rng.uniform());
-        if (b.sample(wo, uc, u, TransportMode::Radiance, &s)) obs[bin(s.wi)] += 1;
-        else obs.back() += 1;
-    }
-    auto integrate = [&](int h, int i, int j, int sub) {
-        double sum = 0;
-        for (int a = 0; a < sub; ++a)
-            for (int c = 0; c < sub; ++c) {
-                double sv = (i + (a + 0.5) / sub) / ns, phi = 2 * Pi * (j + (c + 0.5) / sub) / np;
-                double ct = (1 - sv * sv) * (h ? -1 : 1);
-                sum += 2 * sv * b.pdf(wo, Dir(ct, phi), TransportMode::Radiance);
-            }
-        return sum * (1.0 / (ns * sub)) * (2 * Pi / (np * sub));
-    };
-    double total = 0;
-    for (int h = 0; h < 2; ++h)
-        for (int i = 0; i < ns; ++i)
-            for (int j = 0; j < np; ++j) {
-                int sub = 8;
-                double prev = integrate(h, i, j, sub), e = prev;
-                while (sub < 256) {
-                    sub *= 2;
-                    e = integrate(h, i, j, sub);
-                    if (std::abs(e - prev) * n < std::max(0.1, 0.01 * std::sqrt(e * n))) break;
-                    prev = e;
-                }
-                exp[(h * ns + i) * np + j] = e * n;
-                total += e;
-            }
-    exp.back() = std::max(1e-5, 1 - total) * n;
-    auto r = chi2::TestCounts(obs, exp, alpha);
-    r.message += ", pdf integral = " + std::to_string(total);
-    return r;
-}
-
 // Directional albedo by sampling (importance mode: no radiance compression across
 // refraction), per channel: mean and standard error.
 struct Albedo {
@@ -179,25 +121,6 @@ Spectrum QuadratureAlbedo(const BxDF &b, const Vec3 &wo) {
     return sum * ((1.0 / ns) * (2 * Pi / np));
 }
 
-MaterialDesc ParseMaterial(const std::string &text) {
-    SceneDesc s = ParseString("WorldBegin\n" + text + "\nWorldEnd\n", "test.pbrt");
-    EXPECT_FALSE(s.materials.empty());
-    return s.materials.at(0);
-}
-
-SurfaceInteraction FlatHit() {
-    SurfaceInteraction si;
-    si.p = Point3(0, 0, 0);
-    si.n = Normal3(0, 0, 1);
-    si.uv = Point2(0.5, 0.5);
-    si.dpdu = Vec3(1, 0, 0);
-    si.dpdv = Vec3(0, 1, 0);
-    si.shading.n = si.n;
-    si.shading.dpdu = si.dpdu;
-    si.shading.dpdv = si.dpdv;
-    return si;
-}
-
 }  // namespace
 
 // Every config x direction is one test; Sidak-corrected so that correct code fails the
@@ -210,7 +133,7 @@ TEST(Disney, ChiSquareSampleMatchesPdf) {
     for (const Config &c : cs) {
         DisneyBxDF b(c.p);
         for (const Vec3 &wo : wos) {
-            auto r = SphereChi2(b, wo, 100000, 4000 + idx++, alpha);
+            auto r = BxDFChi2(b, wo, 100000, 4000 + idx++, alpha, 8, 256);
             EXPECT_TRUE(r.pass) << c.name << " wo=" << wo << ": " << r.message;
         }
     }
@@ -237,7 +160,7 @@ TEST(Disney, ChiSquareDetectsSwappedAnisotropy) {
         }
         Float roughness() const override { return b.roughness(); }
     } bad(b);
-    auto r = SphereChi2(bad, Dir(0.5, 0.7), 100000, 99, chi2::SidakAlpha(0.01, 24));
+    auto r = BxDFChi2(bad, Dir(0.5, 0.7), 100000, 99, chi2::SidakAlpha(0.01, 24), 8, 256);
     EXPECT_FALSE(r.pass) << r.message;
 }
 

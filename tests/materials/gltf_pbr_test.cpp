@@ -12,8 +12,10 @@
 #include "materials/gltf_pbr.h"
 #include "samplers/rng.h"
 #include "samplers/sampling.h"
+#include "material_test_util.h"
 
 using namespace gradus;
+using namespace gradus::mattest;
 
 namespace {
 
@@ -29,8 +31,6 @@ double V_GGX(double nl, double nv, double a) {
 }
 double Schlick(double f0, double vh) { return f0 + (1 - f0) * std::pow(1 - vh, 5); }
 double F0(double ior) { return Sqr((1 - ior) / (1 + ior)); }
-
-Vec3 Dir(double cosTheta, double phi) { return SphericalDirection(std::sqrt(1 - cosTheta * cosTheta), cosTheta, phi); }
 
 // Appendix B reflection for one channel (no transmission), upper hemisphere.
 double AppendixB(const Vec3 &v, const Vec3 &l, double base, double metallic, double a, double ior) {

@@ -8,30 +8,12 @@
 #include "materials/material.h"
 #include "parser/scene_desc.h"
 #include "samplers/rng.h"
+#include "material_test_util.h"
 
 using namespace gradus;
+using namespace gradus::mattest;
 
 namespace {
-
-SurfaceInteraction FlatHit() {
-    SurfaceInteraction si;
-    si.p = Point3(0, 0, 0);
-    si.n = Normal3(0, 0, 1);
-    si.uv = Point2(0.5, 0.5);
-    si.dpdu = Vec3(1, 0, 0);
-    si.dpdv = Vec3(0, 1, 0);
-    si.shading.n = si.n;
-    si.shading.dpdu = si.dpdu;
-    si.shading.dpdv = si.dpdv;
-    return si;
-}
-
-// Parses "WorldBegin <text> WorldEnd" and returns its first material description.
-MaterialDesc ParseMaterial(const std::string &text) {
-    SceneDesc s = ParseString("WorldBegin\n" + text + "\nWorldEnd\n", "test.pbrt");
-    EXPECT_FALSE(s.materials.empty());
-    return s.materials.at(0);
-}
 
 std::shared_ptr<Material> Make(const MaterialDesc &d, const NamedTextures &t = {}) {
     return CreateMaterial(d, t, {});

@@ -1,6 +1,6 @@
 // Scaffolding the material tests share: outgoing directions, a chi-square test of a
-// sampler against its pdf over the whole sphere, a flat hit point, and parsing one
-// material description.
+// sampler against its pdf over the whole sphere, a quadrature of a BxDF's albedo, a flat
+// hit point, and parsing one material description.
 #pragma once
 #include <gtest/gtest.h>
 
@@ -102,6 +102,19 @@ inline chi2::Result BxDFChi2(const BxDF &b, const Vec3 &wo, int64_t n, uint64_t 
             return true;
         },
         [&](const Vec3 &wi) { return b.pdf(wo, wi, TransportMode::Radiance); }, n, seed, alpha, subStart, subMax);
+}
+
+// Midpoint-rule integral of f |cos| (importance mode) over the sphere, on an ns x np
+// grid in (s, phi) per hemisphere with |cos theta| = 1 - s^2.
+inline Spectrum QuadratureAlbedo(const BxDF &b, const Vec3 &wo, int ns, int np) {
+    Spectrum sum(0);
+    for (int h = 0; h < 2; ++h)
+        for (int i = 0; i < ns; ++i)
+            for (int j = 0; j < np; ++j) {
+                double sv = (i + 0.5) / ns, ct = (1 - sv * sv) * (h ? -1 : 1);
+                sum += b.f(wo, Dir(ct, 2 * Pi * (j + 0.5) / np), TransportMode::Importance) * (2 * sv * std::abs(ct));
+            }
+    return sum * ((1.0 / ns) * (2 * Pi / np));
 }
 
 // A hit on the plane z = 0 at the origin, normal +z, uv = (0.5, 0.5), dpdu = x, dpdv = y.

@@ -332,6 +332,13 @@ TEST_P(Agreement, AgreesWithBdpt) {
                                                            : AgreementConfig{16, 8, 1000, 2000});
 }
 
+// pbrt-v3's newer parts together (disney, hair on curves, heightfield, NURBS;
+// data/zoo_gen.py), seen through a perspective and an orthographic camera: path
+// agrees with bdpt (which renders the orthographic view without light tracing).
+TEST(conformance, ZooPathAgreesWithBdpt) {
+    for (const char *scene : {"zoo", "zoo-ortho"}) CheckAgreement("path", scene, AgreementConfig{16, 8, 1000, 2000});
+}
+
 INSTANTIATE_TEST_SUITE_P(conformance, Agreement,
                          ::testing::Combine(::testing::ValuesIn(Integrators()), ::testing::ValuesIn(Scenes())),
                          AgreementName);

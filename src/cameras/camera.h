@@ -23,6 +23,10 @@ struct CameraWiSample {
     Interaction pLens;
 };
 
+// pbrt-v3's screen -> raster map: the screen window sw (x0 x1 y0 y1) onto the
+// full resolution, y flipped (shared by the projective cameras).
+Transform RasterFromScreen(Point2i res, const Float sw[4]);
+
 class Camera {
   public:
     virtual ~Camera() = default;

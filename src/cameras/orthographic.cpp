@@ -14,9 +14,7 @@ OrthographicCamera::OrthographicCamera(const Transform &worldFromCamera, Point2i
     fullResolution = res;
     // pbrt-v3: screen = camera space (Orthographic(0, 1) is the identity on
     // z = 0); screen -> raster maps the window onto the full resolution, y flipped.
-    const Transform rasterFromScreen = Scale(res.x, res.y, 1) * Scale(1 / (sw[1] - sw[0]), 1 / (sw[2] - sw[3]), 1) *
-                                       Translate(Vec3(-sw[0], -sw[3], 0));
-    rasterFromCamera_ = rasterFromScreen * Orthographic(0, 1);
+    rasterFromCamera_ = RasterFromScreen(res, sw) * Orthographic(0, 1);
     cameraFromRaster_ = rasterFromCamera_.inverse();
     filmArea_ = std::abs((sw[1] - sw[0]) * (sw[3] - sw[2]));
     viewDir_ = Normal3(Normalize(worldFromCamera_.applyVector(Vec3(0, 0, 1))));

@@ -4,6 +4,11 @@
 
 namespace gradus {
 
+Transform RasterFromScreen(Point2i res, const Float sw[4]) {
+    return Scale(res.x, res.y, 1) * Scale(1 / (sw[1] - sw[0]), 1 / (sw[2] - sw[3]), 1) *
+           Translate(Vec3(-sw[0], -sw[3], 0));
+}
+
 PerspectiveCamera::PerspectiveCamera(const Transform &worldFromCamera, Point2i res, const Float sw[4], Float fov,
                                      Float lensRadius, Float focalDistance)
     : worldFromCamera_(worldFromCamera),
@@ -13,10 +18,7 @@ PerspectiveCamera::PerspectiveCamera(const Transform &worldFromCamera, Point2i r
     fullResolution = res;
     // pbrt-v3: screen -> raster maps the screen window onto the full resolution, y flipped.
     Transform screenFromCamera = Perspective(fov, 1e-2, 1000);
-    Transform rasterFromScreen = Scale(res.x, res.y, 1) *
-                                 Scale(1 / (sw[1] - sw[0]), 1 / (sw[2] - sw[3]), 1) *
-                                 Translate(Vec3(-sw[0], -sw[3], 0));
-    rasterFromCamera_ = rasterFromScreen * screenFromCamera;
+    rasterFromCamera_ = RasterFromScreen(res, sw) * screenFromCamera;
     cameraFromRaster_ = rasterFromCamera_.inverse();
     Point3 pMin = cameraFromRaster_.applyPoint(Point3(0, 0, 0));
     Point3 pMax = cameraFromRaster_.applyPoint(Point3(res.x, res.y, 0));

@@ -108,6 +108,13 @@ class GridMedium : public Medium {
     std::vector<Float> majorant_;   // max density over each cell's support
 };
 
+// The RNG a camera sample's media draw from (distances, transmittances): keyed
+// by the render seed and the sample's film and lens positions, so that it is the
+// same whatever the thread or the number of dimensions the sampler used.
+inline RNG MediaRNG(uint64_t seed, Point2 pFilm, Point2 pLens) {
+    return RNG(Hash(seed, FloatBits(pFilm.x), FloatBits(pFilm.y), FloatBits(pLens.x) ^ (FloatBits(pLens.y) << 1)));
+}
+
 // Measured scattering coefficients (pbrt-v3's named presets: Jensen et al.
 // 2001, Narasimhan et al. 2006), in mm^-1. False for an unknown name.
 bool MediumPreset(const std::string &name, Spectrum *sigmaA, Spectrum *sigmaS);

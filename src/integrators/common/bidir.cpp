@@ -371,8 +371,7 @@ int GenerateCameraSubpath(const BidirContext &ctx, const Ray &ray, Sampler &samp
 }
 
 RNG CameraSampleMediaRNG(const Sampler &sampler, const CameraSample &cs) {
-    return RNG(Hash(sampler.seed(), FloatBits(cs.pFilm.x), FloatBits(cs.pFilm.y),
-                    FloatBits(cs.pLens.x) ^ (FloatBits(cs.pLens.y) << 1)));
+    return MediaRNG(sampler.seed(), cs.pFilm, cs.pLens);
 }
 
 BidirDimensions::BidirDimensions(const Sampler &sampler, int maxCameraVertices, int maxLightVertices)

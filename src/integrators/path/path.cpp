@@ -33,12 +33,24 @@ void PathIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &a
     Float w = scene_->camera->generateRay(cs, &ray);
     if (w == 0) return;
     if (volumetric_) {
-        // Media draw from their own stream, keyed by the render seed and the film position.
-        RNG rng(Hash(sampler.seed(), FloatBits(cs.pFilm.x), FloatBits(cs.pFilm.y), FloatBits(cs.pLens.x)));
+        RNG rng = MediaRNG(sampler.seed(), cs.pFilm, cs.pLens);  // media's own stream (medium.h)
         rec.addRadiance(LiVolumetric(ray, sampler, arena, rng) * w);
         return;
     }
     rec.addRadiance(Li(ray, sampler, arena) * w);
+}
+
+// Russian roulette (pbrt-v3: after three bounces, on beta scaled by eta^2);
+// false ends the path. Takes one sampler dimension at every bounce.
+bool PathIntegrator::survivesRoulette(Spectrum *beta, Float etaScale, int bounces, Sampler &sampler) const {
+    const Spectrum rrBeta = *beta * etaScale;
+    const Float uRR = sampler.get1D();
+    if (rrBeta.maxComponent() < set_.rrThreshold && bounces > 3) {
+        const Float q = std::max<Float>(0.05, 1 - rrBeta.maxComponent());
+        if (uRR < q) return false;
+        *beta = *beta / (1 - q);
+    }
+    return !beta->isBlack();
 }
 
 // Next-event estimation and BSDF sampling combined with the power heuristic
@@ -142,15 +154,7 @@ Spectrum PathIntegrator::Li(const Ray &cameraRay, Sampler &sampler, Arena &arena
         if (bs.isTransmission()) etaScale *= Sqr(bs.eta);
         ray = isect.spawnRay(bs.wi);
 
-        // Russian roulette (pbrt-v3: after three bounces, on beta scaled by eta^2).
-        Spectrum rrBeta = beta * etaScale;
-        Float uRR = sampler.get1D();
-        if (rrBeta.maxComponent() < set_.rrThreshold && bounces > 3) {
-            Float q = std::max<Float>(0.05, 1 - rrBeta.maxComponent());
-            if (uRR < q) break;
-            beta = beta / (1 - q);
-        }
-        if (beta.isBlack()) break;
+        if (!survivesRoulette(&beta, etaScale, bounces, sampler)) break;
     }
     return L;
 }

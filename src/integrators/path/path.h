@@ -50,6 +50,7 @@ class PathIntegrator : public PixelSampleIntegrator {
     Spectrum sampleLightVolumetric(const Interaction &it, const BSDF *bsdf, const Vec3 &shadingN,
                                    const HGPhase *phase, const Medium *medium, const SurfaceInteraction *surface,
                                    Sampler &sampler, RNG &rng) const;
+    bool survivesRoulette(Spectrum *beta, Float etaScale, int bounces, Sampler &sampler) const;
     bool volumetric_ = false;  // the scene has media or BSSRDFs: estimate() takes LiVolumetric
     PathSettings set_;
     FileLoc loc_;

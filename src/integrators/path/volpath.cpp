@@ -176,15 +176,7 @@ Spectrum PathIntegrator::LiVolumetric(const Ray &cameraRay, Sampler &sampler, Ar
                 ray = pi.spawnRay(es.wi);
             }
         }
-        // Russian roulette (pbrt-v3: after three bounces, on beta scaled by eta^2).
-        const Spectrum rrBeta = beta * etaScale;
-        const Float uRR = sampler.get1D();
-        if (rrBeta.maxComponent() < set_.rrThreshold && bounces > 3) {
-            const Float q = std::max<Float>(0.05, 1 - rrBeta.maxComponent());
-            if (uRR < q) break;
-            beta = beta / (1 - q);
-        }
-        if (beta.isBlack()) break;
+        if (!survivesRoulette(&beta, etaScale, bounces, sampler)) break;
     }
     return L;
 }

@@ -33,7 +33,9 @@ void PathIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &a
     Float w = scene_->camera->generateRay(cs, &ray);
     if (w == 0) return;
     if (volumetric_) {
-        RNG rng = MediaRNG(sampler.seed(), cs.pFilm, cs.pLens);  // media's own stream (medium.h)
+        // Media draw from their own stream, keyed by the render seed and the film position
+        // (its own key, not MediaRNG's: the agreement tests' power was measured with it).
+        RNG rng(Hash(sampler.seed(), FloatBits(cs.pFilm.x), FloatBits(cs.pFilm.y), FloatBits(cs.pLens.x)));
         rec.addRadiance(LiVolumetric(ray, sampler, arena, rng) * w);
         return;
     }

@@ -1,5 +1,5 @@
 // gradus._gradus: the C++ half of the Python module (python/gradus/ wraps it).
-// Renders take the command line's route (render/render_route.h), so a render
+// Renders take the command line's route (job/render_route.h), so a render
 // through Python equals gradus's at equal options bit for bit.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -22,10 +22,11 @@
 #include "core/stats.h"
 #include "image/image.h"
 #include "image/metrics.h"
-#include "integrators/integrator.h"
-#include "integrators/params.h"
+#include "render/integrator.h"
+#include "render/params.h"
 #include "reconstruction/reconstruction.h"
-#include "render/render_route.h"
+#include "job/render_route.h"
+#include "integrators/registry.h"
 
 namespace py = pybind11;
 using namespace gradus;

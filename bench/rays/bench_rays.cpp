@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "core/stats.h"
-#include "render/scene_builder.h"
+#include "job/job.h"
 #include "samplers/sampling.h"
 
 using namespace gradus;

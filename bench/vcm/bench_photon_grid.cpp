@@ -18,7 +18,7 @@
 #include "integrators/vcm/vcm.h"
 #include "lights/light_sampler.h"
 #include "parser/scene_desc.h"
-#include "render/scene_builder.h"
+#include "job/job.h"
 #include "samplers/rng_sampler.h"
 
 using namespace gradus;

@@ -3,7 +3,7 @@
 #pragma once
 #include <memory>
 
-#include "integrators/integrator.h"
+#include "render/integrator.h"
 
 namespace gradus {
 

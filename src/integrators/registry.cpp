@@ -2,6 +2,7 @@
 // GRADUS_HAS_<NAME> (see src/render/CMakeLists.txt).
 #include "core/error.h"
 #include "integrators/factories.h"
+#include "integrators/registry.h"
 #include "integrators/path/path.h"
 
 namespace gradus {

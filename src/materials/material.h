@@ -37,18 +37,4 @@ std::shared_ptr<Material> CreateMaterial(const MaterialDesc &desc, const NamedTe
                                          const std::map<std::string, std::shared_ptr<Material>> &named,
                                          const SceneDesc *scene = nullptr);
 
-// Creates a texture of class desc.type ("constant", "imagemap", "checkerboard", ...).
-// Adds it to `textures` under desc.name (float or spectrum by desc.valueType).
-void CreateTexture(const TextureDesc &desc, const SceneDesc &scene, NamedTextures *textures);
-
-// Texture-or-constant parameter lookup ("texture Kd" "name" or "rgb Kd" [...]).
-std::shared_ptr<SpectrumTexture> GetSpectrumTexture(const ParamSet &params, const std::string &name,
-                                                    const Spectrum &def, const NamedTextures &textures,
-                                                    const FileLoc &loc);
-std::shared_ptr<FloatTexture> GetFloatTexture(const ParamSet &params, const std::string &name, Float def,
-                                              const NamedTextures &textures, const FileLoc &loc);
-// Like GetFloatTexture but returns nullptr when the parameter is absent (e.g. "bumpmap").
-std::shared_ptr<FloatTexture> GetFloatTextureOrNull(const ParamSet &params, const std::string &name,
-                                                    const NamedTextures &textures, const FileLoc &loc);
-
 }  // namespace gradus

@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "materials/material.h"
+#include "textures/textures.h"
 
 namespace gradus {
 namespace matutil {

@@ -11,6 +11,7 @@
 #include "materials/gltf_pbr.h"
 #include "materials/hair.h"
 #include "materials/material.h"
+#include "textures/textures.h"
 #include "materials/material_util.h"
 
 namespace gradus {

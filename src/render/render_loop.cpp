@@ -14,7 +14,7 @@
 #include <cstdio>
 #include <mutex>
 
-#include "integrators/integrator.h"
+#include "render/integrator.h"
 
 namespace gradus {
 

@@ -44,7 +44,7 @@ struct RenderOptions {
     bool debug = false;
     Point2i debugPixel;
     int debugSample = -1;
-    // Checkpoints and exact splitting (RenderJobImage; render/checkpoint.h).
+    // Checkpoints and exact splitting (RenderJobImage; job/checkpoint.h).
     std::string checkpointFile;       // --checkpoint: written every checkpointInterval s, at the end, on interrupt
     double checkpointInterval = 300;  // --checkpoint-interval
     std::string resumeFile;           // --resume

@@ -2,7 +2,6 @@
 #include <cmath>
 #include <mutex>
 
-#include "materials/material.h"
 #include "image/image.h"
 #include "textures/gltf_texture.h"
 #include "textures/textures.h"

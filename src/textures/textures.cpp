@@ -1,5 +1,4 @@
 // Texture parameter lookup and the Texture directive factory.
-#include "materials/material.h"
 #include "textures/textures.h"
 
 namespace gradus {

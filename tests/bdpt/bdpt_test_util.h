@@ -9,7 +9,7 @@
 #include "parser/scene_desc.h"
 #include "render/render_loop.h"
 #include "common/render_test_util.h"
-#include "render/scene_builder.h"
+#include "job/job.h"
 
 namespace gradus::bdpt_test {
 

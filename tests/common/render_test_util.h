@@ -9,7 +9,7 @@
 
 #include "image/image.h"
 #include "parser/scene_desc.h"
-#include "render/scene_builder.h"
+#include "job/job.h"
 
 namespace gradus::test {
 

@@ -20,7 +20,7 @@
 #include <set>
 
 #include "agreement.h"
-#include "render/checkpoint.h"
+#include "job/checkpoint.h"
 
 using namespace gradus;
 using namespace gradus::conformance;

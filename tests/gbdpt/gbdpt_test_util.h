@@ -6,7 +6,7 @@
 #include "image/image.h"
 #include "parser/scene_desc.h"
 #include "common/render_test_util.h"
-#include "render/scene_builder.h"
+#include "job/job.h"
 
 namespace gradus::gbdpttest {
 

@@ -11,7 +11,7 @@
 #include <regex>
 
 #include "gltf_test_util.h"
-#include "render/scene_builder.h"
+#include "job/job.h"
 #include "textures/textures.h"
 
 namespace gradus::gltftest {

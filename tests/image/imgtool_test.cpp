@@ -11,7 +11,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
-#include "render/checkpoint.h"
+#include "job/checkpoint.h"
 #include "render/film.h"
 #include "image/image.h"
 #include "test_util.h"

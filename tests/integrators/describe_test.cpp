@@ -8,7 +8,8 @@
 #include <fstream>
 #include <string>
 
-#include "integrators/integrator.h"
+#include "render/integrator.h"
+#include "integrators/registry.h"
 
 namespace gradus {
 namespace {

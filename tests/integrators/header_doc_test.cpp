@@ -9,7 +9,8 @@
 #include <sstream>
 #include <string>
 
-#include "integrators/integrator.h"
+#include "render/integrator.h"
+#include "integrators/registry.h"
 
 namespace gradus {
 namespace {

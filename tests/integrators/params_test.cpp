@@ -1,12 +1,13 @@
-// The parameter table type (integrators/params.h) and the located errors of
+// The parameter table type (render/params.h) and the located errors of
 // the integrators' tables.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "integrators/integrator.h"
-#include "integrators/params.h"
+#include "render/integrator.h"
+#include "render/params.h"
 #include "param_test_util.h"
+#include "integrators/registry.h"
 
 namespace gradus::params_test {
 namespace {

@@ -10,7 +10,7 @@
 #include "lights/light.h"
 #include "lights/light_sampler.h"
 #include "parser/scene_desc.h"
-#include "samplers/chi2_test.h"
+#include "common/chi2_test.h"
 #include "samplers/rng.h"
 #include "samplers/sampling.h"
 #include "shape_cases.h"

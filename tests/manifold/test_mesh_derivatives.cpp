@@ -24,7 +24,7 @@
 #include "integrators/manifold/manifold.h"
 #include "integrators/manifold/manifold_scene.h"
 #include "parser/scene_desc.h"
-#include "render/scene_builder.h"
+#include "job/job.h"
 #include "samplers/rng.h"
 #include "shapes/triangle.h"
 

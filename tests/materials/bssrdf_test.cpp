@@ -12,8 +12,8 @@
 #include "materials/bssrdf.h"
 #include "materials/fresnel.h"
 #include "parser/scene_desc.h"
-#include "render/scene_builder.h"
-#include "samplers/chi2_test.h"
+#include "job/job.h"
+#include "common/chi2_test.h"
 #include "samplers/rng.h"
 #include "material_test_util.h"
 

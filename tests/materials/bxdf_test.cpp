@@ -10,7 +10,7 @@
 
 #include "materials/bxdfs.h"
 #include "materials/gltf_pbr.h"
-#include "samplers/chi2_test.h"
+#include "common/chi2_test.h"
 #include "material_test_util.h"
 
 using namespace gradus;

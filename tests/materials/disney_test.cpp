@@ -14,7 +14,7 @@
 #include "materials/disney.h"
 #include "materials/material.h"
 #include "parser/scene_desc.h"
-#include "samplers/chi2_test.h"
+#include "common/chi2_test.h"
 #include "material_test_util.h"
 
 using namespace gradus;

@@ -19,7 +19,7 @@
 #include "common/render_test_util.h"
 #include "core/error.h"
 #include "materials/fourier.h"
-#include "samplers/chi2_test.h"
+#include "common/chi2_test.h"
 #include "samplers/rng.h"
 
 using namespace gradus;

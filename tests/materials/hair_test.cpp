@@ -13,8 +13,8 @@
 #include "core/error.h"
 #include "materials/hair.h"
 #include "parser/scene_desc.h"
-#include "render/scene_builder.h"
-#include "samplers/chi2_test.h"
+#include "job/job.h"
+#include "common/chi2_test.h"
 #include "samplers/rng.h"
 #include "shapes/curve.h"
 

@@ -12,7 +12,7 @@
 #include "core/interaction.h"
 #include "materials/bsdf.h"
 #include "parser/scene_desc.h"
-#include "samplers/chi2_test.h"
+#include "common/chi2_test.h"
 #include "samplers/rng.h"
 
 namespace gradus::mattest {

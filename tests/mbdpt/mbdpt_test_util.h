@@ -7,10 +7,10 @@
 #include <vector>
 
 #include "image/image.h"
-#include "integrators/integrator.h"
+#include "render/integrator.h"
 #include "parser/scene_desc.h"
 #include "common/render_test_util.h"
-#include "render/scene_builder.h"
+#include "job/job.h"
 
 namespace gradus::mbdpt_test {
 

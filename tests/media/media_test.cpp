@@ -13,9 +13,9 @@
 #include "core/error.h"
 #include "media/medium.h"
 #include "parser/scene_desc.h"
-#include "render/scene.h"
-#include "render/scene_builder.h"
-#include "samplers/chi2_test.h"
+#include "scene/scene.h"
+#include "job/job.h"
+#include "common/chi2_test.h"
 
 using namespace gradus;
 

@@ -12,7 +12,7 @@
 #include "image/image.h"
 #include "integrators/mlt/mlt.h"
 #include "parser/scene_desc.h"
-#include "render/scene_builder.h"
+#include "job/job.h"
 
 namespace gradus::mlt_test {
 

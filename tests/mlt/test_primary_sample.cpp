@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "integrators/mlt/primary_sample.h"
-#include "samplers/chi2_test.h"
+#include "common/chi2_test.h"
 
 namespace gradus::mlt {
 namespace {

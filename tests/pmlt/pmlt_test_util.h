@@ -10,7 +10,7 @@
 
 #include "integrators/pmlt/mutations.h"
 #include "parser/scene_desc.h"
-#include "render/scene_builder.h"
+#include "job/job.h"
 #include "samplers/rng_sampler.h"
 
 namespace gradus::pmlt_test {

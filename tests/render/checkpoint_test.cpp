@@ -9,7 +9,7 @@
 #include <string>
 #include <unistd.h>
 
-#include "render/checkpoint.h"
+#include "job/checkpoint.h"
 #include "render/film.h"
 
 using namespace gradus;

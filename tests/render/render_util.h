@@ -5,11 +5,11 @@
 #include "image/image.h"
 #include "parser/scene_desc.h"
 #include "common/render_test_util.h"
-#include "render/scene_builder.h"
+#include "job/job.h"
 
 namespace gradus::test {
 
-// RenderResult (render/scene_builder.h): image and render statistics.
+// RenderResult (job/job.h): image and render statistics.
 inline RenderResult RenderDesc(const SceneDesc &desc, int spp, uint64_t seed, int nthreads,
                                const std::string &integrator) {
     TestRender t = RenderTestDesc(desc, spp, seed, nthreads, integrator);

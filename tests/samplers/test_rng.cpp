@@ -6,7 +6,7 @@
 #include <set>
 #include <vector>
 
-#include "samplers/chi2_test.h"
+#include "common/chi2_test.h"
 #include "samplers/lowdiscrepancy.h"
 #include "samplers/rng.h"
 

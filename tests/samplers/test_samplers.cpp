@@ -8,7 +8,7 @@
 #include <thread>
 #include <vector>
 
-#include "samplers/chi2_test.h"
+#include "common/chi2_test.h"
 #include "samplers/lowdiscrepancy.h"
 #include "samplers/samplers.h"
 

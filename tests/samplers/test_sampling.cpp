@@ -1,12 +1,12 @@
 // Warping functions, their inverses, tabulated distributions and MIS weights,
-// checked with the chi-square helpers of samplers/chi2_test.h.
+// checked with the chi-square helpers of common/chi2_test.h.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <vector>
 
 #include "core/error.h"
-#include "samplers/chi2_test.h"
+#include "common/chi2_test.h"
 #include "samplers/rng.h"
 #include "samplers/sampling.h"
 

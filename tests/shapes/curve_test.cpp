@@ -9,7 +9,7 @@
 
 #include "core/error.h"
 #include "parser/scene_desc.h"
-#include "render/scene_builder.h"
+#include "job/job.h"
 #include "samplers/rng.h"
 #include "shapes/curve.h"
 

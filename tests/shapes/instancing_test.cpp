@@ -11,7 +11,7 @@
 #include "core/error.h"
 #include "parser/scene_desc.h"
 #include "render/render_util.h"
-#include "render/scene_builder.h"
+#include "job/job.h"
 
 namespace gradus {
 namespace {

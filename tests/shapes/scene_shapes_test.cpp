@@ -4,7 +4,7 @@
 
 #include "core/error.h"
 #include "parser/scene_desc.h"
-#include "render/scene_builder.h"
+#include "job/job.h"
 #include "shapes/loopsubdiv.h"
 
 namespace gradus {

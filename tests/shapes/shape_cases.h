@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "samplers/chi2_test.h"
+#include "common/chi2_test.h"
 #include "shapes/quadrics.h"
 #include "shapes/sphere.h"
 

@@ -4,7 +4,7 @@
 // pbrt-v3 normal orientation under ReverseOrientation and mirror transforms.
 #include <gtest/gtest.h>
 
-#include "samplers/chi2_test.h"
+#include "common/chi2_test.h"
 #include "samplers/rng.h"
 #include "shape_cases.h"
 #include "shapes/triangle.h"

@@ -16,7 +16,7 @@
 // With both visualize flags set, visualizeweights wins.
 #pragma once
 #include "integrators/common/bidir_family.h"
-#include "integrators/integrator.h"
+#include "render/integrator.h"
 
 namespace gradus {
 

@@ -45,7 +45,7 @@
 #include "integrators/common/merge_kernel.h"
 #include "integrators/common/path_vertex.h"
 #include "lights/light_sampler.h"
-#include "render/scene.h"
+#include "scene/scene.h"
 #include "samplers/rng.h"
 #include "samplers/sampler.h"
 

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "integrators/common/bidir.h"
-#include "integrators/params.h"
+#include "render/params.h"
 #include "lights/light_sampler.h"
 #include "render/film.h"
 

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "render/scene.h"
+#include "scene/scene.h"
 
 namespace gradus {
 

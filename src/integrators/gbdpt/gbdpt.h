@@ -61,7 +61,7 @@
 #include "integrators/gradient/gradient_film.h"
 #include "integrators/gradient/gradient_params.h"
 #include "integrators/gradient/gradient_family.h"
-#include "integrators/integrator.h"
+#include "render/integrator.h"
 #include "lights/light_sampler.h"
 
 namespace gradus {

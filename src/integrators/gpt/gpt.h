@@ -32,7 +32,7 @@
 #include "integrators/gradient/gradient_params.h"
 #include "integrators/gradient/gradient_family.h"
 #include "integrators/gradient/shift.h"
-#include "integrators/integrator.h"
+#include "render/integrator.h"
 #include "integrators/path/path.h"
 #include "lights/light_sampler.h"
 

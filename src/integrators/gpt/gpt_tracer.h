@@ -7,7 +7,7 @@
 #include "integrators/gradient/shift.h"
 #include "lights/light.h"
 #include "lights/light_sampler.h"
-#include "render/scene.h"
+#include "scene/scene.h"
 
 namespace gradus::gpt {
 

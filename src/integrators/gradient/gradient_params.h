@@ -3,7 +3,7 @@
 #pragma once
 #include <string>
 
-#include "integrators/params.h"
+#include "render/params.h"
 #include "materials/bsdf.h"
 #include "reconstruction/reconstruction.h"
 

@@ -8,7 +8,7 @@
 
 #include "core/error.h"
 #include "integrators/factories.h"
-#include "integrators/params.h"
+#include "render/params.h"
 #include "samplers/rng.h"
 #include "samplers/rng_sampler.h"
 

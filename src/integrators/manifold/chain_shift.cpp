@@ -1,7 +1,7 @@
 #include "integrators/manifold/chain_shift.h"
 
 #include "materials/material.h"
-#include "render/scene.h"
+#include "scene/scene.h"
 
 namespace gradus {
 

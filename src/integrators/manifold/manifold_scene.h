@@ -15,7 +15,7 @@
 
 #include "integrators/manifold/manifold.h"
 #include "core/interaction.h"
-#include "render/scene.h"
+#include "scene/scene.h"
 
 namespace gradus {
 

@@ -59,7 +59,7 @@
 #include "image/image.h"
 #include "integrators/common/bidir_family.h"
 #include "integrators/common/subpath_store.h"
-#include "integrators/integrator.h"
+#include "render/integrator.h"
 #include "integrators/mbdpt/matrix.h"
 
 namespace gradus {

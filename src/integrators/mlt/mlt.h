@@ -63,9 +63,9 @@
 #include <vector>
 
 #include "integrators/common/bidir.h"
-#include "integrators/integrator.h"
+#include "render/integrator.h"
 #include "integrators/mlt/primary_sample.h"
-#include "integrators/params.h"
+#include "render/params.h"
 #include "lights/light_sampler.h"
 
 namespace gradus {

@@ -10,8 +10,8 @@
 #pragma once
 #include <vector>
 
-#include "integrators/integrator.h"
-#include "integrators/params.h"
+#include "render/integrator.h"
+#include "render/params.h"
 #include "lights/light_sampler.h"
 
 namespace gradus {

@@ -4,7 +4,7 @@
 #pragma once
 #include "core/arena.h"
 #include "materials/bssrdf.h"
-#include "render/scene.h"
+#include "scene/scene.h"
 
 namespace gradus {
 

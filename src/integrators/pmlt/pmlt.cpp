@@ -10,6 +10,7 @@
 #include "integrators/factories.h"
 #include "render/state_bytes.h"
 #include "samplers/rng_sampler.h"
+#include "integrators/registry.h"
 
 namespace gradus {
 

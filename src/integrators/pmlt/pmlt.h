@@ -51,7 +51,7 @@
 #include <string>
 #include <vector>
 
-#include "integrators/integrator.h"
+#include "render/integrator.h"
 #include "integrators/pmlt/mutations.h"
 #include "lights/light_sampler.h"
 

@@ -96,7 +96,7 @@
 #include "integrators/common/bidir_family.h"
 #include "integrators/common/merge_kernel.h"
 #include "integrators/common/photon_grid.h"
-#include "integrators/integrator.h"
+#include "render/integrator.h"
 
 namespace gradus {
 

@@ -14,7 +14,7 @@
 
 #include "core/error.h"
 #include "parser/gltf.h"
-#include "render/scene_builder.h"
+#include "job/job.h"
 
 namespace {
 

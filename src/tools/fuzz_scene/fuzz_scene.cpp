@@ -21,7 +21,8 @@
 
 #include "core/error.h"
 #include "parser/scene_desc.h"
-#include "render/scene_builder.h"
+#include "job/job.h"
+#include "integrators/registry.h"
 
 namespace {
 

@@ -15,7 +15,8 @@
 #include "image/image.h"
 #include "parser/gltf.h"
 #include "parser/scene_desc.h"
-#include "render/render_route.h"
+#include "job/render_route.h"
+#include "integrators/registry.h"
 
 using namespace gradus;
 

@@ -15,7 +15,7 @@
 #include "core/error.h"
 #include "image/image.h"
 #include "image/metrics.h"
-#include "render/checkpoint.h"
+#include "job/checkpoint.h"
 
 #include "compare_page.h"
 

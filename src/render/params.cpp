@@ -1,4 +1,4 @@
-#include "integrators/params.h"
+#include "render/params.h"
 
 #include <algorithm>
 #include <cstdio>

@@ -1,14 +1,16 @@
-// Turns a parsed SceneDesc into a renderable Scene, Film, Sampler and
-// Integrator, consuming every parameter (unused ones are located errors).
+// The job layer: a parsed SceneDesc and the command line's options become a
+// renderable job (Scene, Film, Sampler, Integrator), consuming every parameter
+// (unused ones are located errors); RenderJobImage runs it to an image with
+// its checkpoints and provenance.
 #pragma once
 #include <memory>
 #include <string>
 
 #include "image/image.h"
-#include "integrators/integrator.h"
+#include "render/integrator.h"
 #include "parser/scene_desc.h"
 #include "render/film.h"
-#include "render/scene.h"
+#include "scene/scene_builder.h"
 #include "samplers/sampler.h"
 
 namespace gradus {
@@ -61,7 +63,7 @@ struct RenderResult {
 // opts.timeLimit bounds all of it: the loop gets what preprocessing left,
 // minus the integrator's estimate of its finish (e.g. reconstruction).
 // Checkpoints (opts.checkpointFile, resumeFile, passBegin/passEnd): see
-// render/checkpoint.h; a checkpoint of another render is refused.
+// job/checkpoint.h; a checkpoint of another render is refused.
 RenderResult RenderJobImage(RenderJob &job, const RenderOptions &opts);
 // The text that identifies a render for its checkpoints.
 std::string RenderIdentity(const RenderJob &job, const RenderOptions &opts);
@@ -69,8 +71,5 @@ std::string RenderIdentity(const RenderJob &job, const RenderOptions &opts);
 // --param NAME=VALUE overrides for the integrator entity (typed by its
 // parameter table; located errors name the command line).
 void ApplyParamOverrides(const std::vector<std::string> &overrides, EntityDesc *integrator);
-
-// Builds only the scene (geometry, materials, lights, camera) for the given film resolution.
-std::unique_ptr<Scene> BuildScene(const SceneDesc &desc, Point2i resolution);
 
 }  // namespace gradus

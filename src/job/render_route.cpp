@@ -1,4 +1,4 @@
-#include "render/render_route.h"
+#include "job/render_route.h"
 
 #include <chrono>
 

@@ -1,4 +1,4 @@
-#include "render/checkpoint.h"
+#include "job/checkpoint.h"
 
 #include <algorithm>
 #include <cerrno>

@@ -7,7 +7,7 @@
 #include "parser/gltf.h"
 #include "parser/scene_desc.h"
 #include "render/render_loop.h"
-#include "render/scene_builder.h"
+#include "job/job.h"
 
 namespace gradus {
 

@@ -8,11 +8,11 @@
 
 #include "core/error.h"
 #include "image/image.h"
-#include "integrators/params.h"
+#include "render/params.h"
 #include "parser/scene_desc.h"
 #include "render/render_loop.h"
 #include "render/film.h"
-#include "render/scene.h"
+#include "scene/scene.h"
 
 namespace gradus {
 
@@ -39,7 +39,7 @@ class Integrator {
     virtual double finishEstimate() const { return 0; }
     // Integrator-specific statistics for the end-of-render report.
     virtual std::string statistics() const { return ""; }
-    // Checkpoints (render/checkpoint.h): what later passes need beyond the
+    // Checkpoints (job/checkpoint.h): what later passes need beyond the
     // film and the pass index, as bytes (mlt: chains and b); loadState throws
     // Error on bytes it did not write. Counters of statistics() are per session.
     virtual std::string saveState() const { return ""; }
@@ -103,21 +103,5 @@ inline double FinishMetropolisImage(Image *out, const std::string &prefix, doubl
     WriteMetropolisMetadata(&out->metadata, prefix, b, performed, chains, warning);
     return rescale;
 }
-
-using IntegratorFactory = std::function<std::unique_ptr<Integrator>(const EntityDesc &desc)>;
-
-struct IntegratorInfo {
-    std::string name;
-    std::string description;
-    IntegratorFactory create;
-    // The integrator's parameter table (gradus --describe), without a scene.
-    std::function<std::vector<ParamInfo>()> parameters;
-};
-
-// The one table of integrator names (src/integrators/registry.cpp).
-const std::vector<IntegratorInfo> &IntegratorRegistry();
-// Creates `desc.type` (throws a located Error listing valid names if unknown).
-// The caller checks unused parameters afterwards.
-std::unique_ptr<Integrator> CreateIntegrator(const EntityDesc &desc);
 
 }  // namespace gradus

@@ -71,6 +71,9 @@ std::string Quote(const std::string &s);
                               const std::string &reason, const std::vector<std::string> &valid);
 }  // namespace params_detail
 
+// pbrt-v3's default path depth, shared by every integrator family.
+constexpr int kDefaultMaxDepth = 5;
+
 template <class S>
 class ParamTable {
   public:
@@ -104,6 +107,14 @@ class ParamTable {
         std::vector<Choice<std::string>> c;
         for (const auto &n : names) c.push_back({n, n});
         return enumeration(name, field, def, std::move(c), help);
+    }
+    // The parameters every family shares, written once: pbrt-v3's "maxdepth"
+    // (default 5) and "pixelbounds" (accepted; the job checks it covers the film).
+    ParamTable &maxDepth(int S::*field) {
+        return integer("maxdepth", field, kDefaultMaxDepth, "maximum path depth (bounces; edges - 1)", AtLeast(0));
+    }
+    ParamTable &pixelBounds(std::vector<int> S::*field) {
+        return integers("pixelbounds", field, "accepted (use --cropwindow instead)");
     }
     // An integer list (default empty).
     ParamTable &integers(const std::string &name, std::vector<int> S::*field, const std::string &help) {

@@ -7,7 +7,7 @@ namespace gradus {
 ParamTable<BidirSettings> BidirParams(const BidirParamOptions &o) {
     using S = BidirSettings;
     ParamTable<S> t("bidirectional family");
-    t.integer("maxdepth", &S::maxDepth, 5, "maximum path depth (edges - 1)", AtLeast(0));
+    t.maxDepth(&S::maxDepth);
     t.enumeration<std::string>("lightsamplestrategy", &S::lightStrategy, "power",
                                {{"uniform", "uniform"}, {"power", "power"}, {"spatial", "spatial", o.noSpatial}},
                                o.noSpatial.empty() ? "light choice; spatial = power (position-free, as the MIS assumes)"
@@ -24,7 +24,7 @@ ParamTable<BidirSettings> BidirParams(const BidirParamOptions &o) {
     Range rr;
     if (!o.noRoulette.empty()) rr = Range{double(o.rrDepth), double(o.rrDepth), o.noRoulette};
     t.integer("rrdepth", &S::rrDepth, o.rrDepth, "Russian roulette on subpaths after this many bounces (-1: off)", rr);
-    t.integers("pixelbounds", &S::pixelBounds, "accepted (use --cropwindow instead)");
+    t.pixelBounds(&S::pixelBounds);
     return t;
 }
 

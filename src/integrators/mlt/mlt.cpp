@@ -25,7 +25,7 @@ constexpr uint64_t kMutationTag = 0x6d6c740000000003ULL;
 ParamTable<MLTSettings> Table() {
     using S = MLTSettings;
     ParamTable<S> t("mlt");
-    t.integer("maxdepth", &S::maxDepth, 5, "maximum path depth (edges - 1)", AtLeast(0));
+    t.maxDepth(&S::maxDepth);
     t.integer("bootstrapsamples", &S::bootstrapSamples, 100000, "bootstrap states per depth (b and the chain starts)",
               AtLeast(1));
     t.integer("bootstrapvertices", &S::bootstrapVertices, 50000000,

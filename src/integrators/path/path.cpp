@@ -10,12 +10,12 @@ namespace gradus {
 ParamTable<PathSettings> PathParams() {
     using S = PathSettings;
     ParamTable<S> t("path tracing");
-    t.integer("maxdepth", &S::maxDepth, 5, "maximum number of bounces", AtLeast(0));
+    t.maxDepth(&S::maxDepth);
     t.real("rrthreshold", &S::rrThreshold, 1,
            "Russian roulette when max(beta) < rrthreshold, after 3 bounces (pbrt-v3)");
     t.enumeration("lightsamplestrategy", &S::lightStrategy, "spatial", {"uniform", "power", "spatial"},
                   "light choice; spatial: per-voxel distributions (see light_sampler.h)");
-    t.integers("pixelbounds", &S::pixelBounds, "accepted (use --cropwindow instead)");
+    t.pixelBounds(&S::pixelBounds);
     return t;
 }
 

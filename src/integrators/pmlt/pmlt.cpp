@@ -31,7 +31,7 @@ constexpr uint64_t kDirectionTag = 0x706d6c7400000005ULL;
 ParamTable<PMLTSettings> PMLTParamTable() {
     using S = PMLTSettings;
     ParamTable<S> t("pmlt");
-    t.integer("maxdepth", &S::maxDepth, 5, "maximum path depth (edges - 1)", AtLeast(0));
+    t.maxDepth(&S::maxDepth);
     t.integer("bootstrapsamples", &S::bootstrapSamples, 100000,
               "bidirectional samples of the bootstrap (b and the chain starts)", AtLeast(1));
     t.integer("bootstrapconnections", &S::bootstrapConnections, 0,

@@ -95,12 +95,10 @@ void MapPbrtSppm(EntityDesc *d) {
     d->type = "vcm";
 }
 
-}  // namespace
-
-RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
-    RenderJob job;
-    job.warnings = desc.notes;
-    // Film.
+// 1. The film: resolution (scene, --resolution, --quick), crop window, output
+// file (checked writable before any geometry is loaded), pixel filter.
+std::unique_ptr<Film> CreateJobFilm(const SceneDesc &desc, const BuildOptions &opts, Point2i *resOut,
+                                    Float crop[4]) {
     const EntityDesc &fd = desc.film;
     if (fd.present && fd.type != "image")
         throw Error(fd.loc, "unknown film \"" + fd.type + "\" (valid: image)");
@@ -115,7 +113,6 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
     }
     if (opts.resolution.x > 0 && opts.resolution.y > 0) res = opts.resolution;
     if (opts.quick) res = {std::max(1, res.x / 4), std::max(1, res.y / 4)};
-    Float crop[4] = {0, 1, 0, 1};
     std::vector<Float> cw = fp.getFloats("cropwindow");
     if (!cw.empty()) {
         if (cw.size() != 4) throw Error(fp.locOf("cropwindow", fd.loc), "\"cropwindow\" needs 4 values");
@@ -136,28 +133,21 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
     if (!opts.outfileOverride.empty()) filename = opts.outfileOverride;
     if (opts.checkOutput) CheckWritableImagePath(filename);  // before any geometry is loaded or a sample rendered
     std::unique_ptr<Filter> filter = CreateFilter(desc.filter);
+    *resOut = res;
     try {
-        job.film = std::make_unique<Film>(res, crop, std::move(filter), filename, scale);
+        return std::make_unique<Film>(res, crop, std::move(filter), filename, scale);
     } catch (const Error &e) {  // a film too large for this machine: located at the resolution
         throw Error(fp.locOf("xresolution", fd.loc), e.what());
     }
+}
 
-    // Sampler.
-    EntityDesc sdesc = desc.sampler;
-    if (!sdesc.present) sdesc.type = "halton";
-    int sppOverride = opts.sppOverride;
-    job.sampler = CreateSampler(sdesc, opts.seed, sppOverride);
-    if (opts.quick && sppOverride <= 0)
-        job.sampler = CreateSampler(sdesc, opts.seed, std::max(1, job.sampler->samplesPerPixel() / 8));
-    sdesc.params.checkUnused("Sampler \"" + sdesc.type + "\"");
-
-    if (desc.accelerator.present) {
-        // Embree replaces pbrt-v3's BVH/kd-tree; their tuning parameters are accepted and ignored.
-        for (const auto &p : desc.accelerator.params.all()) p.used = true;
-    }
-
-    // Integrator.
-    EntityDesc idesc = desc.integrator;
+// 3. The integrator: --integrator and --param overrides, pbrt-v3's sppm and
+// volpath names, unused parameters (warnings when overridden, else errors),
+// variance layers, an integrator's own sample count, "pixelbounds".
+void CreateJobIntegrator(const SceneDesc &desc, const BuildOptions &opts, RenderJob *jobOut, EntityDesc *idescOut) {
+    RenderJob &job = *jobOut;
+    EntityDesc &idesc = *idescOut;
+    idesc = desc.integrator;
     if (!idesc.present) idesc.type = "path";
     bool overridden = !opts.integratorOverride.empty() && opts.integratorOverride != idesc.type;
     if (!opts.integratorOverride.empty()) idesc.type = opts.integratorOverride;
@@ -183,7 +173,7 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
     // numiterations) keeps it unless --spp is given, carried by a "random" sampler
     // (a stratified one could round it; mlt draws no numbers from it, and pbrt-v3's
     // sppm ignores the scene's Sampler as well).
-    if (const int n = job.integrator->defaultSamplesPerPixel(); n > 0 && sppOverride <= 0) {
+    if (const int n = job.integrator->defaultSamplesPerPixel(); n > 0 && opts.sppOverride <= 0) {
         EntityDesc rd;
         rd.type = "random";
         rd.present = true;
@@ -199,11 +189,13 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
         if (pb[0] > fb.pMin.x || pb[1] < fb.pMax.x || pb[2] > fb.pMin.y || pb[3] < fb.pMax.y)
             throw UnsupportedError(at, "Integrator \"pixelbounds\" that exclude film pixels (use --cropwindow)");
     }
+}
 
-    job.scene = BuildScene(desc, res);
-    RefuseUnhandledParts(*job.integrator, *job.scene, desc, idesc);
-
-    Metadata &m = job.provenance;
+// 5. Provenance: the resolved parameters of every entity and the input files.
+void RecordJobProvenance(const SceneDesc &desc, const BuildOptions &opts, const EntityDesc &sdesc,
+                         const EntityDesc &idesc, Point2i res, const Float crop[4], RenderJob *job) {
+    const EntityDesc &fd = desc.film;
+    Metadata &m = job->provenance;
     auto entity = [](const EntityDesc &e, const std::string &type) {
         std::string r = e.params.resolved();
         return "\"" + type + "\"" + (r.empty() ? "" : " " + r);
@@ -217,11 +209,38 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
     m["cropwindow"] = std::to_string(crop[0]) + " " + std::to_string(crop[1]) + " " + std::to_string(crop[2]) +
                       " " + std::to_string(crop[3]);
     m["quick"] = MetaValue::Int(opts.quick ? 1 : 0);
-    m["variance_layers"] = MetaValue::Int(job.film->varianceLayers() ? 1 : 0);
+    m["variance_layers"] = MetaValue::Int(job->film->varianceLayers() ? 1 : 0);
     InputFilesSummary in = InputFiles();
     m["scene_files"] = MetaValue::Int(in.files);
     m["scene_bytes"] = MetaValue::Int(int64_t(in.bytes));
     m["scene_hash"] = "fnv1a64:" + in.hash;
+}
+
+}  // namespace
+
+RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
+    RenderJob job;
+    job.warnings = desc.notes;
+    Point2i res;
+    Float crop[4] = {0, 1, 0, 1};
+    job.film = CreateJobFilm(desc, opts, &res, crop);
+    // 2. The sampler (--spp, --quick: 1/8 of the samples).
+    EntityDesc sdesc = desc.sampler;
+    if (!sdesc.present) sdesc.type = "halton";
+    job.sampler = CreateSampler(sdesc, opts.seed, opts.sppOverride);
+    if (opts.quick && opts.sppOverride <= 0)
+        job.sampler = CreateSampler(sdesc, opts.seed, std::max(1, job.sampler->samplesPerPixel() / 8));
+    sdesc.params.checkUnused("Sampler \"" + sdesc.type + "\"");
+    if (desc.accelerator.present) {
+        // Embree replaces pbrt-v3's BVH/kd-tree; their tuning parameters are accepted and ignored.
+        for (const auto &p : desc.accelerator.params.all()) p.used = true;
+    }
+    EntityDesc idesc;
+    CreateJobIntegrator(desc, opts, &job, &idesc);
+    // 4. The scene, and the scene parts this integrator refuses.
+    job.scene = BuildScene(desc, res);
+    RefuseUnhandledParts(*job.integrator, *job.scene, desc, idesc);
+    RecordJobProvenance(desc, opts, sdesc, idesc, res, crop, &job);
     return job;
 }
 
@@ -242,6 +261,10 @@ std::string RenderIdentity(const RenderJob &job, const RenderOptions &opts) {
 }
 
 namespace {
+
+using Clock = std::chrono::steady_clock;
+double SecondsBetween(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+
 // The first line in which two identities differ, for the refusal message.
 std::string FirstDifference(const std::string &a, const std::string &b) {
     std::istringstream sa(a), sb(b);
@@ -254,126 +277,167 @@ std::string FirstDifference(const std::string &a, const std::string &b) {
         if (la != lb) return "checkpoint has \"" + la + "\", this render \"" + lb + "\"";
     }
 }
+
+// A render's checkpoints (job/checkpoint.h): --resume and --passes set where
+// the loop starts and stops; --checkpoint writes after passes and at the end.
+class CheckpointSession {
+  public:
+    CheckpointSession(RenderJob &job, const RenderOptions &opts, Clock::time_point t0)
+        : job_(job), opts_(opts), t0_(t0), identity_(RenderIdentity(job, opts)), lastWrite_(Clock::now()) {}
+    // Reads a resumed render's state or applies --passes to the loop's options.
+    void begin(RenderOptions *loopOpts);
+    // Periodic writes (whole passes only) when --checkpoint is given.
+    void installWriter(RenderOptions *loopOpts) {
+        if (opts_.checkpointFile.empty()) return;
+        loopOpts->wholePasses = true;
+        loopOpts->afterPass = [this](const RenderStats &st) {
+            if (SecondsBetween(lastWrite_, Clock::now()) >= opts_.checkpointInterval) write(st);
+        };
+    }
+    void writeFinal(const RenderStats &st) {
+        if (!opts_.checkpointFile.empty()) write(st);
+    }
+    void record(const RenderOptions &loopOpts, const RenderStats &stats, Metadata *m) const;
+
+  private:
+    Checkpoint make(const RenderStats &st) const;
+    void write(const RenderStats &st) {
+        const auto w0 = Clock::now();
+        Checkpoint c = make(st);
+        WriteCheckpoint(opts_.checkpointFile, c);
+        lastWrite_ = Clock::now();
+        writeSeconds_ = SecondsBetween(w0, lastWrite_);
+        writeBytes_ = c.film.size() + c.state.size();
+    }
+    RenderJob &job_;
+    const RenderOptions &opts_;
+    Clock::time_point t0_;
+    std::string identity_;
+    Checkpoint prior_;
+    bool resumed_ = false;
+    Clock::time_point lastWrite_;
+    double writeSeconds_ = 0;
+    size_t writeBytes_ = 0;
+};
+
+void CheckpointSession::begin(RenderOptions *loopOpts) {
+    if (!opts_.resumeFile.empty()) {
+        if (opts_.passBegin != 0 || opts_.passEnd >= 0) throw Error("--resume and --passes exclude each other");
+        prior_ = ReadCheckpoint(opts_.resumeFile);
+        if (prior_.identity != identity_ || prior_.integrator != job_.integrator->name())
+            throw Error(opts_.resumeFile + ": a checkpoint of another render (" +
+                        FirstDifference(prior_.identity, identity_) +
+                        "); resume with the scene, integrator, parameters, --spp and --seed it was made with");
+        job_.film->loadState(prior_.film);
+        try {
+            job_.integrator->loadState(prior_.state);
+        } catch (const Error &e) {
+            throw Error(opts_.resumeFile + ": " + e.what());
+        }
+        loopOpts->firstPass = prior_.passEnd;
+        loopOpts->firstSpp = prior_.sppEnd;
+        resumed_ = true;
+    } else if (opts_.passBegin != 0 || opts_.passEnd >= 0) {
+        if (opts_.passBegin > 0 && !job_.integrator->independentPasses())
+            throw Error("--passes " + std::to_string(opts_.passBegin) + ":...: " + job_.integrator->name() +
+                        "'s passes depend on the ones before (split it with --checkpoint and --resume instead)");
+        if (opts_.timeLimit > 0 && opts_.spp <= 0)
+            throw Error("--passes needs --spp (or the sampler's count), not --time alone");
+        loopOpts->firstPass = opts_.passBegin;
+        loopOpts->firstSpp = -1;
+        loopOpts->lastPass = opts_.passEnd;
+    }
+}
+
+Checkpoint CheckpointSession::make(const RenderStats &st) const {
+    Checkpoint c;
+    c.identity = identity_;
+    c.integrator = job_.integrator->name();
+    c.seed = job_.sampler->seed();
+    c.passBegin = resumed_ ? prior_.passBegin : st.firstPass;
+    c.sppBegin = resumed_ ? prior_.sppBegin : st.firstSpp;
+    c.passEnd = st.passes;
+    c.sppEnd = st.spp;
+    c.complete = st.complete;
+    c.seconds = prior_.seconds + SecondsBetween(t0_, Clock::now());
+    c.nonFinite = prior_.nonFinite + st.nonFinite;
+    c.film = job_.film->saveState();
+    c.state = job_.integrator->saveState();
+    return c;
+}
+
+void CheckpointSession::record(const RenderOptions &loopOpts, const RenderStats &stats, Metadata *mp) const {
+    Metadata &m = *mp;
+    if (resumed_) {
+        m["resumed_from"] = opts_.resumeFile;
+        m["resumed_at_pass"] = MetaValue::Int(prior_.passEnd);
+        m["render_seconds_all_sessions"] = MetaValue::Double(prior_.seconds + stats.seconds);
+    }
+    if (loopOpts.firstPass > 0 || loopOpts.lastPass >= 0) {
+        m["pass_begin"] = MetaValue::Int(resumed_ ? prior_.passBegin : stats.firstPass);
+        m["pass_end"] = MetaValue::Int(stats.passes);
+    }
+    if (!opts_.checkpointFile.empty()) {
+        m["checkpoint"] = opts_.checkpointFile;
+        m["checkpoint_bytes"] = MetaValue::Int(int64_t(writeBytes_));
+        m["checkpoint_write_seconds"] = MetaValue::Double(writeSeconds_);
+    }
+}
+
+// The render's figures as typed metadata (RenderResult in job.h).
+void RecordRenderFigures(const RenderJob &job, const RenderOptions &opts, const RenderStats &stats,
+                         const Clock::time_point t[4], double cpuSeconds, Metadata *mp) {
+    const Film &film = *job.film;
+    Metadata &m = *mp;
+    for (const auto &kv : job.provenance) m[kv.first] = kv.second;
+    m["integrator"] = job.integrator->name();
+    m["spp"] = MetaValue::Int(stats.spp);
+    m["passes"] = MetaValue::Int(stats.passes);
+    m["seed"] = std::to_string(stats.seed);
+    m["threads"] = MetaValue::Int(opts.nthreads > 0 ? opts.nthreads : int(std::thread::hardware_concurrency()));
+    m["render_seconds"] = MetaValue::Double(stats.seconds);
+    m["seconds_preprocess"] = MetaValue::Double(SecondsBetween(t[0], t[1]));
+    m["seconds_passes"] = MetaValue::Double(SecondsBetween(t[1], t[2]));
+    m["seconds_finish"] = MetaValue::Double(SecondsBetween(t[2], t[3]));
+    m["cpu_seconds"] = MetaValue::Double(cpuSeconds);
+    m["stop_reason"] = stats.interrupted ? "interrupted" : stats.timeLimited ? "time budget" : "completed";
+    if (opts.timeLimit > 0) m["time_budget"] = MetaValue::Double(opts.timeLimit);
+    m["nonfinite_discarded"] = MetaValue::Int(int64_t(stats.nonFinite));
+    m["output_values_clamped"] = MetaValue::Int(int64_t(film.clampedValues()));
+    m["peak_rss_mb"] = MetaValue::Double(PeakRSSMegabytes());
+    m["gradus_version"] = std::string(GradusVersion()) + " (" + GradusGitCommit() + ")";
+}
+
 }  // namespace
 
 RenderResult RenderJobImage(RenderJob &job, const RenderOptions &opts) {
-    using Clock = std::chrono::steady_clock;
-    auto seconds = [](Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); };
     const double cpu0 = CpuSeconds();
-    const auto t0 = Clock::now();
+    Clock::time_point t[4];
+    t[0] = Clock::now();
     job.integrator->preprocess(*job.scene, *job.film);
-    const auto t1 = Clock::now();
+    t[1] = Clock::now();
     RenderOptions loopOpts = opts;
     if (opts.timeLimit > 0) {  // at least one pass runs whatever is left
         // The estimate may time a probe of its own: it is taken first, so that its
         // time counts as spent.
         const double finish = job.integrator->finishEstimate();
-        loopOpts.timeLimit = std::max(1e-9, opts.timeLimit - seconds(t0, Clock::now()) - finish);
+        loopOpts.timeLimit = std::max(1e-9, opts.timeLimit - SecondsBetween(t[0], Clock::now()) - finish);
     }
-    // Checkpoints: resume, --passes, periodic and final writes (job/checkpoint.h).
-    const std::string identity = RenderIdentity(job, opts);
-    Checkpoint prior;
-    bool resumed = false;
-    if (!opts.resumeFile.empty()) {
-        if (opts.passBegin != 0 || opts.passEnd >= 0) throw Error("--resume and --passes exclude each other");
-        prior = ReadCheckpoint(opts.resumeFile);
-        if (prior.identity != identity || prior.integrator != job.integrator->name())
-            throw Error(opts.resumeFile + ": a checkpoint of another render (" + FirstDifference(prior.identity, identity) +
-                        "); resume with the scene, integrator, parameters, --spp and --seed it was made with");
-        job.film->loadState(prior.film);
-        try {
-            job.integrator->loadState(prior.state);
-        } catch (const Error &e) {
-            throw Error(opts.resumeFile + ": " + e.what());
-        }
-        loopOpts.firstPass = prior.passEnd;
-        loopOpts.firstSpp = prior.sppEnd;
-        resumed = true;
-    } else if (opts.passBegin != 0 || opts.passEnd >= 0) {
-        if (opts.passBegin > 0 && !job.integrator->independentPasses())
-            throw Error("--passes " + std::to_string(opts.passBegin) + ":...: " + job.integrator->name() +
-                        "'s passes depend on the ones before (split it with --checkpoint and --resume instead)");
-        if (opts.timeLimit > 0 && opts.spp <= 0) throw Error("--passes needs --spp (or the sampler's count), not --time alone");
-        loopOpts.firstPass = opts.passBegin;
-        loopOpts.firstSpp = -1;
-        loopOpts.lastPass = opts.passEnd;
-    }
-    auto makeCheckpoint = [&](const RenderStats &st) {
-        Checkpoint c;
-        c.identity = identity;
-        c.integrator = job.integrator->name();
-        c.seed = job.sampler->seed();
-        c.passBegin = resumed ? prior.passBegin : st.firstPass;
-        c.sppBegin = resumed ? prior.sppBegin : st.firstSpp;
-        c.passEnd = st.passes;
-        c.sppEnd = st.spp;
-        c.complete = st.complete;
-        c.seconds = prior.seconds + seconds(t0, Clock::now());
-        c.nonFinite = prior.nonFinite + st.nonFinite;
-        c.film = job.film->saveState();
-        c.state = job.integrator->saveState();
-        return c;
-    };
-    auto lastWrite = Clock::now();
-    double writeSeconds = 0;
-    size_t writeBytes = 0;
-    auto writeCheckpoint = [&](const RenderStats &st) {
-        const auto w0 = Clock::now();
-        Checkpoint c = makeCheckpoint(st);
-        WriteCheckpoint(opts.checkpointFile, c);
-        lastWrite = Clock::now();
-        writeSeconds = seconds(w0, lastWrite);
-        writeBytes = c.film.size() + c.state.size();
-    };
-    if (!opts.checkpointFile.empty()) {
-        loopOpts.wholePasses = true;
-        loopOpts.afterPass = [&](const RenderStats &st) {
-            if (seconds(lastWrite, Clock::now()) >= opts.checkpointInterval) writeCheckpoint(st);
-        };
-    }
+    CheckpointSession checkpoints(job, opts, t[0]);
+    checkpoints.begin(&loopOpts);
+    checkpoints.installWriter(&loopOpts);
     RenderResult r;
     r.stats = RunRender(*job.integrator, *job.scene, *job.film, *job.sampler, loopOpts);
-    if (!opts.checkpointFile.empty()) writeCheckpoint(r.stats);
-    const auto t2 = Clock::now();
+    checkpoints.writeFinal(r.stats);
+    t[2] = Clock::now();
     r.image = job.film->toImage();
     job.integrator->finish(*job.film, r.stats, &r.image);
-    const auto t3 = Clock::now();
-    r.stats.seconds = seconds(t0, t3);
-
-    const Film &film = *job.film;
-    Metadata &m = r.image.metadata;
-    for (const auto &kv : job.provenance) m[kv.first] = kv.second;
-    m["integrator"] = job.integrator->name();
-    m["spp"] = MetaValue::Int(r.stats.spp);
-    m["passes"] = MetaValue::Int(r.stats.passes);
-    m["seed"] = std::to_string(r.stats.seed);
-    m["threads"] = MetaValue::Int(opts.nthreads > 0 ? opts.nthreads : int(std::thread::hardware_concurrency()));
-    m["render_seconds"] = MetaValue::Double(r.stats.seconds);
-    m["seconds_preprocess"] = MetaValue::Double(seconds(t0, t1));
-    m["seconds_passes"] = MetaValue::Double(seconds(t1, t2));
-    m["seconds_finish"] = MetaValue::Double(seconds(t2, t3));
-    m["cpu_seconds"] = MetaValue::Double(CpuSeconds() - cpu0);
-    m["stop_reason"] = r.stats.interrupted ? "interrupted" : r.stats.timeLimited ? "time budget" : "completed";
-    if (opts.timeLimit > 0) m["time_budget"] = MetaValue::Double(opts.timeLimit);
-    m["nonfinite_discarded"] = MetaValue::Int(int64_t(r.stats.nonFinite));
-    m["output_values_clamped"] = MetaValue::Int(int64_t(film.clampedValues()));
-    m["peak_rss_mb"] = MetaValue::Double(PeakRSSMegabytes());
-    m["gradus_version"] = std::string(GradusVersion()) + " (" + GradusGitCommit() + ")";
-    if (resumed) {
-        m["resumed_from"] = opts.resumeFile;
-        m["resumed_at_pass"] = MetaValue::Int(prior.passEnd);
-        m["render_seconds_all_sessions"] = MetaValue::Double(prior.seconds + r.stats.seconds);
-    }
-    if (loopOpts.firstPass > 0 || loopOpts.lastPass >= 0) {
-        m["pass_begin"] = MetaValue::Int(resumed ? prior.passBegin : r.stats.firstPass);
-        m["pass_end"] = MetaValue::Int(r.stats.passes);
-    }
-    if (!opts.checkpointFile.empty()) {
-        m["checkpoint"] = opts.checkpointFile;
-        m["checkpoint_bytes"] = MetaValue::Int(int64_t(writeBytes));
-        m["checkpoint_write_seconds"] = MetaValue::Double(writeSeconds);
-    }
+    t[3] = Clock::now();
+    r.stats.seconds = SecondsBetween(t[0], t[3]);
+    RecordRenderFigures(job, opts, r.stats, t, CpuSeconds() - cpu0, &r.image.metadata);
+    checkpoints.record(loopOpts, r.stats, &r.image.metadata);
     // Crops keep their place in the full image (EXR data window in the display window).
+    const Film &film = *job.film;
     r.image.originX = film.pixelBounds().pMin.x;
     r.image.originY = film.pixelBounds().pMin.y;
     r.image.displayWidth = film.fullResolution().x;

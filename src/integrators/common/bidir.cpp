@@ -225,7 +225,6 @@ void MakeSurfaceVertex(const BidirContext &ctx, const SurfaceInteraction &isect,
     const GeometryRecord &g = ctx.scene->geometry[isect.geomId];
     if (g.mesh) Barycentrics(g, isect.primId, isect.p, &v.b1, &v.b2);
     v.ns = bsdf ? bsdf.ns() : isect.shading.n;
-    if (bsdf) v.setRoughnessClass(bsdf.roughnessClass(kDefaultShiftThreshold));
 }
 
 Interaction AsInteraction(const PathVertex &v) {

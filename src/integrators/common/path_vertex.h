@@ -46,7 +46,6 @@ enum VertexFlags : uint8_t {
     VERTEX_DELTA = 1,        // the direction sampled at this vertex was a specular (delta) lobe
     VERTEX_DELTA_LIGHT = 2,  // light vertex of a delta-position or delta-direction light
     VERTEX_INFINITE = 4,     // light vertex of an infinite or distant light (direction only)
-    // Bits 3-4: RoughnessClass of the BSDF (shift mappings).
 };
 
 // Throughputs are stored as float with a power-of-two exponent: the
@@ -115,8 +114,6 @@ struct PathVertex {
     bool inMedium() const { return type == VertexType::Medium; }
     // Surface or medium: a vertex that scatters (BSDF or phase function).
     bool scatters() const { return type == VertexType::Surface || type == VertexType::Medium; }
-    RoughnessClass roughnessClass() const { return RoughnessClass((flags >> 3) & 3); }
-    void setRoughnessClass(RoughnessClass c) { flags = uint8_t((flags & ~(3 << 3)) | (int(c) << 3)); }
 };
 
 // One subpath: vertices and (optionally) the BSDFs of its surface vertices.

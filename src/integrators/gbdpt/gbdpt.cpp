@@ -113,41 +113,13 @@ void GBDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &
     for (const GradientSplat &sp : splats) gfilm_.splatLightTracing(rec, sp, splatScale_);
 }
 
-GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler, Arena &arena,
-                                       const bool inside[kNumNeighbours], std::vector<GradientSplat> *splats) const {
-    GradientSample out;
-    ThreadState &ts = local();
-    SubpathShiftStats &st = ts.shift;
-    const Scene &scene = *scene_;
-    Ray ray;
-    Float w = scene.camera->generateRay(cs, &ray);
-    if (w == 0) return out;
-    for (int k = 0; k < kNumNeighbours; ++k) out.active[k] = inside[k];
-
-    // [1] camera and light subpaths.
-    const int maxCam = set_.maxDepth + 2, maxLight = set_.maxDepth + 1;
-    ShiftSubpath cam, light;
-    AllocSubpath(arena, maxCam, &cam.v, &cam.b);
-    AllocSubpath(arena, maxLight, &light.v, &light.b);
-    cam.deltaSample = static_cast<uint8_t *>(arena.alloc(maxCam));
-    light.deltaSample = static_cast<uint8_t *>(arena.alloc(maxLight));
-    BidirDimensions dims(sampler, maxCam, maxLight);  // fixed blocks of dimensions (bidir.h), as bdpt
-    cam.n = GenerateCameraSubpath(bctx_, ray, sampler, arena, maxCam, cam.v, cam.b);
-    dims.startLightSubpath(sampler);
-    light.n = scene.lights.empty() || !connections_ ? 0 : GenerateLightSubpath(bctx_, sampler, arena, maxLight, light.v, light.b);
-    PrepareSubpath(sctx_, &cam);
-    PrepareSubpath(sctx_, &light);
-    SubpathView camView = cam.view(), lightView = light.view();
-
-    // [2-5] shift the camera subpath once per neighbour (Eqs. 6 and 7).
-    CameraShift shifts[kNumNeighbours];
-    if (cam.n >= 2)
-        for (int k = 0; k < kNumNeighbours; ++k)
-            if (inside[k]) ShiftCameraSubpath(sctx_, cam, cs, kNeighbourOffsets[k], arena, &shifts[k], &st);
-    // Index of c on the camera subpath (case (i) vs (ii)).
+namespace {
+// Index of the second diffuse vertex c of the camera subpath (-1: none): a
+// base path whose camera part reaches c is case (i), else case (ii).
+int SecondDiffuseVertex(const SubpathShiftContext &sctx, const ShiftSubpath &cam) {
     int b = -1, c = -1;
     for (int i = 1; i < cam.n; ++i)
-        if (IsDiffuseVertex(sctx_, cam.v[i], &cam.b[i])) {
+        if (IsDiffuseVertex(sctx, cam.v[i], &cam.b[i])) {
             if (b < 0)
                 b = i;
             else {
@@ -155,167 +127,276 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
                 break;
             }
         }
+    return c;
+}
+}  // namespace
 
-    // Incremental offset weights (bidir.h MISSplit): the offsets reconnect at
-    // the same vertex r (c, or the half-vector shift's first diffuse pair, a
-    // function of the base), share the base's vertices from r on and its
-    // densities from r + 2 on; for kc >= r + 3 an offset's BDPT weight is
-    // 1 / (1 + shared + product Q_y) with the base's parts split at r + 1 and
-    // the offset's prefix sum Q_y, computed once per offset.
-    int rShared = -1;
-    for (int k = 0; k < kNumNeighbours; ++k)
-        if (inside[k] && shifts[k].r >= 0) rShared = shifts[k].r;
-    // With merging (G-VCM) the prefix sum takes the merges at z'_1 .. z'_{r+1}
-    // too, for a kernel with one eta at every vertex (SplitSupported).
-    const int misSplit = rShared >= 0 && SplitSupported(bctx_.strategies) ? rShared + 1 : -1;
-    Float prefixY[kNumNeighbours];
-    bool havePrefix[kNumNeighbours] = {};
+// One camera sample of Algorithm 1: the subpaths, their shifts and the state
+// its strategies share; each stage below is a numbered step of the algorithm.
+struct GBDPTIntegrator::SampleRun {
+    // A base path of strategy (s, t) (step 6).
+    struct Base {
+        ConnectResult r;
+        LightPoint lp;
+        bool useLp = false;
+        MISSplit parts;
+        Spectrum fx;  // unweighted contribution times the camera ray weight
+        Float wx;     // BDPT weight
+    };
 
-    PathVertex lens = cam.v[0];
-    lens.setThroughput(Spectrum(1));
-    lens.pdfFwd = 1;
-    Spectrum primal(0);
-    auto diffuseAt = [&](const ShiftSubpath &p, int i) { return IsDiffuseVertex(sctx_, p.v[i], &p.b[i]); };
-    for (int t = 1; t <= (connections_ ? cam.n : 0); ++t) {
-        for (int s = 0; s <= light.n; ++s) {
-            int depth = s + t - 2;
-            if ((s == 1 && t == 1) || depth < 0 || depth > set_.maxDepth) continue;
-            ConnectSamples u;
-            dims.startConnection(sampler, s, t);
-            if (s == 1) {
-                u.uLightSelect = sampler.get1D();
-                u.uLight = sampler.get2D();
-            }
-            if (t == 1) u.uLens = sampler.get2D();
-            if (t == 1 && !set_.lightTracing) continue;  // no light-tracing paths (Table 1, "w/o LTP")
-            // Sec. 3.2: no connections at vertices classified specular.
-            if (s >= 1 && t >= 2 && !diffuseAt(cam, t - 1)) continue;
-            if (s >= 2 && !diffuseAt(light, s - 1)) continue;
-            if (t == 1 && !diffuseAt(light, s - 1)) continue;
+    SampleRun(const GBDPTIntegrator &gi, const CameraSample &cs, Sampler &sampler, Arena &arena,
+              const bool inside[kNumNeighbours], Float w, std::vector<GradientSplat> *splats)
+        : gi(gi), set(gi.set_), sctx(gi.sctx_), bctx(gi.bctx_), ts(gi.local()), st(ts.shift), cs(cs),
+          sampler(sampler), arena(arena), inside(inside), w(w), splats(splats), maxCam(set.maxDepth + 2),
+          maxLight(set.maxDepth + 1), dims(AllocSubpaths(arena, maxCam, maxLight, &cam, &light, sampler)) {}
 
-            // [6] base path.
-            ConnectResult r;
-            LightPoint lp;
-            bool useLp = false, ok;
-            MISSplit parts;
-            u.misSplit = misSplit;
-            u.misParts = &parts;
-            if (s == 1) {
-                ok = SampleLightPoint(sctx_, cam.v[t - 1], u.uLightSelect, u.uLight, &lp);
-                if (ok && !lp.infinite) {
-                    useLp = true;
-                    ok = ConnectLightPoint(sctx_, lp, camView, t, &r, false, misSplit, &parts);
-                } else {
-                    ok = ConnectBDPT(bctx_, lightView, camView, s, t, u, &r);
-                }
-            } else {
-                ok = ConnectBDPT(bctx_, lightView, camView, s, t, u, &r);
-            }
-            u.misParts = nullptr;
-            if (!ok) continue;  // blocked or black base path: nothing to shift (Sec. 4)
-            const Spectrum fx = r.unweighted * w;
-            // BDPT weight over the strategies in play (bctx_.strategies: without
-            // light tracing the t = 1 terms are left out of every sum).
-            const Float wx = r.weight;
+    // Arena storage of both subpaths, then the dimension blocks from the
+    // sampler's current dimension (as bdpt).
+    static BidirDimensions AllocSubpaths(Arena &arena, int maxCam, int maxLight, ShiftSubpath *cam,
+                                         ShiftSubpath *light, Sampler &sampler) {
+        AllocSubpath(arena, maxCam, &cam->v, &cam->b);
+        AllocSubpath(arena, maxLight, &light->v, &light->b);
+        cam->deltaSample = static_cast<uint8_t *>(arena.alloc(maxCam));
+        light->deltaSample = static_cast<uint8_t *>(arena.alloc(maxLight));
+        return BidirDimensions(sampler, maxCam, maxLight);  // fixed blocks of dimensions (bidir.h)
+    }
 
-            if (t == 1) {
-                // [8-11] light-tracing path (case (iii)): shifted one by one.
-                ++ts.cases[2];
-                GradientSplat sp;
-                GradientSample &g = sp.value;
-                sp.pixel = Point2i{int(std::floor(r.pRaster.x)), int(std::floor(r.pRaster.y))};
-                g.primal = r.L;
-                for (int k = 0; k < kNumNeighbours; ++k) {
-                    if (!pairInside(sp.pixel, k)) continue;
-                    Point2i off = kNeighbourOffsets[k];
-                    g.active[k] = true;
-                    Spectrum fy;
-                    Float wy = 0, rho = 0;
-                    ++ts.caseAttempts[2];
-                    bool shifted = ShiftLightTracingPath(sctx_, light, s, lens, r.pRaster, r.unweighted, off, arena,
-                                                         &fy, &wy, &rho, &st);
-                    if (shifted) {
-                        ++ts.caseSuccesses[2];
-                        Float wg = set_.mis == GBDPTSettings::MIS::Combined ? CombinedWeight(wx, wy, rho) : 0.5 * wx;  // Eq. 8 / Eq. 9
-                        g.diff[k] = (fy - r.unweighted) * wg;
-                    } else {
-                        ++ts.fallbacks[FallbackLightTracing];
-                        g.diff[k] = r.unweighted * -wx;  // fallback: zero offset, BDPT weight
-                    }
-                }
-                splats->push_back(sp);
-                continue;
-            }
+    // [1] camera and light subpaths.
+    void traceSubpaths(const Ray &ray) {
+        cam.n = GenerateCameraSubpath(bctx, ray, sampler, arena, maxCam, cam.v, cam.b);
+        dims.startLightSubpath(sampler);
+        light.n = gi.scene_->lights.empty() || !gi.connections_
+                      ? 0
+                      : GenerateLightSubpath(bctx, sampler, arena, maxLight, light.v, light.b);
+        PrepareSubpath(sctx, &cam);
+        PrepareSubpath(sctx, &light);
+        camView = cam.view();
+        lightView = light.view();
+    }
 
-            // [15] primal with the usual BDPT weight.
-            primal += fx * wx;
-            const int kc = t - 1;  // last camera vertex of the base path
-            const int cas = (c >= 0 && kc >= c) ? 0 : 1;
-            ++ts.cases[cas];
-            // [12-14] offsets from the shifted camera subpaths.
-            for (int k = 0; k < kNumNeighbours; ++k) {
-                if (!inside[k]) continue;
-                const CameraShift &sh = shifts[k];
-                ++ts.caseAttempts[cas];
-                ConnectResult ry;
-                bool oky = false;
-                // Next-event estimation of an infinite light: the offset samples the
-                // light with the base's numbers, which give the same light and
-                // direction from any point (the light choice is position-free):
-                // the environment shift, |T'| = 1, equal light densities, so rho
-                // is the camera subpath's (as for a shared light point).
-                const bool envNEE = s == 1 && !useLp;
-                if (kc > sh.validUpTo) ++ts.fallbacks[FallbackShift];
-                const bool reuse = kc <= sh.validUpTo && sh.r >= 0 && kc > sh.r;
-                const bool incremental = reuse && parts.valid && sh.r == rShared;
-                if (reuse && (incremental || !envNEE)) {
-                    // Past the reconnection the offset's connection is the base's
-                    // (same vertices, same light sample, same shadow ray): only the
-                    // camera-side throughput and the offset's MIS densities differ.
-                    SubpathView yv = sh.y.view();
-                    ry.unweighted = r.unweighted * SafeDiv(sh.y.v[kc].throughput(), cam.v[kc].throughput());
-                    if (incremental) {
-                        if (!havePrefix[k]) {
-                            prefixY[k] = CameraPrefixSum(bctx_, bctx_.strategies, yv, misSplit);
-                            havePrefix[k] = true;
-                        }
-                        ry.weight = parts.weight(prefixY[k]);
-                        ++ts.incrementalWeights;
-                    } else if (useLp) {
-                        PathVertex sv = lp.v;
-                        sv.pdfFwd = PdfLightOrigin(bctx_, sv, sh.y.v[kc]);
-                        ry.weight = MISWeight(bctx_, SubpathView{&sv, nullptr, 1}, yv, 1, t, &sv);
-                    } else {
-                        ry.weight = MISWeight(bctx_, lightView, yv, s, t, nullptr);
-                    }
-                    oky = !ry.unweighted.isBlack() && ry.weight > 0;
-                } else if (kc <= sh.validUpTo) {
-                    SubpathView yv = sh.y.view();
-                    // At and after the reconnection vertex (kc >= r) the offset's
-                    // vertex is the base's and so is the connection edge: the
-                    // base's shadow ray already found it unoccluded.
-                    ConnectSamples uy = u;
-                    uy.knownVisible = sh.r >= 0 && kc >= sh.r;
-                    if (useLp)
-                        oky = ConnectLightPoint(sctx_, lp, yv, t, &ry, uy.knownVisible);
-                    else
-                        oky = ConnectBDPT(bctx_, lightView, yv, s, t, uy, &ry);
-                    oky = oky && !ry.unweighted.isBlack() && ry.weight > 0;
-                    if (!oky) ++ts.fallbacks[FallbackOffsetZero];
-                }
-                if (oky) {
-                    ++ts.caseSuccesses[cas];
-                    Spectrum fy = ry.unweighted * w;
-                    Float wg = set_.mis == GBDPTSettings::MIS::Combined ? CombinedWeight(wx, ry.weight, sh.rho[kc]) : 0.5 * wx;
-                    out.diff[k] += (fy - fx) * wg;
-                } else {
-                    out.diff[k] += fx * -wx;
-                }
-            }
+    // [2-5] shift the camera subpath once per neighbour (Eqs. 6 and 7).
+    void shiftCameraSubpath() {
+        if (cam.n >= 2)
+            for (int k = 0; k < kNumNeighbours; ++k)
+                if (inside[k]) ShiftCameraSubpath(sctx, cam, cs, kNeighbourOffsets[k], arena, &shifts[k], &st);
+        c = SecondDiffuseVertex(sctx, cam);
+        // Incremental offset weights (bidir.h MISSplit): the offsets reconnect at
+        // the same vertex r (c, or the half-vector shift's first diffuse pair, a
+        // function of the base), share the base's vertices from r on and its
+        // densities from r + 2 on; for kc >= r + 3 an offset's BDPT weight is
+        // 1 / (1 + shared + product Q_y) with the base's parts split at r + 1 and
+        // the offset's prefix sum Q_y, computed once per offset.
+        for (int k = 0; k < kNumNeighbours; ++k)
+            if (inside[k] && shifts[k].r >= 0) rShared = shifts[k].r;
+        // With merging (G-VCM) the prefix sum takes the merges at z'_1 .. z'_{r+1}
+        // too, for a kernel with one eta at every vertex (SplitSupported).
+        misSplit = rShared >= 0 && SplitSupported(bctx.strategies) ? rShared + 1 : -1;
+        lens = cam.v[0];
+        lens.setThroughput(Spectrum(1));
+        lens.pdfFwd = 1;
+    }
+
+    bool diffuseAt(const ShiftSubpath &p, int i) const { return IsDiffuseVertex(sctx, p.v[i], &p.b[i]); }
+
+    // Strategy (s, t): its connection numbers, then the base path and its shifts.
+    void strategy(int s, int t, GradientSample *out) {
+        int depth = s + t - 2;
+        if ((s == 1 && t == 1) || depth < 0 || depth > set.maxDepth) return;
+        ConnectSamples u;
+        dims.startConnection(sampler, s, t);
+        if (s == 1) {
+            u.uLightSelect = sampler.get1D();
+            u.uLight = sampler.get2D();
+        }
+        if (t == 1) u.uLens = sampler.get2D();
+        if (t == 1 && !set.lightTracing) return;  // no light-tracing paths (Table 1, "w/o LTP")
+        // Sec. 3.2: no connections at vertices classified specular.
+        if (s >= 1 && t >= 2 && !diffuseAt(cam, t - 1)) return;
+        if (s >= 2 && !diffuseAt(light, s - 1)) return;
+        if (t == 1 && !diffuseAt(light, s - 1)) return;
+
+        Base base;
+        if (!connectBase(s, t, &u, &base)) return;  // blocked or black base path: nothing to shift (Sec. 4)
+        if (t == 1) {
+            shiftLightTracingPath(s, base);
+            return;
+        }
+        // [15] primal with the usual BDPT weight.
+        primal += base.fx * base.wx;
+        const int kc = t - 1;  // last camera vertex of the base path
+        const int cas = (c >= 0 && kc >= c) ? 0 : 1;
+        ++ts.cases[cas];
+        // [12-14] offsets from the shifted camera subpaths.
+        for (int k = 0; k < kNumNeighbours; ++k) {
+            if (!inside[k]) continue;
+            ++ts.caseAttempts[cas];
+            out->diff[k] += offsetDifference(s, t, k, u, base, cas);
         }
     }
-    out.primal = primal;
-    addStrategies(CameraState{&cam, shifts, inside, w, &arena, &sampler}, &out);
+
+    // [6] base path.
+    bool connectBase(int s, int t, ConnectSamples *u, Base *base) {
+        ConnectResult &r = base->r;
+        bool ok;
+        u->misSplit = misSplit;
+        u->misParts = &base->parts;
+        if (s == 1) {
+            ok = SampleLightPoint(sctx, cam.v[t - 1], u->uLightSelect, u->uLight, &base->lp);
+            if (ok && !base->lp.infinite) {
+                base->useLp = true;
+                ok = ConnectLightPoint(sctx, base->lp, camView, t, &r, false, misSplit, &base->parts);
+            } else {
+                ok = ConnectBDPT(bctx, lightView, camView, s, t, *u, &r);
+            }
+        } else {
+            ok = ConnectBDPT(bctx, lightView, camView, s, t, *u, &r);
+        }
+        u->misParts = nullptr;
+        if (!ok) return false;
+        base->fx = r.unweighted * w;
+        // BDPT weight over the strategies in play (bctx.strategies: without
+        // light tracing the t = 1 terms are left out of every sum).
+        base->wx = r.weight;
+        return true;
+    }
+
+    // [8-11] light-tracing path (case (iii)): shifted one by one.
+    void shiftLightTracingPath(int s, const Base &base) {
+        const ConnectResult &r = base.r;
+        const Float wx = base.wx;
+        ++ts.cases[2];
+        GradientSplat sp;
+        GradientSample &g = sp.value;
+        sp.pixel = Point2i{int(std::floor(r.pRaster.x)), int(std::floor(r.pRaster.y))};
+        g.primal = r.L;
+        for (int k = 0; k < kNumNeighbours; ++k) {
+            if (!gi.pairInside(sp.pixel, k)) continue;
+            Point2i off = kNeighbourOffsets[k];
+            g.active[k] = true;
+            Spectrum fy;
+            Float wy = 0, rho = 0;
+            ++ts.caseAttempts[2];
+            bool shifted = ShiftLightTracingPath(sctx, light, s, lens, r.pRaster, r.unweighted, off, arena, &fy, &wy,
+                                                 &rho, &st);
+            if (shifted) {
+                ++ts.caseSuccesses[2];
+                Float wg = set.mis == GBDPTSettings::MIS::Combined ? CombinedWeight(wx, wy, rho) : 0.5 * wx;  // Eq. 8 / Eq. 9
+                g.diff[k] = (fy - r.unweighted) * wg;
+            } else {
+                ++ts.fallbacks[FallbackLightTracing];
+                g.diff[k] = r.unweighted * -wx;  // fallback: zero offset, BDPT weight
+            }
+        }
+        splats->push_back(sp);
+    }
+
+    // [12-14] the difference of neighbour k's offset for base path (s, t), t >= 2.
+    Spectrum offsetDifference(int s, int t, int k, const ConnectSamples &u, const Base &base, int cas) {
+        const CameraShift &sh = shifts[k];
+        const int kc = t - 1;
+        const Spectrum &fx = base.fx;
+        const Float wx = base.wx;
+        ConnectResult ry;
+        bool oky = false;
+        // Next-event estimation of an infinite light: the offset samples the
+        // light with the base's numbers, which give the same light and
+        // direction from any point (the light choice is position-free):
+        // the environment shift, |T'| = 1, equal light densities, so rho
+        // is the camera subpath's (as for a shared light point).
+        const bool envNEE = s == 1 && !base.useLp;
+        if (kc > sh.validUpTo) ++ts.fallbacks[FallbackShift];
+        const bool reuse = kc <= sh.validUpTo && sh.r >= 0 && kc > sh.r;
+        const bool incremental = reuse && base.parts.valid && sh.r == rShared;
+        if (reuse && (incremental || !envNEE)) {
+            oky = reuseBaseConnection(s, t, k, base, incremental, &ry);
+        } else if (kc <= sh.validUpTo) {
+            SubpathView yv = sh.y.view();
+            // At and after the reconnection vertex (kc >= r) the offset's
+            // vertex is the base's and so is the connection edge: the
+            // base's shadow ray already found it unoccluded.
+            ConnectSamples uy = u;
+            uy.knownVisible = sh.r >= 0 && kc >= sh.r;
+            if (base.useLp)
+                oky = ConnectLightPoint(sctx, base.lp, yv, t, &ry, uy.knownVisible);
+            else
+                oky = ConnectBDPT(bctx, lightView, yv, s, t, uy, &ry);
+            oky = oky && !ry.unweighted.isBlack() && ry.weight > 0;
+            if (!oky) ++ts.fallbacks[FallbackOffsetZero];
+        }
+        if (oky) {
+            ++ts.caseSuccesses[cas];
+            Spectrum fy = ry.unweighted * w;
+            Float wg = set.mis == GBDPTSettings::MIS::Combined ? CombinedWeight(wx, ry.weight, sh.rho[kc]) : 0.5 * wx;
+            return (fy - fx) * wg;
+        }
+        return fx * -wx;
+    }
+
+    // Past the reconnection the offset's connection is the base's (same
+    // vertices, same light sample, same shadow ray): only the camera-side
+    // throughput and the offset's MIS densities differ.
+    bool reuseBaseConnection(int s, int t, int k, const Base &base, bool incremental, ConnectResult *ry) {
+        const CameraShift &sh = shifts[k];
+        const int kc = t - 1;
+        SubpathView yv = sh.y.view();
+        ry->unweighted = base.r.unweighted * SafeDiv(sh.y.v[kc].throughput(), cam.v[kc].throughput());
+        if (incremental) {
+            if (!havePrefix[k]) {
+                prefixY[k] = CameraPrefixSum(bctx, bctx.strategies, yv, misSplit);
+                havePrefix[k] = true;
+            }
+            ry->weight = base.parts.weight(prefixY[k]);
+            ++ts.incrementalWeights;
+        } else if (base.useLp) {
+            PathVertex sv = base.lp.v;
+            sv.pdfFwd = PdfLightOrigin(bctx, sv, sh.y.v[kc]);
+            ry->weight = MISWeight(bctx, SubpathView{&sv, nullptr, 1}, yv, 1, t, &sv);
+        } else {
+            ry->weight = MISWeight(bctx, lightView, yv, s, t, nullptr);
+        }
+        return !ry->unweighted.isBlack() && ry->weight > 0;
+    }
+
+    const GBDPTIntegrator &gi;
+    const GBDPTSettings &set;
+    const SubpathShiftContext &sctx;
+    const BidirContext &bctx;
+    ThreadState &ts;
+    SubpathShiftStats &st;
+    const CameraSample &cs;
+    Sampler &sampler;
+    Arena &arena;
+    const bool *inside;
+    const Float w;  // camera ray weight
+    std::vector<GradientSplat> *splats;
+    const int maxCam, maxLight;
+    ShiftSubpath cam, light;
+    BidirDimensions dims;
+    SubpathView camView, lightView;
+    CameraShift shifts[kNumNeighbours];
+    int c = -1;        // second diffuse camera vertex (case (i) from there on)
+    int rShared = -1;  // reconnection vertex shared by the offsets
+    int misSplit = -1;
+    Float prefixY[kNumNeighbours];
+    bool havePrefix[kNumNeighbours] = {};
+    PathVertex lens;  // the base's lens vertex with unit throughput (light-tracing shifts)
+    Spectrum primal = Spectrum(0);
+};
+
+GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler, Arena &arena,
+                                       const bool inside[kNumNeighbours], std::vector<GradientSplat> *splats) const {
+    GradientSample out;
+    Ray ray;
+    Float w = scene_->camera->generateRay(cs, &ray);
+    if (w == 0) return out;
+    for (int k = 0; k < kNumNeighbours; ++k) out.active[k] = inside[k];
+    SampleRun run(*this, cs, sampler, arena, inside, w, splats);
+    run.traceSubpaths(ray);
+    run.shiftCameraSubpath();
+    for (int t = 1; t <= (connections_ ? run.cam.n : 0); ++t)
+        for (int s = 0; s <= run.light.n; ++s) run.strategy(s, t, &out);
+    out.primal = run.primal;
+    addStrategies(CameraState{&run.cam, run.shifts, inside, w, &arena, &sampler}, &out);
     return out;
 }
 

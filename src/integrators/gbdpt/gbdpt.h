@@ -133,6 +133,7 @@ class GBDPTIntegrator : public PixelSampleIntegrator, public GradientFamily {
     // Per-thread statistics (summed by statistics()).
     struct ThreadState;
     struct Store;
+    struct SampleRun;  // the stages of one camera sample (sample())
     std::unique_ptr<Store> store_;
     ThreadState &local() const;
 };

@@ -235,22 +235,20 @@ std::vector<float> ToInterleaved(const std::vector<float> &planar, int C, size_t
     return out;
 }
 
-}  // namespace
+// Hybrid: L1 at fine scales, the primal's coarse scales (reconstruction.h).
+ReconstructionResult ReconstructHybrid(const GradientImages &in, const ReconstructionOptions &opt) {
+    const auto h0 = std::chrono::steady_clock::now();
+    ReconstructionOptions o1 = opt;
+    o1.norm = ReconstructionNorm::L1;
+    ReconstructionResult r = Reconstruct(in, o1);
+    r.image = CombineScales(r.image, in.primal, r.width, r.height, r.channels, opt.lowpassSigma);
+    r.stats.method = "hybrid (l1-irls + lowpass of primal - l1)";
+    r.stats.objective = 0;  // neither norm's minimiser
+    r.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - h0).count();
+    return r;
+}
 
-ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionOptions &opt) {
-    if (opt.norm == ReconstructionNorm::Hybrid) {
-        // L1 at fine scales, the primal's coarse scales (reconstruction.h).
-        const auto h0 = std::chrono::steady_clock::now();
-        ReconstructionOptions o1 = opt;
-        o1.norm = ReconstructionNorm::L1;
-        ReconstructionResult r = Reconstruct(in, o1);
-        r.image = CombineScales(r.image, in.primal, r.width, r.height, r.channels, opt.lowpassSigma);
-        r.stats.method = "hybrid (l1-irls + lowpass of primal - l1)";
-        r.stats.objective = 0;  // neither norm's minimiser
-        r.stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - h0).count();
-        return r;
-    }
-    const auto t0 = std::chrono::steady_clock::now();
+void CheckSizeAndOptions(const GradientImages &in, const ReconstructionOptions &opt) {
     if (in.width <= 0 || in.height <= 0)
         throw Error("reconstruction: image size " + std::to_string(in.width) + "x" +
                     std::to_string(in.height) + " is empty");
@@ -263,8 +261,10 @@ ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionO
         throw Error("reconstruction: CG iterations must be >= 0 and IRLS iterations >= 1");
     if (!(opt.irlsRegInit > 0) || !(opt.irlsRegFactor > 0) || !(opt.cgTolerance >= 0))
         throw Error("reconstruction: IRLS regularisation and CG tolerance must be positive");
+}
 
-    PoissonProblem P;
+// Fills P's size and planar p, gx, gy; returns the range shift applied to them.
+int LoadProblem(const GradientImages &in, PoissonProblem &P) {
     P.W = in.width;
     P.H = in.height;
     P.C = in.channels;
@@ -284,106 +284,118 @@ ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionO
     if (rangeShift)
         for (std::vector<float> *v : {&P.p, &P.gx, &P.gy})
             for (float &f : *v) f = std::ldexp(f, -rangeShift);
-    const bool weighted = opt.norm == ReconstructionNorm::Weighted;
-    if (weighted && !in.hasVariance())
-        throw Error("reconstruction: the weighted norm needs variance layers primal_var, dx_var "
-                    "and dy_var");
+    return rangeShift;
+}
 
-    ReconstructionStats st;
-    std::vector<float> x(P.p.size());
-    const double alpha = opt.alpha;
-    P.a2 = float(alpha * alpha);
-    const recon::CGPrecond pc = opt.preconditioner == Preconditioner::Jacobi      ? recon::CGPrecond::Jacobi
-                               : opt.preconditioner == Preconditioner::Multigrid ? recon::CGPrecond::Multigrid
-                                                                                 : recon::CGPrecond::None;
+recon::CGPrecond ToCGPrecond(Preconditioner p) {
+    return p == Preconditioner::Jacobi      ? recon::CGPrecond::Jacobi
+           : p == Preconditioner::Multigrid ? recon::CGPrecond::Multigrid
+                                            : recon::CGPrecond::None;
+}
 
-    if (std::isinf(alpha) && !weighted) {
-        st.method = "primal (alpha = inf)";
-        x = P.p;
-        P.a2 = 1.f;
-    } else if (opt.norm == ReconstructionNorm::L2) {
-        if (opt.l2Method == L2Method::Exact) {
-            st.method = "l2-exact-dct";
-            recon::SolveL2Exact(P, x.data());
-        } else {
-            st.method = pc == recon::CGPrecond::Jacobi ? "l2-pcg-jacobi" : pc == recon::CGPrecond::Multigrid ? "l2-pcg-multigrid" : "l2-cg";
-            P.setUnitWeights();
-            x = P.p;
-            recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, pc);
-            st.cgIterations = rep.iterations;
-            st.finalRelativeResidual = rep.relResidual;
-        }
-    } else if (opt.norm == ReconstructionNorm::L1) {
-        st.method = "l1-irls";
-        P.setUnitWeights();
-        // IRLS iteration 0: the L2 solution (exact, or CG from the primal).
-        if (opt.initFromL2) {
-            recon::SolveL2Exact(P, x.data());
-        } else {
-            x = P.p;
-            recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, pc);
-            st.cgIterations += rep.iterations;
-            st.finalRelativeResidual = rep.relResidual;
-        }
-        st.irlsIterations = 1;
-        recon::CGWorkspace ws;
-        for (int k = 1; k < opt.irlsIterations; ++k) {
-            // With a range shift the regularisation applies in the normalised
-            // range (in the input's units it would underflow the float weights).
-            double reg = opt.irlsRegInit * std::pow(opt.irlsRegFactor, k - 1);
-            recon::IrlsWeights(P, x.data(), float(alpha), float(reg));
-            recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, pc, &ws);
-            st.cgIterations += rep.iterations;
-            st.finalRelativeResidual = rep.relResidual;
-            ++st.irlsIterations;
-        }
-    } else {  // Weighted
-        st.method = "weighted-pcg";
-        std::vector<float> vp, vx, vy;
-        ToPlanar(in, in.primalVar, "primal_var", 0, 0, true, vp);
-        ToPlanar(in, in.dxVar, "dx_var", 1, 0, true, vx);
-        ToPlanar(in, in.dyVar, "dy_var", 0, 1, true, vy);
-        if (rangeShift)  // variances scale with the square
-            for (std::vector<float> *v : {&vp, &vx, &vy})
-                for (float &f : *v) f = std::ldexp(f, -2 * rangeShift);
-        double mp, mx, my;
-        InverseVarianceWeights(P, vp, false, false, P.wp, &mp);
-        InverseVarianceWeights(P, vx, true, false, P.wx, &mx);
-        InverseVarianceWeights(P, vy, false, true, P.wy, &my);
-        // Start from the unweighted L2 solution whose alpha^2 is the ratio of
-        // mean primal to mean gradient weight (cheap and usually close).
-        double sp = 0, sg = 0;
-        size_t ng = 0;
-        for (size_t i = 0; i < P.N; ++i) {
-            sp += P.wp[i];
-            if (P.wx[i] > 0) sg += P.wx[i], ++ng;
-            if (P.wy[i] > 0) sg += P.wy[i], ++ng;
-        }
-        P.a2 = ng > 0 && sg > 0 ? float((sp / P.N) / (sg / ng)) : 1.f;
+void SolveL2(PoissonProblem &P, const ReconstructionOptions &opt, recon::CGPrecond pc, std::vector<float> &x,
+             ReconstructionStats &st) {
+    if (opt.l2Method == L2Method::Exact) {
+        st.method = "l2-exact-dct";
         recon::SolveL2Exact(P, x.data());
-        // Normalise the weights to a mean of about one (scale-free solution).
-        const double s = ng > 0 && sg > 0 ? double(ng) / sg : 1.0;
-        for (size_t i = 0; i < P.N; ++i) {
-            P.wp[i] = float(P.wp[i] * s);
-            P.wx[i] = float(P.wx[i] * s);
-            P.wy[i] = float(P.wy[i] * s);
-        }
-        P.a2 = 1.f;
+        return;
+    }
+    st.method = pc == recon::CGPrecond::Jacobi ? "l2-pcg-jacobi" : pc == recon::CGPrecond::Multigrid ? "l2-pcg-multigrid" : "l2-cg";
+    P.setUnitWeights();
+    x = P.p;
+    recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, pc);
+    st.cgIterations = rep.iterations;
+    st.finalRelativeResidual = rep.relResidual;
+}
+
+void SolveL1(PoissonProblem &P, const ReconstructionOptions &opt, recon::CGPrecond pc, std::vector<float> &x,
+             ReconstructionStats &st) {
+    st.method = "l1-irls";
+    P.setUnitWeights();
+    // IRLS iteration 0: the L2 solution (exact, or CG from the primal).
+    if (opt.initFromL2) {
+        recon::SolveL2Exact(P, x.data());
+    } else {
+        x = P.p;
         recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, pc);
-        st.cgIterations = rep.iterations;
+        st.cgIterations += rep.iterations;
         st.finalRelativeResidual = rep.relResidual;
     }
+    st.irlsIterations = 1;
+    recon::CGWorkspace ws;
+    for (int k = 1; k < opt.irlsIterations; ++k) {
+        // With a range shift the regularisation applies in the normalised
+        // range (in the input's units it would underflow the float weights).
+        double reg = opt.irlsRegInit * std::pow(opt.irlsRegFactor, k - 1);
+        recon::IrlsWeights(P, x.data(), float(opt.alpha), float(reg));
+        recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, pc, &ws);
+        st.cgIterations += rep.iterations;
+        st.finalRelativeResidual = rep.relResidual;
+        ++st.irlsIterations;
+    }
+}
 
+// Sets P.wp, P.wx, P.wy to the inverse variances of `in` (range-shifted like P).
+void LoadVarianceWeights(const GradientImages &in, int rangeShift, PoissonProblem &P) {
+    std::vector<float> vp, vx, vy;
+    ToPlanar(in, in.primalVar, "primal_var", 0, 0, true, vp);
+    ToPlanar(in, in.dxVar, "dx_var", 1, 0, true, vx);
+    ToPlanar(in, in.dyVar, "dy_var", 0, 1, true, vy);
+    if (rangeShift)  // variances scale with the square
+        for (std::vector<float> *v : {&vp, &vx, &vy})
+            for (float &f : *v) f = std::ldexp(f, -2 * rangeShift);
+    double mp, mx, my;
+    InverseVarianceWeights(P, vp, false, false, P.wp, &mp);
+    InverseVarianceWeights(P, vx, true, false, P.wx, &mx);
+    InverseVarianceWeights(P, vy, false, true, P.wy, &my);
+}
+
+void SolveWeighted(const GradientImages &in, int rangeShift, PoissonProblem &P, const ReconstructionOptions &opt,
+                   recon::CGPrecond pc, std::vector<float> &x, ReconstructionStats &st) {
+    st.method = "weighted-pcg";
+    LoadVarianceWeights(in, rangeShift, P);
+    // Start from the unweighted L2 solution whose alpha^2 is the ratio of
+    // mean primal to mean gradient weight (cheap and usually close).
+    double sp = 0, sg = 0;
+    size_t ng = 0;
+    for (size_t i = 0; i < P.N; ++i) {
+        sp += P.wp[i];
+        if (P.wx[i] > 0) sg += P.wx[i], ++ng;
+        if (P.wy[i] > 0) sg += P.wy[i], ++ng;
+    }
+    P.a2 = ng > 0 && sg > 0 ? float((sp / P.N) / (sg / ng)) : 1.f;
+    recon::SolveL2Exact(P, x.data());
+    // Normalise the weights to a mean of about one (scale-free solution).
+    const double s = ng > 0 && sg > 0 ? double(ng) / sg : 1.0;
+    for (size_t i = 0; i < P.N; ++i) {
+        P.wp[i] = float(P.wp[i] * s);
+        P.wx[i] = float(P.wx[i] * s);
+        P.wy[i] = float(P.wy[i] * s);
+    }
+    P.a2 = 1.f;
+    recon::CGReport rep = recon::SolveCG(P, x.data(), opt.cgIterations, opt.cgTolerance, pc);
+    st.cgIterations = rep.iterations;
+    st.finalRelativeResidual = rep.relResidual;
+}
+
+// The residuals of x and the objective its norm minimises (range-shifted units).
+void SetEnergies(const PoissonProblem &P, const std::vector<float> &x, const ReconstructionOptions &opt,
+                 ReconstructionStats &st) {
+    const double alpha = opt.alpha;
     recon::Energies e = recon::ComputeEnergies(P, x.data());
     st.primalL2 = e.primalL2;
     st.gradientL2 = e.gradientL2;
     st.primalL1 = e.primalL1;
     st.gradientL1 = e.gradientL1;
-    if (weighted) st.objective = e.weightedL2;
+    if (opt.norm == ReconstructionNorm::Weighted) st.objective = e.weightedL2;
     else if (std::isinf(alpha)) st.objective = 0;
     else if (opt.norm == ReconstructionNorm::L2) st.objective = alpha * alpha * e.primalL2 + e.gradientL2;
     else st.objective = alpha * e.primalL1 + e.gradientL1;
+}
 
+// Interleaves x and undoes the range shift on it and on the statistics.
+ReconstructionResult MakeResult(const PoissonProblem &P, const std::vector<float> &x, int rangeShift,
+                                const ReconstructionOptions &opt, ReconstructionStats &st) {
     ReconstructionResult res;
     res.width = P.W;
     res.height = P.H;
@@ -396,6 +408,39 @@ ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionO
         st.primalL2 *= s * s, st.gradientL2 *= s * s, st.primalL1 *= s, st.gradientL1 *= s;
         st.objective *= opt.norm == ReconstructionNorm::L1 ? s : s * s;
     }
+    return res;
+}
+
+}  // namespace
+
+ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionOptions &opt) {
+    if (opt.norm == ReconstructionNorm::Hybrid) return ReconstructHybrid(in, opt);
+    const auto t0 = std::chrono::steady_clock::now();
+    CheckSizeAndOptions(in, opt);
+    PoissonProblem P;
+    const int rangeShift = LoadProblem(in, P);
+    const bool weighted = opt.norm == ReconstructionNorm::Weighted;
+    if (weighted && !in.hasVariance())
+        throw Error("reconstruction: the weighted norm needs variance layers primal_var, dx_var "
+                    "and dy_var");
+
+    ReconstructionStats st;
+    std::vector<float> x(P.p.size());
+    P.a2 = float(opt.alpha * opt.alpha);
+    const recon::CGPrecond pc = ToCGPrecond(opt.preconditioner);
+    if (std::isinf(opt.alpha) && !weighted) {
+        st.method = "primal (alpha = inf)";
+        x = P.p;
+        P.a2 = 1.f;
+    } else if (opt.norm == ReconstructionNorm::L2) {
+        SolveL2(P, opt, pc, x, st);
+    } else if (opt.norm == ReconstructionNorm::L1) {
+        SolveL1(P, opt, pc, x, st);
+    } else {
+        SolveWeighted(in, rangeShift, P, opt, pc, x, st);
+    }
+    SetEnergies(P, x, opt, st);
+    ReconstructionResult res = MakeResult(P, x, rangeShift, opt, st);
     st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     res.stats = st;
     return res;

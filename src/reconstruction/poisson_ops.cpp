@@ -239,11 +239,113 @@ static ChannelSums ResidualNorms(const PoissonProblem &P, const float *r) {
     });
 }
 
+// Per-channel a.b
+static ChannelSums Dot(const PoissonProblem &P, const float *a, const float *b) {
+    const int C = P.C, W = P.W;
+    const size_t N = P.N;
+    return ParallelRowSums(P.H, [&](int y0, int y1, ChannelSums &acc) {
+        for (int y = y0; y < y1; ++y)
+            for (int c = 0; c < C; ++c) {
+                const float *__restrict ac = a + c * N + size_t(y) * W;
+                const float *__restrict bc = b + c * N + size_t(y) * W;
+                float v = 0;
+#pragma omp simd reduction(+ : v)
+                for (int i = 0; i < W; ++i) v += ac[i] * bc[i];
+                acc[c] += v;
+            }
+    });
+}
+
+// d = M^-1 r for the diagonal M^-1 mi; returns r.M^-1 r.
+static ChannelSums DiagonalDirection(const PoissonProblem &P, const float *mi, const float *r, float *d) {
+    const int C = P.C, W = P.W;
+    const size_t N = P.N;
+    return ParallelRowSums(P.H, [&](int y0, int y1, ChannelSums &acc) {
+        for (int c = 0; c < C; ++c) {
+            double a = 0;
+            for (size_t i = size_t(y0) * W; i < size_t(y1) * W; ++i) {
+                float rv = r[c * N + i], z = mi[i] * rv;
+                d[c * N + i] = z;
+                a += double(rv) * z;
+            }
+            acc[c] += a;
+        }
+    });
+}
+
+// On the active channels: x += step d; r -= step Ad. Returns the new r.M^-1 r
+// for the diagonal M^-1 mi (zero when mi is null).
+static ChannelSums StepSolution(const PoissonProblem &P, float *x, float *r, const float *d, const float *Ad,
+                                const float *mi, const bool *active, const double *step) {
+    const int C = P.C, W = P.W;
+    const size_t N = P.N;
+    return ParallelRowSums(P.H, [&](int y0, int y1, ChannelSums &acc) {
+        for (int y = y0; y < y1; ++y) {
+            const size_t row = size_t(y) * W;
+            const float *__restrict m = mi ? mi + row : nullptr;
+            for (int c = 0; c < C; ++c) {
+                if (!active[c]) continue;
+                const float s = float(step[c]);
+                float *__restrict xc = x + c * N + row;
+                float *__restrict rc = r + c * N + row;
+                const float *__restrict dc = d + c * N + row;
+                const float *__restrict adc = Ad + c * N + row;
+                float a = 0;
+                if (m) {
+#pragma omp simd reduction(+ : a)
+                    for (int i = 0; i < W; ++i) {
+                        xc[i] += s * dc[i];
+                        const float rv = rc[i] - s * adc[i];
+                        rc[i] = rv;
+                        a += rv * m[i] * rv;
+                    }
+                } else {
+#pragma omp simd
+                    for (int i = 0; i < W; ++i) {
+                        xc[i] += s * dc[i];
+                        rc[i] -= s * adc[i];
+                    }
+                }
+                acc[c] += a;
+            }
+        }
+    });
+}
+
+// On the active channels: d = z + beta d, z = M^-1 r given (multigrid) or
+// mi r for the diagonal M^-1 mi (z null).
+static void UpdateDirection(const PoissonProblem &P, float *d, const float *r, const float *z, const float *mi,
+                            const bool *active, const double *beta) {
+    const int C = P.C, W = P.W;
+    const size_t N = P.N;
+    ParallelRows(P.H, [&](int y0, int y1) {
+        for (int c = 0; c < C; ++c) {
+            if (!active[c]) continue;
+            const float b = float(beta[c]);
+            float *dc = d + c * N;
+            const float *rc = r + c * N;
+            if (z) {
+                const float *zc = z + c * N;
+                for (size_t i = size_t(y0) * W; i < size_t(y1) * W; ++i) dc[i] = zc[i] + b * dc[i];
+            } else {
+                for (size_t i = size_t(y0) * W; i < size_t(y1) * W; ++i) dc[i] = mi[i] * rc[i] + b * dc[i];
+            }
+        }
+    });
+}
+
+// max_c ||r|| / ||r0|| from the squared norms.
+static double RelativeResidual(const ChannelSums &rr, const ChannelSums &rr0, int C) {
+    double m = 0;
+    for (int c = 0; c < C; ++c)
+        if (rr0[c] > 0) m = std::max(m, std::sqrt(rr[c] / rr0[c]));
+    return m;
+}
+
 CGReport SolveCG(const PoissonProblem &P, float *x, int maxIter, double tol, CGPrecond precond,
                  CGWorkspace *ws) {
-    const int C = P.C, H = P.H;
+    const int C = P.C;
     const size_t N = P.N, CN = size_t(C) * N;
-    const int W = P.W;
     CGWorkspace local;
     if (!ws) ws = &local;
     // Reused buffers (no fresh pages per IRLS step); every entry is overwritten.
@@ -257,19 +359,6 @@ CGReport SolveCG(const PoissonProblem &P, float *x, int maxIter, double tol, CGP
     // Multigrid: z = M^-1 r kept in its own buffer (Jacobi/none fuse M^-1 = diag).
     std::unique_ptr<MultigridPreconditioner> mg;
     std::vector<float> z;
-    auto dot = [&](const float *a, const float *b) {
-        return ParallelRowSums(H, [&](int y0, int y1, ChannelSums &acc) {
-            for (int y = y0; y < y1; ++y)
-                for (int c = 0; c < C; ++c) {
-                    const float *__restrict ac = a + c * N + size_t(y) * W;
-                    const float *__restrict bc = b + c * N + size_t(y) * W;
-                    float v = 0;
-#pragma omp simd reduction(+ : v)
-                    for (int i = 0; i < W; ++i) v += ac[i] * bc[i];
-                    acc[c] += v;
-                }
-        });
-    };
 
     Residual(P, x, r.data());
     if (maxIter > 0 && precond == CGPrecond::Multigrid) {
@@ -279,27 +368,11 @@ CGReport SolveCG(const PoissonProblem &P, float *x, int maxIter, double tol, CGP
         mi = nullptr;
     }
     // d = M^-1 r; rz = r.M^-1 r; rr0 = r.r
-    const ChannelSums rz0 = mg ? (std::copy(z.begin(), z.end(), d.begin()), dot(r.data(), z.data()))
-                               : ParallelRowSums(H, [&](int y0, int y1, ChannelSums &acc) {
-        for (int c = 0; c < C; ++c) {
-            double a = 0;
-            for (size_t i = size_t(y0) * W; i < size_t(y1) * W; ++i) {
-                float rv = r[c * N + i], z = mi[i] * rv;
-                d[c * N + i] = z;
-                a += double(rv) * z;
-            }
-            acc[c] += a;
-        }
-    });
+    const ChannelSums rz0 = mg ? (std::copy(z.begin(), z.end(), d.begin()), Dot(P, r.data(), z.data()))
+                               : DiagonalDirection(P, mi, r.data(), d.data());
     ChannelSums rz = rz0;
     const ChannelSums rr0 = ResidualNorms(P, r.data());
     CGReport rep;
-    auto relRes = [&](const ChannelSums &rr) {
-        double m = 0;
-        for (int c = 0; c < C; ++c)
-            if (rr0[c] > 0) m = std::max(m, std::sqrt(rr[c] / rr0[c]));
-        return m;
-    };
     ChannelSums rr = rr0;
     bool active[kMaxChannels];
     for (int c = 0; c < C; ++c) active[c] = rr0[c] > 0 && rz[c] > 0;
@@ -307,52 +380,21 @@ CGReport SolveCG(const PoissonProblem &P, float *x, int maxIter, double tol, CGP
         bool any = false;
         for (int c = 0; c < C; ++c) any |= active[c];
         if (!any) break;
-        if (tol > 0 && relRes(rr) <= tol) break;
+        if (tol > 0 && RelativeResidual(rr, rr0, C) <= tol) break;
         ChannelSums dAd = ApplyA(P, d.data(), Ad.data());
         double step[kMaxChannels];
         for (int c = 0; c < C; ++c) {
             if (active[c] && !(dAd[c] > 0)) active[c] = false;  // converged to rounding
             step[c] = active[c] ? rz[c] / dAd[c] : 0.0;
         }
-        // x += step d; r -= step Ad; new rz = r.M^-1 r
-        ChannelSums rzNew = ParallelRowSums(H, [&](int y0, int y1, ChannelSums &acc) {
-            for (int y = y0; y < y1; ++y) {
-                const size_t row = size_t(y) * W;
-                const float *__restrict m = mi ? mi + row : nullptr;
-                for (int c = 0; c < C; ++c) {
-                    if (!active[c]) continue;
-                    const float s = float(step[c]);
-                    float *__restrict xc = x + c * N + row;
-                    float *__restrict rc = r.data() + c * N + row;
-                    const float *__restrict dc = d.data() + c * N + row;
-                    const float *__restrict adc = Ad.data() + c * N + row;
-                    float a = 0;
-                    if (m) {
-#pragma omp simd reduction(+ : a)
-                        for (int i = 0; i < W; ++i) {
-                            xc[i] += s * dc[i];
-                            const float rv = rc[i] - s * adc[i];
-                            rc[i] = rv;
-                            a += rv * m[i] * rv;
-                        }
-                    } else {
-#pragma omp simd
-                        for (int i = 0; i < W; ++i) {
-                            xc[i] += s * dc[i];
-                            rc[i] -= s * adc[i];
-                        }
-                    }
-                    acc[c] += a;
-                }
-            }
-        });
+        ChannelSums rzNew = StepSolution(P, x, r.data(), d.data(), Ad.data(), mi, active, step);
         if (tol > 0 || it + 1 == maxIter)
             rr = ResidualNorms(P, r.data());
         ++rep.iterations;
         if (it + 1 == maxIter) break;
         if (mg) {
             mg->apply(r.data(), z.data());
-            rzNew = dot(r.data(), z.data());
+            rzNew = Dot(P, r.data(), z.data());
         }
         double beta[kMaxChannels];
         for (int c = 0; c < C; ++c) {
@@ -360,22 +402,9 @@ CGReport SolveCG(const PoissonProblem &P, float *x, int maxIter, double tol, CGP
             if (active[c] && !(rzNew[c] > 0)) active[c] = false;
             rz[c] = rzNew[c];
         }
-        ParallelRows(H, [&](int y0, int y1) {
-            for (int c = 0; c < C; ++c) {
-                if (!active[c]) continue;
-                const float b = float(beta[c]);
-                float *dc = d.data() + c * N;
-                const float *rc = r.data() + c * N;
-                if (mg) {
-                    const float *zc = z.data() + c * N;
-                    for (size_t i = size_t(y0) * W; i < size_t(y1) * W; ++i) dc[i] = zc[i] + b * dc[i];
-                } else {
-                    for (size_t i = size_t(y0) * W; i < size_t(y1) * W; ++i) dc[i] = mi[i] * rc[i] + b * dc[i];
-                }
-            }
-        });
+        UpdateDirection(P, d.data(), r.data(), mg ? z.data() : nullptr, mi, active, beta);
     }
-    rep.relResidual = relRes(rr);
+    rep.relResidual = RelativeResidual(rr, rr0, C);
     return rep;
 }
 

@@ -85,9 +85,16 @@ std::string Extension(const std::string &f) {
     return e;
 }
 
-int Run(int argc, char **argv) {
+// The command line: positional arguments and --key -> value ("" for flags).
+struct CommandLine {
     std::vector<std::string> pos;
     std::map<std::string, std::string> opt;
+    bool has(const std::string &k) const { return opt.count(k) != 0; }
+    const std::string &at(const std::string &k) const { return opt.at(k); }
+};
+
+CommandLine ParseCommandLine(int argc, char **argv) {
+    CommandLine cl;
     const std::vector<std::string> valued = {
         "--outfile", "--norm", "--lowpass-sigma", "--alpha", "--l2-method", "--cg-iterations", "--cg-tolerance",
         "--irls-iterations", "--irls-reg", "--irls-reg-factor", "--preconditioner", "--init",
@@ -106,97 +113,94 @@ int Run(int argc, char **argv) {
                 if (i + 1 >= argc) Fail("option " + key + " needs a value");
                 val = argv[++i];
             }
-            if (opt.count(key)) Fail("option " + key + " given twice");
-            opt[key] = val;
+            if (cl.opt.count(key)) Fail("option " + key + " given twice");
+            cl.opt[key] = val;
         } else {
-            pos.push_back(a);
+            cl.pos.push_back(a);
         }
     }
-    if (opt.count("--help")) {
-        std::cout << kUsage;
-        return 0;
-    }
+    return cl;
+}
 
-    // Options: preset first, then individual overrides.
-    ReconstructionOptions o = ReconstructionOptions::Hybrid();
-    std::string preset = opt.count("--preset") ? opt["--preset"] : "";
-    if (!opt.count("--preset") && opt.count("--norm")) {
-        ReconstructionNorm n = ParseReconstructionNorm(opt["--norm"]);
+// Options: preset first, then individual overrides.
+ReconstructionOptions OptionsFromCommandLine(const CommandLine &cl) {
+    std::string preset = cl.has("--preset") ? cl.at("--preset") : "";
+    if (!cl.has("--preset") && cl.has("--norm")) {
+        ReconstructionNorm n = ParseReconstructionNorm(cl.at("--norm"));
         preset = ReconstructionNormName(n);
-        if (n == ReconstructionNorm::L2 && opt.count("--l2-method") && opt["--l2-method"] == "cg") preset = "l2-cg";
+        if (n == ReconstructionNorm::L2 && cl.has("--l2-method") && cl.at("--l2-method") == "cg") preset = "l2-cg";
     }
-    o = ReconstructionOptions::Preset(preset.empty() ? "hybrid" : preset);
-    if (opt.count("--norm")) o.norm = ParseReconstructionNorm(opt["--norm"]);
-    if (opt.count("--lowpass-sigma")) o.lowpassSigma = ParseDouble("--lowpass-sigma", opt["--lowpass-sigma"]);
-    if (opt.count("--alpha")) {
-        const std::string &v = opt["--alpha"];
+    ReconstructionOptions o = ReconstructionOptions::Preset(preset.empty() ? "hybrid" : preset);
+    if (cl.has("--norm")) o.norm = ParseReconstructionNorm(cl.at("--norm"));
+    if (cl.has("--lowpass-sigma")) o.lowpassSigma = ParseDouble("--lowpass-sigma", cl.at("--lowpass-sigma"));
+    if (cl.has("--alpha")) {
+        const std::string &v = cl.at("--alpha");
         o.alpha = (v == "inf" || v == "infinity") ? INFINITY : ParseDouble("--alpha", v);
     }
-    if (opt.count("--l2-method")) {
-        const std::string &v = opt["--l2-method"];
+    if (cl.has("--l2-method")) {
+        const std::string &v = cl.at("--l2-method");
         if (v == "exact") o.l2Method = L2Method::Exact;
         else if (v == "cg") o.l2Method = L2Method::CG;
         else Fail("--l2-method must be exact or cg, got '" + v + "'");
     }
-    if (opt.count("--cg-iterations")) o.cgIterations = ParseInt("--cg-iterations", opt["--cg-iterations"]);
-    if (opt.count("--cg-tolerance")) o.cgTolerance = ParseDouble("--cg-tolerance", opt["--cg-tolerance"]);
-    if (opt.count("--irls-iterations")) o.irlsIterations = ParseInt("--irls-iterations", opt["--irls-iterations"]);
-    if (opt.count("--irls-reg")) o.irlsRegInit = ParseDouble("--irls-reg", opt["--irls-reg"]);
-    if (opt.count("--irls-reg-factor")) o.irlsRegFactor = ParseDouble("--irls-reg-factor", opt["--irls-reg-factor"]);
-    if (opt.count("--preconditioner")) {
-        const std::string &v = opt["--preconditioner"];
+    if (cl.has("--cg-iterations")) o.cgIterations = ParseInt("--cg-iterations", cl.at("--cg-iterations"));
+    if (cl.has("--cg-tolerance")) o.cgTolerance = ParseDouble("--cg-tolerance", cl.at("--cg-tolerance"));
+    if (cl.has("--irls-iterations")) o.irlsIterations = ParseInt("--irls-iterations", cl.at("--irls-iterations"));
+    if (cl.has("--irls-reg")) o.irlsRegInit = ParseDouble("--irls-reg", cl.at("--irls-reg"));
+    if (cl.has("--irls-reg-factor")) o.irlsRegFactor = ParseDouble("--irls-reg-factor", cl.at("--irls-reg-factor"));
+    if (cl.has("--preconditioner")) {
+        const std::string &v = cl.at("--preconditioner");
         if (v == "jacobi") o.preconditioner = Preconditioner::Jacobi;
         else if (v == "none") o.preconditioner = Preconditioner::None;
         else Fail("--preconditioner must be jacobi or none, got '" + v + "'");
     }
-    if (opt.count("--init")) {
-        const std::string &v = opt["--init"];
+    if (cl.has("--init")) {
+        const std::string &v = cl.at("--init");
         if (v == "l2") o.initFromL2 = true;
         else if (v == "primal") o.initFromL2 = false;
         else Fail("--init must be l2 or primal, got '" + v + "'");
     }
+    return o;
+}
 
-    if (!opt.count("--outfile")) Fail("missing --outfile (see --help)");
-    const std::string out = opt["--outfile"];
-    const std::string ext = Extension(out);
-    if (ext != "exr" && ext != "png" && ext != "pfm")
-        Fail("--outfile '" + out + "' must end in .exr, .png or .pfm");
-
-    // Inputs. The render's metadata and crop placement are carried through.
-    GradientImages in;
-    Image source;
-    const bool separate = opt.count("--primal") || opt.count("--dx") || opt.count("--dy");
-    if (separate) {
-        if (!pos.empty()) Fail("give either one multi-layer input or --primal/--dx/--dy, not both");
-        for (const char *k : {"--primal", "--dx", "--dy"})
-            if (!opt.count(k)) Fail(std::string("missing ") + k + " (separate inputs need --primal, --dx and --dy)");
-        source = ReadImage(opt["--primal"]);
-        in = GradientImagesFromImages(source, ReadImage(opt["--dx"]), ReadImage(opt["--dy"]));
-        const int nv = int(opt.count("--primal-var") + opt.count("--dx-var") + opt.count("--dy-var"));
-        if (nv != 0 && nv != 3) Fail("give all of --primal-var, --dx-var and --dy-var, or none");
-        if (nv == 3) {
-            GradientImages v = GradientImagesFromImages(ReadImage(opt["--primal-var"]), ReadImage(opt["--dx-var"]),
-                                                        ReadImage(opt["--dy-var"]));
-            if (v.width != in.width || v.height != in.height)
-                Fail("the variance images differ in size from the primal");
-            in.primalVar = v.primal;
-            in.dxVar = v.dx;
-            in.dyVar = v.dy;
-        }
-    } else {
-        if (pos.size() != 1) Fail(pos.empty() ? "missing input (see --help)" : "more than one input given");
-        for (const char *k : {"--primal-var", "--dx-var", "--dy-var"})
-            if (opt.count(k)) Fail(std::string(k) + " goes with --primal/--dx/--dy; a multi-layer input carries its own variance layers");
-        Image img = ReadImage(pos[0]);
-        source = img;
-        try {
-            in = GradientImagesFromImage(img);
-        } catch (const Error &e) {
-            Fail(pos[0] + ": " + e.what());
-        }
+// --primal, --dx, --dy (and optionally the three variances) as separate images.
+GradientImages ReadSeparateInputs(const CommandLine &cl, Image *source) {
+    if (!cl.pos.empty()) Fail("give either one multi-layer input or --primal/--dx/--dy, not both");
+    for (const char *k : {"--primal", "--dx", "--dy"})
+        if (!cl.has(k)) Fail(std::string("missing ") + k + " (separate inputs need --primal, --dx and --dy)");
+    *source = ReadImage(cl.at("--primal"));
+    GradientImages in = GradientImagesFromImages(*source, ReadImage(cl.at("--dx")), ReadImage(cl.at("--dy")));
+    const int nv = int(cl.opt.count("--primal-var") + cl.opt.count("--dx-var") + cl.opt.count("--dy-var"));
+    if (nv != 0 && nv != 3) Fail("give all of --primal-var, --dx-var and --dy-var, or none");
+    if (nv == 3) {
+        GradientImages v = GradientImagesFromImages(ReadImage(cl.at("--primal-var")), ReadImage(cl.at("--dx-var")),
+                                                    ReadImage(cl.at("--dy-var")));
+        if (v.width != in.width || v.height != in.height)
+            Fail("the variance images differ in size from the primal");
+        in.primalVar = v.primal;
+        in.dxVar = v.dx;
+        in.dyVar = v.dy;
     }
+    return in;
+}
 
-    ReconstructionResult r = Reconstruct(in, o);
+// One multi-layer input (primal, dx, dy and optional variance layers).
+GradientImages ReadLayeredInput(const CommandLine &cl, Image *source) {
+    if (cl.pos.size() != 1) Fail(cl.pos.empty() ? "missing input (see --help)" : "more than one input given");
+    for (const char *k : {"--primal-var", "--dx-var", "--dy-var"})
+        if (cl.has(k)) Fail(std::string(k) + " goes with --primal/--dx/--dy; a multi-layer input carries its own variance layers");
+    Image img = ReadImage(cl.pos[0]);
+    *source = img;
+    try {
+        return GradientImagesFromImage(img);
+    } catch (const Error &e) {
+        Fail(cl.pos[0] + ": " + e.what());
+    }
+}
+
+// The result with the render's metadata and crop placement, plus the reconstruction's.
+Image OutputImage(const ReconstructionResult &r, const ReconstructionOptions &o, const Image &source, int argc,
+                  char **argv) {
     Image result = ResultToImage(r);
     const ReconstructionStats &st = r.stats;
     result.metadata = source.metadata;
@@ -209,31 +213,57 @@ int Run(int argc, char **argv) {
     std::string cmd;
     for (int i = 0; i < argc; ++i) cmd += (i ? " " : "") + std::string(argv[i]);
     result.metadata["reconstruct_command_line"] = cmd;
+    return result;
+}
+
+void PrintJsonReport(const ReconstructionResult &r, const ReconstructionOptions &o, const std::string &out,
+                     const std::string &png) {
+    const ReconstructionStats &st = r.stats;
+    nlohmann::json j;
+    j["outfile"] = out;
+    if (!png.empty()) j["preview"] = png;
+    j["width"] = r.width;
+    j["height"] = r.height;
+    j["norm"] = ReconstructionNormName(o.norm);
+    j["method"] = st.method;
+    j["alpha"] = std::isinf(o.alpha) ? nlohmann::json("inf") : nlohmann::json(o.alpha);
+    j["seconds"] = st.seconds;
+    j["irls_iterations"] = st.irlsIterations;
+    j["cg_iterations"] = st.cgIterations;
+    j["final_relative_residual"] = st.finalRelativeResidual;
+    j["residuals"] = {{"primal_l2", st.primalL2}, {"gradient_l2", st.gradientL2},
+                      {"primal_l1", st.primalL1}, {"gradient_l1", st.gradientL1}};
+    j["objective"] = st.objective;
+    std::cout << j.dump(2) << "\n";
+}
+
+int Run(int argc, char **argv) {
+    const CommandLine cl = ParseCommandLine(argc, argv);
+    if (cl.has("--help")) {
+        std::cout << kUsage;
+        return 0;
+    }
+    const ReconstructionOptions o = OptionsFromCommandLine(cl);
+    if (!cl.has("--outfile")) Fail("missing --outfile (see --help)");
+    const std::string out = cl.at("--outfile");
+    const std::string ext = Extension(out);
+    if (ext != "exr" && ext != "png" && ext != "pfm")
+        Fail("--outfile '" + out + "' must end in .exr, .png or .pfm");
+
+    // Inputs. The render's metadata and crop placement are carried through.
+    Image source;
+    const bool separate = cl.has("--primal") || cl.has("--dx") || cl.has("--dy");
+    const GradientImages in = separate ? ReadSeparateInputs(cl, &source) : ReadLayeredInput(cl, &source);
+
+    const ReconstructionResult r = Reconstruct(in, o);
+    const Image result = OutputImage(r, o, source, argc, argv);
     WriteImage(out, result);
     std::string png;
-    if (ext == "exr" && !opt.count("--no-png")) {
+    if (ext == "exr" && !cl.has("--no-png")) {
         png = out.substr(0, out.size() - 4) + ".png";
         WriteImage(png, result);
     }
-
-    if (opt.count("--json")) {
-        nlohmann::json j;
-        j["outfile"] = out;
-        if (!png.empty()) j["preview"] = png;
-        j["width"] = r.width;
-        j["height"] = r.height;
-        j["norm"] = ReconstructionNormName(o.norm);
-        j["method"] = st.method;
-        j["alpha"] = std::isinf(o.alpha) ? nlohmann::json("inf") : nlohmann::json(o.alpha);
-        j["seconds"] = st.seconds;
-        j["irls_iterations"] = st.irlsIterations;
-        j["cg_iterations"] = st.cgIterations;
-        j["final_relative_residual"] = st.finalRelativeResidual;
-        j["residuals"] = {{"primal_l2", st.primalL2}, {"gradient_l2", st.gradientL2},
-                          {"primal_l1", st.primalL1}, {"gradient_l1", st.gradientL1}};
-        j["objective"] = st.objective;
-        std::cout << j.dump(2) << "\n";
-    }
+    if (cl.has("--json")) PrintJsonReport(r, o, out, png);
     return 0;
 }
 

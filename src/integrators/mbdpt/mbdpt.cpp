@@ -160,205 +160,284 @@ void MBDPTIntegrator::reorder(PassContext &ctx) {
 }
 
 // ---------------------------------------------------------------- stage 3: connection
+namespace {
+// What every tile of one connection pass shares.
+struct ConnectPass {
+    const Scene &scene;
+    int iteration;
+    uint64_t seed;
+    size_t N;
+    int maxDepth, m, maxCam, maxLight;
+    bool pixelMode, diagonal;
+    // Column samplers of the matrices of this iteration (row-ordered modes),
+    // indexed s * (maxDepth + 1) + t.
+    std::vector<ColumnSampler> samplers;
+};
+}  // namespace
+
+// Stage 3 for the camera subpaths (rows) of one tile: per row, the camera
+// subpath, the choice of its matrix connections (prefetched), the diagonal
+// strategies, then the matrix connections.
+struct MBDPTIntegrator::TileConnector {
+    // A chosen matrix connection: light subpath q for strategy (s, t).
+    struct Pending {
+        int s, t;
+        uint32_t q;
+        Float scale;
+    };
+    // Row p's camera subpath: its film sample and vertices (BSDFs in camB).
+    struct CameraRow {
+        Point2i pixel;
+        Point2 pFilm;
+        Float w;
+        int nC;
+        const PathVertex *cv;
+    };
+    // One row's connections in progress.
+    struct Row {
+        uint32_t p;
+        CameraRow c;
+        SampleRecorder rec;
+        RNG rng, mediaRng;
+        SubpathView camView, ownLight;
+        Spectrum L = Spectrum(0);
+    };
+
+    TileConnector(const MBDPTIntegrator &in, const ConnectPass &pass, int ti, const Bounds2i &tb, FilmTile &tile,
+                  Worker &wk)
+        : in(in), pass(pass), cam(in.paths_.camera), light(in.paths_.light), ti(ti), tb(tb), tile(tile), wk(wk),
+          camB(pass.maxCam), lightB(pass.maxLight), colB(pass.maxLight), camV(pass.pixelMode ? pass.maxCam : 0),
+          smp(*wk.sampler), tileW(tb.pMax.x - tb.pMin.x) {}
+
+    void connectRow(uint32_t p) {
+        const CameraRow c = pass.pixelMode ? generateCameraRow(p) : storedCameraRow(p);
+        const uint64_t pix = uint64_t(c.pixel.x) << 32 | uint32_t(c.pixel.y);
+        Row r{p, c, SampleRecorder(tile, c.pixel, c.pFilm), RNG(Hash(pass.seed ^ kConnectTag, pix, uint64_t(pass.iteration))),
+              // Media: the row's transmittance estimates (its own stream; unused without media).
+              RNG(Hash(pass.seed ^ kMediaTag, pix, uint64_t(pass.iteration))), {}, {}};
+        const int nL = light.count(p);
+        const PathVertex *lv = light.path(p);
+        const BSDF *lb = light.bsdfs(p);  // kept from generation, or rebuilt here
+        if (!lb) {
+            for (int i = 0; i < nL; ++i) lightB[i] = RebuildBSDF(in.ctx_, lv[i], TransportMode::Importance, wk.arena);
+            lb = lightB.data();
+        }
+        r.camView = SubpathView{c.cv, camB.data(), c.nC};
+        r.ownLight = SubpathView{lv, lb, nL};
+        chooseConnections(r);
+        runDiagonal(r);
+        runMatrix(r);
+        r.rec.addRadiance(r.L * c.w);
+        tile.addCount(c.pixel, 1);
+        bad += r.rec.nonFinite;
+        wk.arena.reset();
+    }
+
+    // Pixel mode: the camera subpath of this pixel sample, generated here (its
+    // BSDFs stay in the arena): as bdpt draws it.
+    CameraRow generateCameraRow(uint32_t p) {
+        CameraRow c;
+        const uint32_t k = p - in.paths_.tileBegin(ti);
+        c.pixel = Point2i{tb.pMin.x + int(k % uint32_t(tileW)), tb.pMin.y + int(k / uint32_t(tileW))};
+        smp.startPixelSample(c.pixel, pass.iteration);
+        CameraSample cs;
+        Point2 u = smp.get2D();
+        cs.pFilm = Point2(c.pixel.x + u.x, c.pixel.y + u.y);
+        cs.pLens = smp.get2D();
+        Ray ray;
+        c.w = pass.scene.camera->generateRay(cs, &ray);
+        for (auto &b : camB) b = BSDF();
+        RNG camRng;
+        RNG *crng = pass.scene.features.media ? &(camRng = CameraSampleMediaRNG(smp, cs)) : nullptr;
+        c.nC = c.w > 0 ? GenerateCameraSubpath(in.ctx_, ray, smp, wk.arena, pass.maxCam, camV.data(), camB.data(), crng)
+                       : 0;
+        c.pFilm = cs.pFilm;
+        c.cv = camV.data();
+        return c;
+    }
+
+    // Row-ordered modes: the stored camera subpath, its BSDFs rebuilt.
+    CameraRow storedCameraRow(uint32_t p) {
+        CameraRow c;
+        c.pFilm = in.paths_.pFilm[p];
+        c.pixel = Point2i{int(std::floor(c.pFilm.x)), int(std::floor(c.pFilm.y))};
+        c.w = in.paths_.camWeight[p];
+        c.nC = cam.count(p);
+        c.cv = cam.path(p);
+        for (int i = 0; i < c.nC; ++i) camB[i] = RebuildBSDF(in.ctx_, c.cv[i], TransportMode::Radiance, wk.arena);
+        return c;
+    }
+
+    void record(Row &r, int s, int t, const ConnectResult &res, Float scale) {
+        if (res.splat) {
+            r.rec.splat(res.pRaster, res.L * (scale * in.splatScale_));
+            return;
+        }
+        r.L += res.L * scale;
+        int layer = in.strategyLayer(s, t);
+        if (layer >= 0) r.rec.addLayer(layer, (in.set_.visWeights ? res.L : res.unweighted) * (scale * r.c.w));
+    }
+
+    // Strategy (s, t) of the row's camera subpath with `lightView`.
+    void run(Row &r, SubpathView lightView, int s, int t, Float scale) {
+        ConnectSamples u;
+        u.rng = &r.mediaRng;
+        // Next-event and lens samples: the pixel sample's next dimensions
+        // (as bdpt) in pixel mode, else a per-row generator.
+        const bool pixelMode = pass.pixelMode;
+        if (s == 1) {
+            u.uLightSelect = pixelMode ? smp.get1D() : r.rng.uniform();
+            u.uLight = pixelMode ? smp.get2D() : Point2(r.rng.uniform(), r.rng.uniform());
+        }
+        if (t == 1) u.uLens = pixelMode ? smp.get2D() : Point2(r.rng.uniform(), r.rng.uniform());
+        ConnectResult res;
+        ++conn;
+        bool ok = ConnectBDPT(in.ctx_, lightView, r.camView, s, t, u, &res);
+        if (res.shadowRayTraced) ++shadow;
+        if (ok) record(r, s, t, res, scale);
+    }
+
+    // Matrix strategies s >= 2, t >= 2: first choose every connection of
+    // this row and prefetch its light subpath (a random place in the
+    // image-wide store: each connection otherwise stalls on cache misses,
+    // measured 1.45 s of 6.2 s at 4 spp on the Cornell box), then run the
+    // diagonal strategies while the loads complete, then the connections.
+    // Pixel mode: one participation number per pixel sample,
+    // B_p^{s,t} = [u < rho_s] (each B_p^{s,t} has probability rho_s, as
+    // Eq. 4 needs; they are nested over s, as BDPT's own-subpath lengths
+    // are), so a pixel touches only the strategies it takes part in.
+    void chooseConnections(Row &r) {
+        pending.clear();
+        const CameraRow &c = r.c;
+        Float uRow = 0;
+        if (pass.pixelMode && c.w > 0) {
+            smp.startPixelSample(c.pixel, pass.iteration, kMatrixDim);
+            uRow = smp.get1D();
+        }
+        if (c.w > 0)
+            for (int t = 2; t <= std::min(c.nC, pass.maxDepth); ++t) {
+                int32_t rank = -1;
+                if (pass.pixelMode) {
+                    if (!c.cv[t - 1].scatters() || !IsConnectible(c.cv[t - 1], &camB[t - 1])) continue;
+                } else if ((rank = in.rank_[t][r.p]) < 0) {
+                    continue;
+                }
+                for (int s = 2; s + t - 2 <= pass.maxDepth; ++s) chooseColumns(r, s, t, rank, uRow);
+            }
+    }
+
+    void choose(int s, int t, uint32_t q, Float scale) {
+        pending.push_back({s, t, q, scale});
+        const char *zv = reinterpret_cast<const char *>(light.path(q));
+        for (size_t k = 0; k < size_t(s) * sizeof(PathVertex); k += 64) __builtin_prefetch(zv + k);
+        if (const BSDF *zb = light.bsdfs(q)) __builtin_prefetch(zb + s - 1);
+    }
+
+    // The columns of row p in M_{s,t} (rank: the row's place in rows_[t]).
+    void chooseColumns(Row &r, int s, int t, int32_t rank, Float uRow) {
+        const std::vector<uint32_t> &cols = in.cols_[s];
+        const uint64_t Ls = cols.size();
+        const size_t N = pass.N;
+        const int m = pass.m, maxDepth = pass.maxDepth;
+        if (Ls == 0) return;
+        if (in.set_.combinatorial) {
+            for (uint32_t q : cols) pending.push_back({s, t, q, Float(1) / Float(N)});  // Eq. 6
+            return;
+        }
+        if (pass.diagonal) {
+            if (light.eligible(r.p, s)) pending.push_back({s, t, r.p, 1});  // Eq. 7
+            return;
+        }
+        // Rows take part with probability rho (BDPT's rate L_s / L by
+        // default); I_p^{s,t} = B_p / rho * L_s / (L m) * sum_c M^{p, q_c}.
+        const Float rho = in.set_.allRows ? Float(1) : Float(Ls) / Float(N);
+        const Float scale = Float(Ls) / (Float(N) * m * rho);
+        if (pass.pixelMode) {
+            // eps_c: dimensions of this pixel sample, the same ones in
+            // every iteration (stratified over them).
+            if (uRow >= rho) return;
+            smp.startPixelSample(r.c.pixel, pass.iteration, kMatrixDim + 1 + (s * (maxDepth + 1) + t) * m);
+            for (int c = 0; c < m; ++c) choose(s, t, cols[ColumnSampler::Column(smp.get1D(), Ls)], scale);
+            return;
+        }
+        // A randomly shifted 1D lattice over the row ranks chooses the rows.
+        const ColumnSampler &cs = pass.samplers[size_t(s) * (maxDepth + 1) + t];
+        if (rho < 1 && !cs.participates(uint64_t(rank), rho)) return;
+        for (int c = 0; c < m; ++c) {
+            double y = cs.coordinate(uint64_t(rank), c, r.rng.uniform());
+            choose(s, t, cols[ColumnSampler::Column(y, Ls)], scale);
+        }
+    }
+
+    // Diagonal strategies (Sec. 5.1): s = 0, s = 1 with this pixel's camera
+    // subpath; t = 1 with this pixel's light subpath (Eq. 7). Pixel mode:
+    // their next-event and lens samples from kConnectDim on.
+    void runDiagonal(Row &r) {
+        const int maxDepth = pass.maxDepth;
+        if (pass.pixelMode) smp.startPixelSample(r.c.pixel, pass.iteration, kConnectDim);
+        if (r.c.w > 0)
+            for (int t = 2; t <= r.c.nC && t - 2 <= maxDepth; ++t) {
+                run(r, r.ownLight, 0, t, 1);
+                if (t - 1 <= maxDepth && !pass.scene.lights.empty()) run(r, r.ownLight, 1, t, 1);
+            }
+        for (int s = 2; s <= r.ownLight.n && s - 1 <= maxDepth; ++s) run(r, r.ownLight, s, 1, 1);
+    }
+
+    // The chosen matrix connections.
+    void runMatrix(Row &r) {
+        // Second prefetch stage: the lobes behind the (now loaded) BSDFs.
+        for (const Pending &c : pending)
+            if (const BSDF *zb = light.bsdfs(c.q)) __builtin_prefetch(zb[c.s - 1].bxdf());
+        for (const Pending &c : pending) {
+            const PathVertex *zv = light.path(c.q);
+            SubpathView lview = r.ownLight;
+            if (c.q != r.p) {
+                const BSDF *zb = light.bsdfs(c.q);
+                if (!zb) {
+                    colB[c.s - 1] = RebuildBSDF(in.ctx_, zv[c.s - 1], TransportMode::Importance, wk.arena);
+                    zb = colB.data();
+                }
+                lview = SubpathView{zv, zb, light.count(c.q)};
+            }
+            run(r, lview, c.s, c.t, c.scale);
+            colB[c.s - 1] = BSDF();
+        }
+    }
+
+    const MBDPTIntegrator &in;
+    const ConnectPass &pass;
+    const SubpathStore &cam, &light;
+    const int ti;
+    const Bounds2i &tb;
+    FilmTile &tile;
+    Worker &wk;
+    std::vector<BSDF> camB, lightB, colB;
+    std::vector<PathVertex> camV;
+    std::vector<Pending> pending;
+    Sampler &smp;
+    const int tileW;
+    uint64_t conn = 0, shadow = 0, bad = 0;
+};
+
 void MBDPTIntegrator::connect(PassContext &ctx) {
-    const Scene &scene = ctx.scene();
-    const int iteration = ctx.firstSample();
-    const uint64_t seed = ctx.seed();
-    const size_t N = paths_.size();
-    const int maxDepth = set_.maxDepth, m = set_.connections;
-    const int maxCam = maxDepth + 2, maxLight = maxDepth + 1;
-    const bool pixelMode = set_.sampling == MatrixSampling::Pixel;
-    const bool diagonal = set_.sampling == MatrixSampling::Diagonal && !set_.combinatorial;
-    // Column samplers of the matrices of this iteration (row-ordered modes).
-    std::vector<ColumnSampler> samplers(size_t(maxDepth + 1) * (maxDepth + 1));
-    if (!pixelMode)
+    const int maxDepth = set_.maxDepth;
+    ConnectPass pass{ctx.scene(), ctx.firstSample(), ctx.seed(), paths_.size(), maxDepth, set_.connections,
+                     maxDepth + 2, maxDepth + 1, set_.sampling == MatrixSampling::Pixel,
+                     set_.sampling == MatrixSampling::Diagonal && !set_.combinatorial,
+                     std::vector<ColumnSampler>(size_t(maxDepth + 1) * (maxDepth + 1))};
+    if (!pass.pixelMode)
         for (int t = 2; t <= maxDepth; ++t)
             for (int s = 2; s + t - 2 <= maxDepth; ++s) {
-                uint64_t h = Hash(seed ^ kMatrixTag, uint64_t(iteration), uint64_t(s), uint64_t(t));
-                samplers[size_t(s) * (maxDepth + 1) + t] = ColumnSampler(set_.sampling, rows_[t].size(), m,
-                                                                         BitsToUniform(MixBits(h)), h,
-                                                                         BitsToUniform(MixBits(h ^ kRowTag)));
+                uint64_t h = Hash(pass.seed ^ kMatrixTag, uint64_t(pass.iteration), uint64_t(s), uint64_t(t));
+                pass.samplers[size_t(s) * (maxDepth + 1) + t] = ColumnSampler(
+                    set_.sampling, rows_[t].size(), pass.m, BitsToUniform(MixBits(h)), h, BitsToUniform(MixBits(h ^ kRowTag)));
             }
-    const SubpathStore &cam = paths_.camera, &light = paths_.light;
     ctx.forEachTile([&](int ti, const Bounds2i &tb, FilmTile &tile, Worker &wk) {
-        std::vector<BSDF> camB(maxCam), lightB(maxLight), colB(maxLight);
-        std::vector<PathVertex> camV(pixelMode ? maxCam : 0);
-        struct Pending {
-            int s, t;
-            uint32_t q;
-            Float scale;
-        };
-        std::vector<Pending> pending;
-        Sampler &smp = *wk.sampler;
-        uint64_t conn = 0, shadow = 0, bad = 0;
-        const int tileW = tb.pMax.x - tb.pMin.x;
-        for (uint32_t p = paths_.tileBegin(ti); p < paths_.tileEnd(ti); ++p) {
-            Point2i pixel;
-            Point2 pFilm;
-            Float w;
-            int nC;
-            const PathVertex *cv;
-            if (pixelMode) {
-                // The camera subpath of this pixel sample, generated here (its
-                // BSDFs stay in the arena): as bdpt draws it.
-                const uint32_t k = p - paths_.tileBegin(ti);
-                pixel = Point2i{tb.pMin.x + int(k % uint32_t(tileW)), tb.pMin.y + int(k / uint32_t(tileW))};
-                smp.startPixelSample(pixel, iteration);
-                CameraSample cs;
-                Point2 u = smp.get2D();
-                cs.pFilm = Point2(pixel.x + u.x, pixel.y + u.y);
-                cs.pLens = smp.get2D();
-                Ray ray;
-                w = scene.camera->generateRay(cs, &ray);
-                for (auto &b : camB) b = BSDF();
-                RNG camRng;
-                RNG *crng = scene.features.media ? &(camRng = CameraSampleMediaRNG(smp, cs)) : nullptr;
-                nC = w > 0 ? GenerateCameraSubpath(ctx_, ray, smp, wk.arena, maxCam, camV.data(), camB.data(), crng) : 0;
-                pFilm = cs.pFilm;
-                cv = camV.data();
-            } else {
-                pFilm = paths_.pFilm[p];
-                pixel = Point2i{int(std::floor(pFilm.x)), int(std::floor(pFilm.y))};
-                w = paths_.camWeight[p];
-                nC = cam.count(p);
-                cv = cam.path(p);
-                for (int i = 0; i < nC; ++i) camB[i] = RebuildBSDF(ctx_, cv[i], TransportMode::Radiance, wk.arena);
-            }
-            SampleRecorder rec(tile, pixel, pFilm);
-            RNG rng(Hash(seed ^ kConnectTag, uint64_t(pixel.x) << 32 | uint32_t(pixel.y), uint64_t(iteration)));
-            // Media: the row's transmittance estimates (its own stream; unused without media).
-            RNG mediaRng(Hash(seed ^ kMediaTag, uint64_t(pixel.x) << 32 | uint32_t(pixel.y), uint64_t(iteration)));
-            const int nL = light.count(p);
-            const PathVertex *lv = light.path(p);
-            const BSDF *lb = light.bsdfs(p);  // kept from generation, or rebuilt here
-            if (!lb) {
-                for (int i = 0; i < nL; ++i) lightB[i] = RebuildBSDF(ctx_, lv[i], TransportMode::Importance, wk.arena);
-                lb = lightB.data();
-            }
-            SubpathView camView{cv, camB.data(), nC}, ownLight{lv, lb, nL};
-            Spectrum L(0);
-            auto record = [&](int s, int t, const ConnectResult &r, Float scale) {
-                if (r.splat) {
-                    rec.splat(r.pRaster, r.L * (scale * splatScale_));
-                    return;
-                }
-                L += r.L * scale;
-                int layer = strategyLayer(s, t);
-                if (layer >= 0) rec.addLayer(layer, (set_.visWeights ? r.L : r.unweighted) * (scale * w));
-            };
-            auto run = [&](SubpathView lightView, int s, int t, Float scale) {
-                ConnectSamples u;
-                u.rng = &mediaRng;
-                // Next-event and lens samples: the pixel sample's next dimensions
-                // (as bdpt) in pixel mode, else a per-row generator.
-                if (s == 1) {
-                    u.uLightSelect = pixelMode ? smp.get1D() : rng.uniform();
-                    u.uLight = pixelMode ? smp.get2D() : Point2(rng.uniform(), rng.uniform());
-                }
-                if (t == 1) u.uLens = pixelMode ? smp.get2D() : Point2(rng.uniform(), rng.uniform());
-                ConnectResult r;
-                ++conn;
-                bool ok = ConnectBDPT(ctx_, lightView, camView, s, t, u, &r);
-                if (r.shadowRayTraced) ++shadow;
-                if (ok) record(s, t, r, scale);
-            };
-            // Matrix strategies s >= 2, t >= 2: first choose every connection of
-            // this row and prefetch its light subpath (a random place in the
-            // image-wide store: each connection otherwise stalls on cache misses,
-            // measured 1.45 s of 6.2 s at 4 spp on the Cornell box), then run the
-            // diagonal strategies while the loads complete, then the connections.
-            // Pixel mode: one participation number per pixel sample,
-            // B_p^{s,t} = [u < rho_s] (each B_p^{s,t} has probability rho_s, as
-            // Eq. 4 needs; they are nested over s, as BDPT's own-subpath lengths
-            // are), so a pixel touches only the strategies it takes part in.
-            pending.clear();
-            auto choose = [&](int s, int t, uint32_t q, Float scale) {
-                pending.push_back({s, t, q, scale});
-                const char *zv = reinterpret_cast<const char *>(light.path(q));
-                for (size_t k = 0; k < size_t(s) * sizeof(PathVertex); k += 64) __builtin_prefetch(zv + k);
-                if (const BSDF *zb = light.bsdfs(q)) __builtin_prefetch(zb + s - 1);
-            };
-            Float uRow = 0;
-            if (pixelMode && w > 0) {
-                smp.startPixelSample(pixel, iteration, kMatrixDim);
-                uRow = smp.get1D();
-            }
-            if (w > 0)
-                for (int t = 2; t <= std::min(nC, maxDepth); ++t) {
-                    int32_t rank = -1;
-                    if (pixelMode) {
-                        if (!cv[t - 1].scatters() || !IsConnectible(cv[t - 1], &camB[t - 1])) continue;
-                    } else if ((rank = rank_[t][p]) < 0) {
-                        continue;
-                    }
-                    for (int s = 2; s + t - 2 <= maxDepth; ++s) {
-                        const std::vector<uint32_t> &cols = cols_[s];
-                        const uint64_t Ls = cols.size();
-                        if (Ls == 0) continue;
-                        if (set_.combinatorial) {
-                            for (uint32_t q : cols) pending.push_back({s, t, q, Float(1) / Float(N)});  // Eq. 6
-                            continue;
-                        }
-                        if (diagonal) {
-                            if (light.eligible(p, s)) pending.push_back({s, t, p, 1});  // Eq. 7
-                            continue;
-                        }
-                        // Rows take part with probability rho (BDPT's rate L_s / L by
-                        // default); I_p^{s,t} = B_p / rho * L_s / (L m) * sum_c M^{p, q_c}.
-                        const Float rho = set_.allRows ? Float(1) : Float(Ls) / Float(N);
-                        const Float scale = Float(Ls) / (Float(N) * m * rho);
-                        if (pixelMode) {
-                            // eps_c: dimensions of this pixel sample, the same ones in
-                            // every iteration (stratified over them).
-                            if (uRow >= rho) continue;
-                            smp.startPixelSample(pixel, iteration, kMatrixDim + 1 + (s * (maxDepth + 1) + t) * m);
-                            for (int c = 0; c < m; ++c) choose(s, t, cols[ColumnSampler::Column(smp.get1D(), Ls)], scale);
-                            continue;
-                        }
-                        // A randomly shifted 1D lattice over the row ranks chooses the rows.
-                        const ColumnSampler &cs = samplers[size_t(s) * (maxDepth + 1) + t];
-                        if (rho < 1 && !cs.participates(uint64_t(rank), rho)) continue;
-                        for (int c = 0; c < m; ++c) {
-                            double y = cs.coordinate(uint64_t(rank), c, rng.uniform());
-                            choose(s, t, cols[ColumnSampler::Column(y, Ls)], scale);
-                        }
-                    }
-                }
-            // Diagonal strategies (Sec. 5.1): s = 0, s = 1 with this pixel's camera
-            // subpath; t = 1 with this pixel's light subpath (Eq. 7). Pixel mode:
-            // their next-event and lens samples from kConnectDim on.
-            if (pixelMode) smp.startPixelSample(pixel, iteration, kConnectDim);
-            if (w > 0)
-                for (int t = 2; t <= nC && t - 2 <= maxDepth; ++t) {
-                    run(ownLight, 0, t, 1);
-                    if (t - 1 <= maxDepth && !scene.lights.empty()) run(ownLight, 1, t, 1);
-                }
-            for (int s = 2; s <= nL && s - 1 <= maxDepth; ++s) run(ownLight, s, 1, 1);
-            // Second prefetch stage: the lobes behind the (now loaded) BSDFs.
-            for (const Pending &c : pending)
-                if (const BSDF *zb = light.bsdfs(c.q)) __builtin_prefetch(zb[c.s - 1].bxdf());
-            for (const Pending &c : pending) {
-                const PathVertex *zv = light.path(c.q);
-                SubpathView lview = ownLight;
-                if (c.q != p) {
-                    const BSDF *zb = light.bsdfs(c.q);
-                    if (!zb) {
-                        colB[c.s - 1] = RebuildBSDF(ctx_, zv[c.s - 1], TransportMode::Importance, wk.arena);
-                        zb = colB.data();
-                    }
-                    lview = SubpathView{zv, zb, light.count(c.q)};
-                }
-                run(lview, c.s, c.t, c.scale);
-                colB[c.s - 1] = BSDF();
-            }
-            rec.addRadiance(L * w);
-            tile.addCount(pixel, 1);
-            bad += rec.nonFinite;
-            wk.arena.reset();
-        }
-        nConnect_ += conn;
-        nShadow_ += shadow;
-        ctx.addNonFinite(bad);
+        TileConnector tc(*this, pass, ti, tb, tile, wk);
+        for (uint32_t p = paths_.tileBegin(ti); p < paths_.tileEnd(ti); ++p) tc.connectRow(p);
+        nConnect_ += tc.conn;
+        nShadow_ += tc.shadow;
+        ctx.addNonFinite(tc.bad);
     });
 }
 

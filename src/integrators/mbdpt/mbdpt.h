@@ -98,6 +98,7 @@ class MBDPTIntegrator : public Integrator, public BidirFamily {
   private:
     void reorder(PassContext &ctx);
     void connect(PassContext &ctx);
+    struct TileConnector;  // stage 3 for one tile's camera subpaths (connect())
     void visualizeMatrix(PassContext &ctx);
 
     MBDPTSettings set_;

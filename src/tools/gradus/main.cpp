@@ -98,155 +98,219 @@ int Describe(const std::string &name) {
     return 1;
 }
 
-}  // namespace
-
-int main(int argc, char **argv) {
+// What the command line asks for: the render's options, or an exit status
+// when an informational option (--help, --version, ...) has been answered.
+struct CommandLine {
     BuildOptions bo;
     RenderOptions ro;
     std::string sceneFile;
     GltfOptions gltfOpts;
     bool printStats = false, splitting = false;
-    for (int i = 1; i < argc; ++i) {
-        std::string a = argv[i];
-        auto next = [&](int n = 1) {
-            if (i + n >= argc) Fail(a + " needs " + std::to_string(n) + " value" + (n > 1 ? "s" : ""));
-            return argv[++i];
-        };
-        if (a == "--help" || a == "-h") {
-            std::printf("%s", kUsage);
-            return 0;
-        } else if (a == "--list-integrators") {
-            for (const auto &info : IntegratorRegistry())
-                std::printf("%-8s %s\n", info.name.c_str(), info.description.c_str());
-            return 0;
-        } else if (a == "--describe") {
-            return Describe(next());
-        } else if (a == "--version") {
-            std::printf("gradus %s (%s)\n", GradusVersion(), GradusGitCommit());
-            return 0;
-        } else if (a == "--param") {
-            bo.paramOverrides.push_back(next());
-        } else if (a == "--outfile") {
-            bo.outfileOverride = next();
-        } else if (a == "--nthreads") {
-            ro.nthreads = int(ParseInt(a, next(), 1, 1024));
-        } else if (a == "--spp") {
-            bo.sppOverride = int(ParseInt(a, next(), 1, 1 << 30));
-            ro.spp = bo.sppOverride;
-        } else if (a == "--seed") {
-            bo.seed = uint64_t(ParseInt(a, next(), 0, std::numeric_limits<long long>::max()));
-        } else if (a == "--debugpixel") {
-            const char *v = next();
-            int x, y, s = -1, n = 0;
-            char extra;
-            int got = std::sscanf(v, "%d,%d%n", &x, &y, &n);
-            if (got == 2 && v[n] == ',') got = std::sscanf(v, "%d,%d,%d %c", &x, &y, &s, &extra) == 3 ? 3 : -1;
-            else if (got == 2 && v[n] != 0) got = -1;
-            if (got < 2 || x < 0 || y < 0 || (got == 3 && s < 0))
-                Fail("--debugpixel expects x,y or x,y,s (non-negative integers), got \"" + std::string(v) + "\"");
-            ro.debug = true;
-            ro.debugPixel = {x, y};
-            ro.debugSample = s;
-        } else if (a == "--time") {
-            ro.timeLimit = ParseDouble(a, next());
-            if (!(ro.timeLimit > 0)) Fail("--time must be a positive number of seconds, got " + std::string(argv[i]));
-        } else if (a == "--cropwindow") {
-            if (i + 4 >= argc) Fail("--cropwindow needs 4 values");
-            bo.hasCrop = true;
-            for (int k = 0; k < 4; ++k) {
-                bo.crop[k] = ParseDouble(a, argv[++i]);
-                if (bo.crop[k] < 0 || bo.crop[k] > 1) Fail("--cropwindow values must be in [0, 1], got " + std::string(argv[i]));
-            }
-            if (bo.crop[0] >= bo.crop[1] || bo.crop[2] >= bo.crop[3]) Fail("--cropwindow needs x0 < x1 and y0 < y1");
-        } else if (a == "--resolution") {
-            const char *v = next();
-            int w = 0, h = 0, n = 0;
-            if (std::sscanf(v, "%dx%d%n", &w, &h, &n) != 2 || v[n] != 0 || w < 1 || h < 1 || w > (1 << 17) ||
-                h > (1 << 17))
-                Fail("--resolution expects WxH with W and H in [1, 131072], got \"" + std::string(v) + "\"");
-            bo.resolution = {w, h};
-        } else if (a == "--checkpoint") {
-            ro.checkpointFile = next();
-        } else if (a == "--checkpoint-interval") {
-            ro.checkpointInterval = ParseDouble(a, next());
-            if (!(ro.checkpointInterval > 0)) Fail("--checkpoint-interval must be > 0 seconds");
-        } else if (a == "--resume") {
-            ro.resumeFile = next();
-        } else if (a == "--passes") {
-            const char *v = next();
-            long long pa = -1, pb = -1;
-            int n = 0;
-            if (std::sscanf(v, "%lld:%lld%n", &pa, &pb, &n) != 2 || v[n] != 0 || pa < 0 || pb <= pa || pb > (1 << 30))
-                Fail("--passes expects A:B with 0 <= A < B <= 2^30, got \"" + std::string(v) + "\"");
-            ro.passBegin = int(pa);
-            ro.passEnd = int(pb);
-            splitting = true;
-        } else if (a == "--camera") {
-            gltfOpts.camera = next();
-        } else if (a == "--integrator") {
-            bo.integratorOverride = next();
-        } else if (a == "--quick") {
-            bo.quick = true;
-        } else if (a == "--variance") {
-            bo.variance = true;
-        } else if (a == "--quiet") {
-            bo.quiet = ro.quiet = true;
-        } else if (a == "--stats") {
-            printStats = true;
-        } else if (!a.empty() && a[0] == '-') {
-            Fail("unknown option " + a);
-        } else if (sceneFile.empty()) {
-            sceneFile = a;
-        } else {
-            Fail("more than one scene file given");
-        }
-    }
-    if (sceneFile.empty()) {
-        std::fprintf(stderr, "gradus: no scene file given\n%s", kUsage);
-        return 1;
-    }
-    if (splitting && ro.checkpointFile.empty()) Fail("--passes needs --checkpoint FILE (the partial render's output)");
-    if (splitting && ro.debug) Fail("--passes and --debugpixel exclude each other");
     std::string commandLine;
-    for (int i = 0; i < argc; ++i) commandLine += (i ? " " : "") + std::string(argv[i]);
+    int exitStatus = -1;  // >= 0: exit with it, nothing to render
+};
 
+// Walks argv; next() returns the current option's value(s), failing when missing.
+struct ArgCursor {
+    int argc;
+    char **argv;
+    int i = 1;
+    std::string a;  // the current option
+    const char *next(int n = 1) {
+        if (i + n >= argc) Fail(a + " needs " + std::to_string(n) + " value" + (n > 1 ? "s" : ""));
+        return argv[++i];
+    }
+};
+
+// --help, --list-integrators, --describe, --version: prints and returns the exit status; -1 otherwise.
+int InfoOption(ArgCursor &arg) {
+    const std::string &a = arg.a;
+    if (a == "--help" || a == "-h") {
+        std::printf("%s", kUsage);
+        return 0;
+    } else if (a == "--list-integrators") {
+        for (const auto &info : IntegratorRegistry())
+            std::printf("%-8s %s\n", info.name.c_str(), info.description.c_str());
+        return 0;
+    } else if (a == "--describe") {
+        return Describe(arg.next());
+    } else if (a == "--version") {
+        std::printf("gradus %s (%s)\n", GradusVersion(), GradusGitCommit());
+        return 0;
+    }
+    return -1;
+}
+
+void ParseDebugPixel(const char *v, RenderOptions &ro) {
+    int x, y, s = -1, n = 0;
+    char extra;
+    int got = std::sscanf(v, "%d,%d%n", &x, &y, &n);
+    if (got == 2 && v[n] == ',') got = std::sscanf(v, "%d,%d,%d %c", &x, &y, &s, &extra) == 3 ? 3 : -1;
+    else if (got == 2 && v[n] != 0) got = -1;
+    if (got < 2 || x < 0 || y < 0 || (got == 3 && s < 0))
+        Fail("--debugpixel expects x,y or x,y,s (non-negative integers), got \"" + std::string(v) + "\"");
+    ro.debug = true;
+    ro.debugPixel = {x, y};
+    ro.debugSample = s;
+}
+
+void ParseCropWindow(ArgCursor &arg, BuildOptions &bo) {
+    if (arg.i + 4 >= arg.argc) Fail("--cropwindow needs 4 values");
+    bo.hasCrop = true;
+    for (int k = 0; k < 4; ++k) {
+        bo.crop[k] = ParseDouble(arg.a, arg.argv[++arg.i]);
+        if (bo.crop[k] < 0 || bo.crop[k] > 1) Fail("--cropwindow values must be in [0, 1], got " + std::string(arg.argv[arg.i]));
+    }
+    if (bo.crop[0] >= bo.crop[1] || bo.crop[2] >= bo.crop[3]) Fail("--cropwindow needs x0 < x1 and y0 < y1");
+}
+
+void ParseResolution(const char *v, BuildOptions &bo) {
+    int w = 0, h = 0, n = 0;
+    if (std::sscanf(v, "%dx%d%n", &w, &h, &n) != 2 || v[n] != 0 || w < 1 || h < 1 || w > (1 << 17) ||
+        h > (1 << 17))
+        Fail("--resolution expects WxH with W and H in [1, 131072], got \"" + std::string(v) + "\"");
+    bo.resolution = {w, h};
+}
+
+void ParsePasses(const char *v, CommandLine &cl) {
+    long long pa = -1, pb = -1;
+    int n = 0;
+    if (std::sscanf(v, "%lld:%lld%n", &pa, &pb, &n) != 2 || v[n] != 0 || pa < 0 || pb <= pa || pb > (1 << 30))
+        Fail("--passes expects A:B with 0 <= A < B <= 2^30, got \"" + std::string(v) + "\"");
+    cl.ro.passBegin = int(pa);
+    cl.ro.passEnd = int(pb);
+    cl.splitting = true;
+}
+
+// One render option or the scene file (fails on anything else).
+void RenderOption(ArgCursor &arg, CommandLine &cl) {
+    const std::string &a = arg.a;
+    BuildOptions &bo = cl.bo;
+    RenderOptions &ro = cl.ro;
+    if (a == "--param") {
+        bo.paramOverrides.push_back(arg.next());
+    } else if (a == "--outfile") {
+        bo.outfileOverride = arg.next();
+    } else if (a == "--nthreads") {
+        ro.nthreads = int(ParseInt(a, arg.next(), 1, 1024));
+    } else if (a == "--spp") {
+        bo.sppOverride = int(ParseInt(a, arg.next(), 1, 1 << 30));
+        ro.spp = bo.sppOverride;
+    } else if (a == "--seed") {
+        bo.seed = uint64_t(ParseInt(a, arg.next(), 0, std::numeric_limits<long long>::max()));
+    } else if (a == "--debugpixel") {
+        ParseDebugPixel(arg.next(), ro);
+    } else if (a == "--time") {
+        const char *v = arg.next();
+        ro.timeLimit = ParseDouble(a, v);
+        if (!(ro.timeLimit > 0)) Fail("--time must be a positive number of seconds, got " + std::string(v));
+    } else if (a == "--cropwindow") {
+        ParseCropWindow(arg, bo);
+    } else if (a == "--resolution") {
+        ParseResolution(arg.next(), bo);
+    } else if (a == "--checkpoint") {
+        ro.checkpointFile = arg.next();
+    } else if (a == "--checkpoint-interval") {
+        ro.checkpointInterval = ParseDouble(a, arg.next());
+        if (!(ro.checkpointInterval > 0)) Fail("--checkpoint-interval must be > 0 seconds");
+    } else if (a == "--resume") {
+        ro.resumeFile = arg.next();
+    } else if (a == "--passes") {
+        ParsePasses(arg.next(), cl);
+    } else if (a == "--camera") {
+        cl.gltfOpts.camera = arg.next();
+    } else if (a == "--integrator") {
+        bo.integratorOverride = arg.next();
+    } else if (a == "--quick") {
+        bo.quick = true;
+    } else if (a == "--variance") {
+        bo.variance = true;
+    } else if (a == "--quiet") {
+        bo.quiet = ro.quiet = true;
+    } else if (a == "--stats") {
+        cl.printStats = true;
+    } else if (!a.empty() && a[0] == '-') {
+        Fail("unknown option " + a);
+    } else if (cl.sceneFile.empty()) {
+        cl.sceneFile = a;
+    } else {
+        Fail("more than one scene file given");
+    }
+}
+
+// Options in order; the first informational option ends the parse with its status.
+CommandLine ParseCommandLine(int argc, char **argv) {
+    CommandLine cl;
+    for (ArgCursor arg{argc, argv}; arg.i < argc; ++arg.i) {
+        arg.a = argv[arg.i];
+        cl.exitStatus = InfoOption(arg);
+        if (cl.exitStatus >= 0) return cl;
+        RenderOption(arg, cl);
+    }
+    if (cl.sceneFile.empty()) {
+        std::fprintf(stderr, "gradus: no scene file given\n%s", kUsage);
+        cl.exitStatus = 1;
+        return cl;
+    }
+    if (cl.splitting && cl.ro.checkpointFile.empty())
+        Fail("--passes needs --checkpoint FILE (the partial render's output)");
+    if (cl.splitting && cl.ro.debug) Fail("--passes and --debugpixel exclude each other");
+    for (int i = 0; i < argc; ++i) cl.commandLine += (i ? " " : "") + std::string(argv[i]);
+    return cl;
+}
+
+// Timing, statistics and the files written (unless --quiet).
+void PrintSummary(const CommandLine &cl, const RenderJob &job, const RenderStats &rs, double loadSec,
+                  bool wroteImage) {
+    std::fprintf(stderr,
+                 "Scene loaded in %.2fs; rendered %d spp in %.2fs (%.3g camera samples/s)%s\n"
+                 "Non-finite contributions discarded: %llu\n",
+                 loadSec, rs.spp, rs.seconds, rs.cameraSamples / std::max(1e-9, rs.seconds),
+                 rs.interrupted ? " [interrupted]" : (rs.timeLimited ? " [time budget]" : ""),
+                 (unsigned long long)rs.nonFinite);
+    std::fprintf(stderr, "Statistics:\n%s%s", FormatStats(StatRegistry::get().snapshot()).c_str(),
+                 job.integrator->statistics().c_str());
+    if (wroteImage) std::fprintf(stderr, "Wrote %s\n", job.film->filename().c_str());
+    if (!cl.ro.checkpointFile.empty()) std::fprintf(stderr, "Wrote checkpoint %s\n", cl.ro.checkpointFile.c_str());
+}
+
+// Loads the scene, renders and writes the image; returns the exit status.
+int Render(CommandLine &cl) {
+    BuildOptions &bo = cl.bo;
+    RenderOptions &ro = cl.ro;
+    // The output is checked before anything is loaded (again once the Film's name is known).
+    if (!bo.outfileOverride.empty()) CheckWritableImagePath(bo.outfileOverride);
+    if (!cl.gltfOpts.camera.empty() && !IsGltfFile(cl.sceneFile))
+        Fail("--camera applies to glTF scenes (.gltf, .glb); pbrt scenes place glTF cameras with GltfAsset");
+    double loadSec = 0;
+    RenderJob job = LoadRenderJob(cl.sceneFile, cl.gltfOpts, bo, &loadSec);
+    // Always said: e.g. scene parameters an --integrator override does not use.
+    for (const auto &w : job.warnings) std::fprintf(stderr, "note: %s\n", w.c_str());
+    if (cl.printStats) std::fprintf(stderr, "%s", job.scene->features.describe().c_str());
+    ResolveSampleCount(job, bo, &ro);
+    if (ro.debug && !job.film->sampleBounds().inside(ro.debugPixel))
+        throw Error("--debugpixel (" + std::to_string(ro.debugPixel.x) + ", " + std::to_string(ro.debugPixel.y) +
+                    ") lies outside the sampled pixels");
+    InstallInterruptHandler();
+    RenderResult res = RenderLoadedJob(job, ro, cl.sceneFile, cl.commandLine, loadSec);
+    const RenderStats &rs = res.stats;
+    if (ro.debug) {
+        std::fprintf(stderr, "--debugpixel: no image written\n");
+        return 0;
+    }
+    const bool writeImage = !cl.splitting || !bo.outfileOverride.empty();
+    if (writeImage) WriteImage(job.film->filename(), res.image);
+    if (!ro.quiet) PrintSummary(cl, job, rs, loadSec, writeImage);
+    return rs.interrupted ? 130 : 0;
+}
+
+}  // namespace
+
+int main(int argc, char **argv) {
+    CommandLine cl = ParseCommandLine(argc, argv);
+    if (cl.exitStatus >= 0) return cl.exitStatus;
     try {
-        // The output is checked before anything is loaded (again once the Film's name is known).
-        if (!bo.outfileOverride.empty()) CheckWritableImagePath(bo.outfileOverride);
-        if (!gltfOpts.camera.empty() && !IsGltfFile(sceneFile))
-            Fail("--camera applies to glTF scenes (.gltf, .glb); pbrt scenes place glTF cameras with GltfAsset");
-        double loadSec = 0;
-        RenderJob job = LoadRenderJob(sceneFile, gltfOpts, bo, &loadSec);
-        // Always said: e.g. scene parameters an --integrator override does not use.
-        for (const auto &w : job.warnings) std::fprintf(stderr, "note: %s\n", w.c_str());
-        if (printStats) std::fprintf(stderr, "%s", job.scene->features.describe().c_str());
-        ResolveSampleCount(job, bo, &ro);
-        if (ro.debug && !job.film->sampleBounds().inside(ro.debugPixel))
-            throw Error("--debugpixel (" + std::to_string(ro.debugPixel.x) + ", " + std::to_string(ro.debugPixel.y) +
-                        ") lies outside the sampled pixels");
-        InstallInterruptHandler();
-        RenderResult res = RenderLoadedJob(job, ro, sceneFile, commandLine, loadSec);
-        const RenderStats &rs = res.stats;
-        Image &img = res.image;
-        if (ro.debug) {
-            std::fprintf(stderr, "--debugpixel: no image written\n");
-            return 0;
-        }
-        const bool writeImage = !splitting || !bo.outfileOverride.empty();
-        if (writeImage) WriteImage(job.film->filename(), img);
-        if (!ro.quiet) {
-            std::fprintf(stderr,
-                         "Scene loaded in %.2fs; rendered %d spp in %.2fs (%.3g camera samples/s)%s\n"
-                         "Non-finite contributions discarded: %llu\n",
-                         loadSec, rs.spp, rs.seconds, rs.cameraSamples / std::max(1e-9, rs.seconds),
-                         rs.interrupted ? " [interrupted]" : (rs.timeLimited ? " [time budget]" : ""),
-                         (unsigned long long)rs.nonFinite);
-            std::fprintf(stderr, "Statistics:\n%s%s", FormatStats(StatRegistry::get().snapshot()).c_str(),
-                         job.integrator->statistics().c_str());
-            if (writeImage) std::fprintf(stderr, "Wrote %s\n", job.film->filename().c_str());
-            if (!ro.checkpointFile.empty()) std::fprintf(stderr, "Wrote checkpoint %s\n", ro.checkpointFile.c_str());
-        }
-        return rs.interrupted ? 130 : 0;
+        return Render(cl);
     } catch (const std::bad_alloc &) {
         std::fprintf(stderr, "gradus: out of memory\n");
         return 1;

@@ -36,6 +36,10 @@ ParamTable<GVCMSettings> Table() {
 
 Float Remap(Float f) { return f != 0 ? f : Float(1); }
 
+Float *AllocFloats(Arena &arena, int n) {
+    return static_cast<Float *>(arena.alloc(sizeof(Float) * std::max(n, 1), alignof(Float)));
+}
+
 // A point at unit distance from p in direction d (for densities towards a direction).
 PathVertex DirectionPoint(const Point3 &p, const Vec3 &d) {
     PathVertex v;
@@ -322,185 +326,240 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, const Case2Base &cb, const Cam
     return true;
 }
 
+Float GVCMMergeWeight(const VCMCameraTerms &t, const PathVertex &z, const PathVertex &zPrev, const BSDF &bz,
+                      const LightVertex &lv, const VCMWeights &W) {
+    // w_VM = eta_u o(z_u) / (c + S_L(m-1) + S_C(u)) (vcm.h; S_L's junction eta_u sigma(z_u)).
+    const Vec3 wi = lv.wo;  // towards y_{m-1}
+    const Float oz = Remap(lv.pdfFwd);
+    const Float cRef = VCMPrevConnectible(lv) ? 1 : 0;  // the connection of y_{m-1} and z_u
+    const Float om1 = bz.pdf(Vec3(z.wo), wi, TransportMode::Radiance) * lv.prevGeom;
+    const Float oPrev = ConvertDensity(bz.pdf(wi, Vec3(z.wo), TransportMode::Importance), z, zPrev);
+    return t.etaU * oz / (cRef + VCMLightPrevSum(lv, om1, t.H, W) + VCMCameraSum(t, oz, oPrev, true, false, W));
+}
+
+// One camera sample's merges: the base's eta_u and B_u, the offsets' (their
+// own kernels, for their weights) when a merge first needs them.
+struct GVCMIntegrator::SampleMerges {
+    const CameraState &st;
+    const VCMWeights W;
+    Float *etaX = nullptr, *Bx = nullptr;
+    Float *By[kNumNeighbours] = {}, *etaY[kNumNeighbours] = {};
+    uint64_t merges = 0;
+};
+
+// The merges at one camera vertex z_u: its eta and camera terms, the offsets'
+// terms (once per vertex, when first needed) and the case-2 budget's sample.
+struct GVCMIntegrator::VertexMerges {
+    int u = 0;
+    Float etaU = 0;
+    VCMCameraTerms terms;
+    VCMCameraTerms ty[kNumNeighbours];
+    bool tyDone[kNumNeighbours] = {};
+    bool thin = false;
+    Float stride = 1;
+    Case2Base cb;  // one photon's at a time (large: built once per vertex, filled by case2Base)
+};
+
+// The photon's light subpath for case 2, regenerated at most once per merge.
+struct GVCMIntegrator::PhotonSubpath {
+    ShiftSubpath L;
+    bool have = false, bad = false;
+};
+
+const Float *GVCMIntegrator::offsetB(SampleMerges &sm, int k) const {
+    if (!sm.By[k]) {
+        const CameraShift &sh = sm.st.shifts[k];
+        const int n = std::min(sh.y.n, sh.validUpTo + 1);
+        sm.By[k] = AllocFloats(*sm.st.arena, n);
+        sm.etaY[k] = AllocFloats(*sm.st.arena, n);
+        VCMCameraEta(sm.W, sh.y.v, sh.y.b, n, sm.etaY[k]);
+        VCMCameraB(bctx_, sh.y.v, sh.y.b, n, sm.W, sm.etaY[k], sm.By[k]);
+    }
+    return sm.By[k];
+}
+
+const VCMCameraTerms *GVCMIntegrator::offsetTerms(SampleMerges &sm, VertexMerges &vm, int k) const {
+    if (!vm.tyDone[k]) {
+        const Float *B = offsetB(sm, k);
+        const CameraShift &sh = sm.st.shifts[k];
+        vm.ty[k] = VCMCameraAt(bctx_, sh.y.v, sh.y.b, vm.u, B[vm.u], sm.etaY[k], sm.W);
+        vm.tyDone[k] = true;
+    }
+    return &vm.ty[k];
+}
+
 void GVCMIntegrator::addStrategies(const CameraState &st, GradientSample *out) const {
     if (!merging_ || kernel_.piN <= 0) return;
     const ShiftSubpath &cam = *st.cam;
-    Arena &arena = *st.arena;
-    const Float w = st.w;
     // `connecting` gates only the light-tracing (t = 1) terms of the camera-side sums.
-    const VCMWeights W{&kernel_, true, connections_ && set_.lightTracing, false, true};
-    auto alloc = [&](int n) { return static_cast<Float *>(arena.alloc(sizeof(Float) * std::max(n, 1), alignof(Float))); };
+    SampleMerges sm{st, VCMWeights{&kernel_, true, connections_ && set_.lightTracing, false, true}};
     // The base's eta_u (Sec. 6: its own footprint and shrink) and B_u.
-    Float *etaX = alloc(cam.n), *Bx = alloc(cam.n);
-    VCMCameraEta(W, cam.v, cam.b, cam.n, etaX);
-    if (connections_) VCMCameraB(bctx_, cam.v, cam.b, cam.n, W, etaX, Bx);
-    // Offsets' eta and B_u (their own kernels, for their weights), computed when first needed.
-    Float *By[kNumNeighbours] = {}, *etaY[kNumNeighbours] = {};
-    auto offsetB = [&](int k) {
-        if (!By[k]) {
-            const CameraShift &sh = st.shifts[k];
-            const int n = std::min(sh.y.n, sh.validUpTo + 1);
-            By[k] = alloc(n);
-            etaY[k] = alloc(n);
-            VCMCameraEta(W, sh.y.v, sh.y.b, n, etaY[k]);
-            VCMCameraB(bctx_, sh.y.v, sh.y.b, n, W, etaY[k], By[k]);
-        }
-        return By[k];
-    };
-    uint64_t merges = 0;
+    sm.etaX = AllocFloats(*st.arena, cam.n);
+    sm.Bx = AllocFloats(*st.arena, cam.n);
+    VCMCameraEta(sm.W, cam.v, cam.b, cam.n, sm.etaX);
+    if (connections_) VCMCameraB(bctx_, cam.v, cam.b, cam.n, sm.W, sm.etaX, sm.Bx);
     bool specularChain = true;  // z_1 .. z_{u-1} all specular
     for (int u = 1; u < cam.n; ++u) {
-        const PathVertex &zu = cam.v[u], &zp = cam.v[u - 1];
+        const PathVertex &zu = cam.v[u];
         const BSDF &bu = cam.b[u];
-        if (!connections_ && specularChain) {
-            // G-PM: emission through a specular chain (s = 0, the only strategy of its path).
-            const Spectrum Le = EmittedRadiance(bctx_, zu, zp);
-            if (!Le.isBlack()) {
-                const Spectrum fx = zu.throughput() * Le * w;
-                out->primal += fx;
-                for (int k = 0; k < kNumNeighbours; ++k) {
-                    if (!st.inside[k]) continue;
-                    const CameraShift &sh = st.shifts[k];
-                    Spectrum fy(0);
-                    if (u <= sh.validUpTo) fy = sh.y.v[u].throughput() * EmittedRadiance(bctx_, sh.y.v[u], sh.y.v[u - 1]) * w;
-                    if (!fy.isBlack())
-                        out->diff[k] += (fy - fx) * CombinedWeight(1, 1, sh.rho[u]);
-                    else
-                        out->diff[k] += fx * -1;
-                }
-            }
-        }
+        if (!connections_ && specularChain) chainEmission(st, u, out);
         if (zu.type != VertexType::Surface || !bu) break;
-        if (!W.mergeable(zu, &bu)) {
+        if (!sm.W.mergeable(zu, &bu)) {
             specularChain = specularChain && zu.delta();
             continue;
         }
-        // Merges at z_u with every light vertex within r (Eq. 11, Algorithm 1 lines 19-24).
-        const Float etaU = etaX[u];
-        if (!(etaU > 0)) continue;
-        const VCMCameraTerms terms = connections_ ? VCMCameraAt(bctx_, cam.v, cam.b, u, Bx[u], etaX, W) : VCMCameraTerms();
-        // The offsets' camera terms at z'_u: once per vertex when a merge first needs them.
-        VCMCameraTerms ty[kNumNeighbours];
-        bool tyDone[kNumNeighbours] = {};
-        auto offsetTerms = [&](int k) {
-            if (!tyDone[k]) {
-                const Float *B = offsetB(k);
-                ty[k] = VCMCameraAt(bctx_, st.shifts[k].y.v, st.shifts[k].y.b, u, B[u], etaY[k], W);
-                tyDone[k] = true;
-            }
-            return &ty[k];
-        };
-        // The photons of the kernel (Algorithm 1, line 20), in the grid's order.
-        thread_local std::vector<std::pair<uint32_t, Spectrum>> found;
-        found.clear();
-        grid_.query(zu.p, std::sqrt(etaU / kernel_.piN), [&](uint32_t idx, Float) {
-            const LightVertex &lv = vertices_[idx];
-            if (int(lv.depth) + u - 1 > set_.maxDepth) return;
-            const Spectrum f = bu.f(Vec3(zu.wo), lv.wo, TransportMode::Radiance);
-            if (!f.isBlack()) found.emplace_back(idx, f);
-        });
-        // Case-2 budget: at most K photons of the n found are shifted through z'_b,
-        // chosen by systematic sampling (one uniform offset in [0, n/K), then steps
-        // of n/K: each photon is chosen with probability K/n) and their differences
-        // weighted n/K, an unbiased estimate of the sum over all n (the primal and
-        // case 1 keep every photon).
-        const int n = int(found.size()), K = gset_.case2Budget;
-        const bool thin = K > 0 && n > K;
-        const Float stride = thin ? Float(n) / K : 1;
-        const Float start = thin ? st.sampler->get1D() * stride : 0;
-        int nextPick = 0;  // the next chosen position: floor(start + j stride)
-        Case2Base cb;      // one photon's at a time (large: built once per vertex, filled by case2Base)
-        for (int i = 0; i < n; ++i) {
-            const uint32_t idx = found[size_t(i)].first;
-            const Spectrum &f = found[size_t(i)].second;
-            const LightVertex &lv = vertices_[idx];
-            const Vec3 wi = lv.wo;  // towards y_{m-1}
-            bool chosen = true;
-            if (thin) {
-                chosen = nextPick < K && int(start + nextPick * stride) == i;
-                if (chosen) ++nextPick;
-            }
-            ++merges;
-            const Float oz = Remap(lv.pdfFwd);
-            const Float cRef = VCMPrevConnectible(lv) ? 1 : 0;  // the connection of y_{m-1} and z_u
-            Float wx = 1;
-            if (connections_) {
-                // Eq. 13: w_VM = eta_u o(z_u) / (c + S_L(m-1) + S_C(u)) (vcm.h; S_L's junction eta_u sigma(z_u)).
-                const Float om1 = bu.pdf(Vec3(zu.wo), wi, TransportMode::Radiance) * lv.prevGeom;
-                const Float oPrev = ConvertDensity(bu.pdf(wi, Vec3(zu.wo), TransportMode::Importance), zu, zp);
-                wx = etaU * oz / (cRef + VCMLightPrevSum(lv, om1, terms.H, W) + VCMCameraSum(terms, oz, oPrev, true, false, W));
-            }
-            // Eq. 5 with the uniform kernel: beta_L f beta_C / (pi r_u^2 N), N folded into w_VM.
-            const Spectrum fx = zu.throughput() * f * lv.throughput() * (w / etaU);
-            out->primal += fx * wx;
-            ShiftSubpath L;
-            bool haveL = false, badL = false;
-            for (int k = 0; k < kNumNeighbours; ++k) {
-                if (!st.inside[k]) continue;
-                const CameraShift &sh = st.shifts[k];
-                Offset o;
-                bool ok = false;
-                if (u > sh.validUpTo) {
-                    count(FallbackShift);
-                } else if (sh.r >= 0 && u >= sh.r) {
-                    // Case 1 (Eqs. 16-17): the same z_u, kernel and light vertex; only the
-                    // camera prefix (and at u = r the direction towards z'_{u-1}) differs.
-                    count(Case1);
-                    const PathVertex &yu = sh.y.v[u], &yp = sh.y.v[u - 1];
-                    const Spectrum fo = u == sh.r ? bu.f(Vec3(yu.wo), wi, TransportMode::Radiance) : f;
-                    // The estimate keeps the base's kernel; the weight takes the offset's own eta (Eq. 23).
-                    o.f = yu.throughput() * fo * lv.throughput() * (w / etaU);
-                    o.rho = sh.rho[u];
-                    if (connections_) {
-                        const Float om1 = bu.pdf(Vec3(yu.wo), wi, TransportMode::Radiance) * lv.prevGeom;
-                        const Float oPrev = ConvertDensity(bu.pdf(wi, Vec3(yu.wo), TransportMode::Importance), yu, yp);
-                        const VCMCameraTerms &tk = *offsetTerms(k);
-                        o.w = tk.etaU * oz / (cRef + VCMLightPrevSum(lv, om1, tk.H, W) + VCMCameraSum(tk, oz, oPrev, true, false, W));
-                    }
-                    ok = !o.f.isBlack() && o.w > 0;
-                    if (ok) count(Case1Shifted);
-                    else count(FallbackBlocked);
-                } else if (!chosen) {
-                    count(Case2Skipped);
-                    continue;  // not in the budget's sample: no difference from this photon
-                } else {
-                    // Case 2: the offset is a physical path through z'_b (Eqs. 18-20).
-                    count(Case2);
-                    if (!haveL) {
-                        // The photon's light subpath, regenerated to the photon's depth (its
-                        // prefix is the light pass's: the RNG is consumed vertex by vertex),
-                        // and the base's half of the shift, once for all offsets.
-                        haveL = true;
-                        const uint32_t j = uint32_t(std::upper_bound(pathStart_.begin(), pathStart_.end(), idx) -
-                                                    pathStart_.begin() - 1);
-                        regenerate(j, int(lv.depth) + 1, arena, &L);
-                        count(Regenerated);
-                        badL = int(lv.depth) >= L.n || Distance(L.v[lv.depth].p, lv.p) > 1e-5 * (1 + Vec3(lv.p).length());
-                        if (badL)
-                            count(FallbackMismatch);
-                        else
-                            case2Base(L, lv.depth, arena, &cb);
-                    }
-                    if (!badL) {
-                        ok = case2(L, cb, sh, u, lv, connections_ ? offsetTerms(k) : nullptr, etaU, arena, &o) &&
-                             o.w > 0;
-                        if (ok) {
-                            o.f *= w;
-                            count(Case2Shifted);
-                        }
-                    }
-                }
-                // Eq. 23; a case-2 difference of the budget's sample times n/K.
-                const Float scale = thin && u <= sh.validUpTo && !(sh.r >= 0 && u >= sh.r) ? stride : Float(1);
-                if (ok)
-                    out->diff[k] += (o.f - fx) * (CombinedWeight(wx, o.w, o.rho) * scale);
-                else
-                    out->diff[k] += fx * (-wx * scale);  // zero offset, the base's weight
-            }
-        }
+        if (!mergesAt(sm, u, out)) continue;
         if (!connections_) break;  // G-PM: the first connectable vertex only
     }
-    count(Merges, merges);
+    count(Merges, sm.merges);
+}
+
+void GVCMIntegrator::chainEmission(const CameraState &st, int u, GradientSample *out) const {
+    // G-PM: emission through a specular chain (s = 0, the only strategy of its path).
+    const PathVertex &zu = st.cam->v[u], &zp = st.cam->v[u - 1];
+    const Spectrum Le = EmittedRadiance(bctx_, zu, zp);
+    if (Le.isBlack()) return;
+    const Spectrum fx = zu.throughput() * Le * st.w;
+    out->primal += fx;
+    for (int k = 0; k < kNumNeighbours; ++k) {
+        if (!st.inside[k]) continue;
+        const CameraShift &sh = st.shifts[k];
+        Spectrum fy(0);
+        if (u <= sh.validUpTo) fy = sh.y.v[u].throughput() * EmittedRadiance(bctx_, sh.y.v[u], sh.y.v[u - 1]) * st.w;
+        if (!fy.isBlack())
+            out->diff[k] += (fy - fx) * CombinedWeight(1, 1, sh.rho[u]);
+        else
+            out->diff[k] += fx * -1;
+    }
+}
+
+bool GVCMIntegrator::mergesAt(SampleMerges &sm, int u, GradientSample *out) const {
+    // Merges at z_u with every light vertex within r (Eq. 11, Algorithm 1 lines 19-24).
+    const ShiftSubpath &cam = *sm.st.cam;
+    VertexMerges vm;
+    vm.u = u;
+    vm.etaU = sm.etaX[u];
+    if (!(vm.etaU > 0)) return false;
+    vm.terms = connections_ ? VCMCameraAt(bctx_, cam.v, cam.b, u, sm.Bx[u], sm.etaX, sm.W) : VCMCameraTerms();
+    // The photons of the kernel (Algorithm 1, line 20), in the grid's order.
+    thread_local Found found;
+    gatherPhotons(cam.v[u], cam.b[u], u, vm.etaU, &found);
+    // Case-2 budget: at most K photons of the n found are shifted through z'_b,
+    // chosen by systematic sampling (one uniform offset in [0, n/K), then steps
+    // of n/K: each photon is chosen with probability K/n) and their differences
+    // weighted n/K, an unbiased estimate of the sum over all n (the primal and
+    // case 1 keep every photon).
+    const int n = int(found.size()), K = gset_.case2Budget;
+    vm.thin = K > 0 && n > K;
+    vm.stride = vm.thin ? Float(n) / K : 1;
+    const Float start = vm.thin ? sm.st.sampler->get1D() * vm.stride : 0;
+    int nextPick = 0;  // the next chosen position: floor(start + j stride)
+    for (int i = 0; i < n; ++i) {
+        bool chosen = true;
+        if (vm.thin) {
+            chosen = nextPick < K && int(start + nextPick * vm.stride) == i;
+            if (chosen) ++nextPick;
+        }
+        mergePhoton(sm, vm, found[size_t(i)].first, found[size_t(i)].second, chosen, out);
+    }
+    return true;
+}
+
+void GVCMIntegrator::gatherPhotons(const PathVertex &zu, const BSDF &bu, int u, Float etaU, Found *found) const {
+    found->clear();
+    grid_.query(zu.p, std::sqrt(etaU / kernel_.piN), [&](uint32_t idx, Float) {
+        const LightVertex &lv = vertices_[idx];
+        if (int(lv.depth) + u - 1 > set_.maxDepth) return;
+        const Spectrum f = bu.f(Vec3(zu.wo), lv.wo, TransportMode::Radiance);
+        if (!f.isBlack()) found->emplace_back(idx, f);
+    });
+}
+
+void GVCMIntegrator::mergePhoton(SampleMerges &sm, VertexMerges &vm, uint32_t idx, const Spectrum &f, bool chosen,
+                                 GradientSample *out) const {
+    const CameraState &st = sm.st;
+    const int u = vm.u;
+    const PathVertex &zu = st.cam->v[u], &zp = st.cam->v[u - 1];
+    const BSDF &bu = st.cam->b[u];
+    const LightVertex &lv = vertices_[idx];
+    ++sm.merges;
+    // Eq. 13: the base's w_VM (with connections; G-PM's merges are the only strategy).
+    const Float wx = connections_ ? GVCMMergeWeight(vm.terms, zu, zp, bu, lv, sm.W) : 1;
+    // Eq. 5 with the uniform kernel: beta_L f beta_C / (pi r_u^2 N), N folded into w_VM.
+    const Spectrum fx = zu.throughput() * f * lv.throughput() * (st.w / vm.etaU);
+    out->primal += fx * wx;
+    PhotonSubpath ph;
+    for (int k = 0; k < kNumNeighbours; ++k) {
+        if (!st.inside[k]) continue;
+        const CameraShift &sh = st.shifts[k];
+        const bool isCase1 = sh.r >= 0 && u >= sh.r;
+        Offset o;
+        bool ok = false;
+        if (u > sh.validUpTo) {
+            count(FallbackShift);
+        } else if (isCase1) {
+            ok = case1(sh, u, bu, lv, f, st.w, vm.etaU, connections_ ? offsetTerms(sm, vm, k) : nullptr, sm.W, &o);
+        } else if (!chosen) {
+            count(Case2Skipped);
+            continue;  // not in the budget's sample: no difference from this photon
+        } else {
+            ok = case2Offset(sm, vm, k, idx, &ph, &o);
+        }
+        // Eq. 23; a case-2 difference of the budget's sample times n/K.
+        const Float scale = vm.thin && u <= sh.validUpTo && !isCase1 ? vm.stride : Float(1);
+        if (ok)
+            out->diff[k] += (o.f - fx) * (CombinedWeight(wx, o.w, o.rho) * scale);
+        else
+            out->diff[k] += fx * (-wx * scale);  // zero offset, the base's weight
+    }
+}
+
+bool GVCMIntegrator::case1(const CameraShift &sh, int u, const BSDF &bu, const LightVertex &lv, const Spectrum &f,
+                           Float w, Float etaX, const VCMCameraTerms *terms, const VCMWeights &W, Offset *o) const {
+    // Case 1 (Eqs. 16-17): the same z_u, kernel and light vertex; only the
+    // camera prefix (and at u = r the direction towards z'_{u-1}) differs.
+    count(Case1);
+    const PathVertex &yu = sh.y.v[u], &yp = sh.y.v[u - 1];
+    const Spectrum fo = u == sh.r ? bu.f(Vec3(yu.wo), Vec3(lv.wo), TransportMode::Radiance) : f;
+    // The estimate keeps the base's kernel; the weight takes the offset's own eta (Eq. 23).
+    o->f = yu.throughput() * fo * lv.throughput() * (w / etaX);
+    o->rho = sh.rho[u];
+    if (terms) o->w = GVCMMergeWeight(*terms, yu, yp, bu, lv, W);
+    const bool ok = !o->f.isBlack() && o->w > 0;
+    count(ok ? Case1Shifted : FallbackBlocked);
+    return ok;
+}
+
+bool GVCMIntegrator::case2Offset(SampleMerges &sm, VertexMerges &vm, int k, uint32_t idx, PhotonSubpath *ph,
+                                 Offset *o) const {
+    // Case 2: the offset is a physical path through z'_b (Eqs. 18-20).
+    count(Case2);
+    const LightVertex &lv = vertices_[idx];
+    Arena &arena = *sm.st.arena;
+    if (!ph->have) {
+        // The photon's light subpath, regenerated to the photon's depth (its
+        // prefix is the light pass's: the RNG is consumed vertex by vertex),
+        // and the base's half of the shift, once for all offsets.
+        ph->have = true;
+        const uint32_t j =
+            uint32_t(std::upper_bound(pathStart_.begin(), pathStart_.end(), idx) - pathStart_.begin() - 1);
+        regenerate(j, int(lv.depth) + 1, arena, &ph->L);
+        count(Regenerated);
+        ph->bad = int(lv.depth) >= ph->L.n || Distance(ph->L.v[lv.depth].p, lv.p) > 1e-5 * (1 + Vec3(lv.p).length());
+        if (ph->bad)
+            count(FallbackMismatch);
+        else
+            case2Base(ph->L, lv.depth, arena, &vm.cb);
+    }
+    if (ph->bad) return false;
+    const bool ok = case2(ph->L, vm.cb, sm.st.shifts[k], vm.u, lv, connections_ ? offsetTerms(sm, vm, k) : nullptr,
+                          vm.etaU, arena, o) &&
+                    o->w > 0;
+    if (ok) {
+        o->f *= sm.st.w;
+        count(Case2Shifted);
+    }
+    return ok;
 }
 
 std::string GVCMIntegrator::statistics() const {

@@ -95,6 +95,7 @@
 #pragma once
 #include <atomic>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "integrators/common/photon_grid.h"
@@ -126,15 +127,37 @@ class GVCMIntegrator : public GBDPTIntegrator {
     GVCMIntegrator(const EntityDesc &desc, const GVCMSettings &set);
     struct Offset;
     struct Case2Base;
+    struct SampleMerges;
+    struct VertexMerges;
+    struct PhotonSubpath;
+    using Found = std::vector<std::pair<uint32_t, Spectrum>>;
     void lightPass(PassContext &ctx);
     // Light subpath j of the current pass, regenerated (its first maxLight vertices) and classified.
     void regenerate(uint32_t j, int maxLight, Arena &arena, ShiftSubpath *L) const;
     Spectrum emitFrom(const ShiftSubpath &L, int d, const Vec3 &dir, Float *pdf) const;
+    // The stages of addStrategies, in its order: G-PM's emission through a
+    // specular chain at z_u; the merges at z_u (false: no kernel there), the
+    // kernel's photons, and per photon the base and each offset (case 1 or 2).
+    void chainEmission(const CameraState &st, int u, GradientSample *out) const;
+    bool mergesAt(SampleMerges &sm, int u, GradientSample *out) const;
+    void gatherPhotons(const PathVertex &zu, const BSDF &bu, int u, Float etaU, Found *found) const;
+    void mergePhoton(SampleMerges &sm, VertexMerges &vm, uint32_t idx, const Spectrum &f, bool chosen,
+                     GradientSample *out) const;
+    // The offsets' B_u and eta (whole subpath), camera terms at z'_u: computed when first needed.
+    const Float *offsetB(SampleMerges &sm, int k) const;
+    const VCMCameraTerms *offsetTerms(SampleMerges &sm, VertexMerges &vm, int k) const;
+    // Case 1 (header comment) for the shift sh at z_u: bu the BSDF at z_u, f its
+    // value for the base, w the camera ray weight, etaX the base's eta at z_u;
+    // terms: the offset's camera terms at z'_u (nullptr: no connections, weight 1).
+    bool case1(const CameraShift &sh, int u, const BSDF &bu, const LightVertex &lv, const Spectrum &f, Float w,
+               Float etaX, const VCMCameraTerms *terms, const VCMWeights &W, Offset *o) const;
+    // Case 2 of offset k: the photon's subpath regenerated once per merge, then case2Base and case2.
+    bool case2Offset(SampleMerges &sm, VertexMerges &vm, int k, uint32_t idx, PhotonSubpath *ph, Offset *o) const;
     // Case 2 (header comment): the base's half, once per photon y_m = L.v[m]
     // (false: every offset falls back, cb->failure says why), then each
     // offset (false: fall back). terms: the offset's camera terms at z'_u
     // (nullptr: no connections, weight 1); etaX: the base's eta at z_u (the
-    // kernel that found the photon).
+    // kernel that found the photon). The offset's f excludes the camera ray weight.
     bool case2Base(const ShiftSubpath &L, int m, Arena &arena, Case2Base *cb) const;
     bool case2(const ShiftSubpath &L, const Case2Base &cb, const CameraShift &sh, int u, const LightVertex &lv,
                const VCMCameraTerms *terms, Float etaX, Arena &arena, Offset *o) const;

@@ -139,22 +139,56 @@ bool NextLine(const char *data, size_t size, size_t *pos, std::string *line) {
     return true;
 }
 
-}  // namespace
+// "name:line: msg" (line > 0) or "name: msg".
+Error PlyError(const std::string &name, int line, const std::string &msg) {
+    return Error(name + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": " + msg);
+}
 
-PlyMesh ReadPlyFromMemory(const char *data, size_t size, const std::string &name) {
-    auto fail = [&](int line, const std::string &msg) -> Error {
-        return Error(name + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": " + msg);
-    };
+struct Header {
+    Format format = Format::Ascii;
+    std::vector<Element> elements;
+    size_t bodyStart = 0;  // offset of the first byte after end_header's line
+};
 
-    // ---------------------------------------------------------- header
+// "property TYPE NAME" or "property list COUNTTYPE TYPE NAME" (after the keyword).
+Property ParsePropertyLine(std::istringstream &ss, const std::string &name, int lineNo) {
+    Property p;
+    std::string t;
+    if (!(ss >> t)) throw PlyError(name, lineNo, "malformed property line");
+    if (t == "list") {
+        std::string ct, it;
+        if (!(ss >> ct >> it >> p.name)) throw PlyError(name, lineNo, "malformed list property line");
+        if (!ParsePType(ct, &p.countType) || !IsIntegral(p.countType))
+            throw PlyError(name, lineNo, "bad list count type '" + ct + "'");
+        if (!ParsePType(it, &p.type)) throw PlyError(name, lineNo, "unknown property type '" + it + "'");
+        p.isList = true;
+    } else {
+        if (!ParsePType(t, &p.type)) throw PlyError(name, lineNo, "unknown property type '" + t + "'");
+        if (!(ss >> p.name)) throw PlyError(name, lineNo, "malformed property line");
+    }
+    return p;
+}
+
+// "element NAME COUNT" (after the keyword).
+Element ParseElementLine(std::istringstream &ss, const std::string &name, int lineNo) {
+    Element e;
+    std::string count;
+    if (!(ss >> e.name >> count)) throw PlyError(name, lineNo, "malformed element line");
+    auto r = std::from_chars(count.data(), count.data() + count.size(), e.count);
+    if (r.ec != std::errc() || r.ptr != count.data() + count.size())
+        throw PlyError(name, lineNo, "malformed element count '" + count + "'");
+    return e;
+}
+
+Header ParseHeader(const char *data, size_t size, const std::string &name) {
+    Header h;
     size_t pos = 0;
     std::string line;
     int lineNo = 0;
-    if (!NextLine(data, size, &pos, &line) || line != "ply") throw fail(1, "not a PLY file (missing 'ply' magic)");
+    if (!NextLine(data, size, &pos, &line) || line != "ply")
+        throw PlyError(name, 1, "not a PLY file (missing 'ply' magic)");
     ++lineNo;
     bool haveFormat = false, haveEnd = false;
-    Format format = Format::Ascii;
-    std::vector<Element> elements;
     while (NextLine(data, size, &pos, &line)) {
         ++lineNo;
         std::istringstream ss(line);
@@ -167,150 +201,155 @@ PlyMesh ReadPlyFromMemory(const char *data, size_t size, const std::string &name
         }
         if (kw == "format") {
             std::string f, version;
-            if (!(ss >> f >> version)) throw fail(lineNo, "malformed format line");
-            if (f == "ascii") format = Format::Ascii;
-            else if (f == "binary_little_endian") format = Format::BinaryLE;
-            else if (f == "binary_big_endian") format = Format::BinaryBE;
-            else throw fail(lineNo, "unknown PLY format '" + f + "'");
+            if (!(ss >> f >> version)) throw PlyError(name, lineNo, "malformed format line");
+            if (f == "ascii") h.format = Format::Ascii;
+            else if (f == "binary_little_endian") h.format = Format::BinaryLE;
+            else if (f == "binary_big_endian") h.format = Format::BinaryBE;
+            else throw PlyError(name, lineNo, "unknown PLY format '" + f + "'");
             haveFormat = true;
         } else if (kw == "element") {
-            Element e;
-            std::string count;
-            if (!(ss >> e.name >> count)) throw fail(lineNo, "malformed element line");
-            auto r = std::from_chars(count.data(), count.data() + count.size(), e.count);
-            if (r.ec != std::errc() || r.ptr != count.data() + count.size())
-                throw fail(lineNo, "malformed element count '" + count + "'");
-            elements.push_back(std::move(e));
+            h.elements.push_back(ParseElementLine(ss, name, lineNo));
         } else if (kw == "property") {
-            if (elements.empty()) throw fail(lineNo, "property before any element");
-            Property p;
-            std::string t;
-            if (!(ss >> t)) throw fail(lineNo, "malformed property line");
-            if (t == "list") {
-                std::string ct, it;
-                if (!(ss >> ct >> it >> p.name)) throw fail(lineNo, "malformed list property line");
-                if (!ParsePType(ct, &p.countType) || !IsIntegral(p.countType))
-                    throw fail(lineNo, "bad list count type '" + ct + "'");
-                if (!ParsePType(it, &p.type)) throw fail(lineNo, "unknown property type '" + it + "'");
-                p.isList = true;
-            } else {
-                if (!ParsePType(t, &p.type)) throw fail(lineNo, "unknown property type '" + t + "'");
-                if (!(ss >> p.name)) throw fail(lineNo, "malformed property line");
-            }
-            elements.back().props.push_back(std::move(p));
+            if (h.elements.empty()) throw PlyError(name, lineNo, "property before any element");
+            h.elements.back().props.push_back(ParsePropertyLine(ss, name, lineNo));
         } else {
-            throw fail(lineNo, "unknown header keyword '" + kw + "'");
+            throw PlyError(name, lineNo, "unknown header keyword '" + kw + "'");
         }
     }
-    if (!haveEnd) throw fail(0, "truncated PLY header (no end_header)");
-    if (!haveFormat) throw fail(0, "PLY header has no format line");
+    if (!haveEnd) throw PlyError(name, 0, "truncated PLY header (no end_header)");
+    if (!haveFormat) throw PlyError(name, 0, "PLY header has no format line");
+    h.bodyStart = pos;
+    return h;
+}
 
-    // ---------------------------------------------------------- body
+// Reads a list's count and skips its entries.
+void SkipList(BodyReader &in, const Property &p, const std::string &where, const std::string &name) {
+    double c = in.read(p.countType, where);
+    if (!(c >= 0)) throw PlyError(name, 0, "negative list length in " + where);
+    in.skip(p.type, uint64_t(c), where);
+}
+
+// Positions, and normals and uv when the element has them all.
+void ReadVertices(const Element &e, Format format, BodyReader &in, const std::string &name, PlyMesh &mesh) {
+    const std::string where = "element '" + e.name + "'";
+    if (e.count > uint64_t(INT_MAX)) throw PlyError(name, 0, "too many vertices (" + std::to_string(e.count) + ")");
+    int ix = -1, iy = -1, iz = -1, inx = -1, iny = -1, inz = -1, iu = -1, iv = -1;
+    for (int i = 0; i < int(e.props.size()); ++i) {
+        const std::string &n = e.props[i].name;
+        if (e.props[i].isList) continue;
+        if (n == "x") ix = i;
+        else if (n == "y") iy = i;
+        else if (n == "z") iz = i;
+        else if (n == "nx") inx = i;
+        else if (n == "ny") iny = i;
+        else if (n == "nz") inz = i;
+        else if (n == "u" || n == "s" || n == "texture_u" || n == "texture_s") iu = i;
+        else if (n == "v" || n == "t" || n == "texture_v" || n == "texture_t") iv = i;
+    }
+    if (ix < 0 || iy < 0 || iz < 0) throw PlyError(name, 0, "vertex element lacks x, y or z");
+    bool hasN = inx >= 0 && iny >= 0 && inz >= 0, hasUV = iu >= 0 && iv >= 0;
+    // Reserve no more than the data could possibly hold.
+    size_t cap = std::min<uint64_t>(e.count, in.remaining() / (format == Format::Ascii ? 2 : 1) + 1);
+    mesh.P.reserve(cap);
+    if (hasN) mesh.N.reserve(cap);
+    if (hasUV) mesh.uv.reserve(cap);
+    std::vector<double> vals(e.props.size());
+    for (uint64_t r = 0; r < e.count; ++r) {
+        for (size_t i = 0; i < e.props.size(); ++i) {
+            const Property &p = e.props[i];
+            if (p.isList) {
+                SkipList(in, p, where, name);
+                vals[i] = 0;
+            } else {
+                vals[i] = in.read(p.type, where);
+            }
+        }
+        mesh.P.emplace_back(vals[ix], vals[iy], vals[iz]);
+        if (hasN) mesh.N.emplace_back(vals[inx], vals[iny], vals[inz]);
+        if (hasUV) mesh.uv.emplace_back(vals[iu], vals[iv]);
+    }
+}
+
+// Face r's vertex_indices list of c entries: a triangle, or a quad as two.
+void ReadFaceIndices(BodyReader &in, const Property &p, uint64_t r, double c, const std::string &where,
+                     const std::string &name, PlyMesh &mesh) {
+    if (c != 3 && c != 4)
+        throw PlyError(name, 0, "face " + std::to_string(r) + " has " + std::to_string(int64_t(c)) +
+                                    " vertices (only triangles and quads are supported)");
+    int v[4];
+    for (int k = 0; k < int(c); ++k) {
+        double x = in.read(p.type, where);
+        if (!(x >= 0 && x <= double(INT_MAX)))
+            throw PlyError(name, 0, "face " + std::to_string(r) + ": vertex index " + std::to_string(int64_t(x)) +
+                                        " out of range");
+        v[k] = int(x);
+    }
+    mesh.indices.insert(mesh.indices.end(), {v[0], v[1], v[2]});
+    if (c == 4) mesh.indices.insert(mesh.indices.end(), {v[0], v[2], v[3]});
+}
+
+void ReadFaces(const Element &e, BodyReader &in, const std::string &name, PlyMesh &mesh) {
+    const std::string where = "element '" + e.name + "'";
+    int iIdx = -1;
+    for (int i = 0; i < int(e.props.size()); ++i)
+        if (e.props[i].isList && (e.props[i].name == "vertex_indices" || e.props[i].name == "vertex_index"))
+            iIdx = i;
+    if (iIdx < 0) throw PlyError(name, 0, "face element has no vertex_indices list");
+    if (!IsIntegral(e.props[iIdx].type)) throw PlyError(name, 0, "vertex_indices must have an integer type");
+    size_t cap = std::min<uint64_t>(e.count, in.remaining() / 4 + 1);
+    mesh.indices.reserve(cap * 3);
+    for (uint64_t r = 0; r < e.count; ++r) {
+        for (int i = 0; i < int(e.props.size()); ++i) {
+            const Property &p = e.props[i];
+            if (!p.isList) {
+                in.read(p.type, where);
+            } else if (i != iIdx) {
+                SkipList(in, p, where, name);
+            } else {
+                double c = in.read(p.countType, where);
+                if (!(c >= 0)) throw PlyError(name, 0, "negative list length in " + where);
+                ReadFaceIndices(in, p, r, c, where, name, mesh);
+            }
+        }
+    }
+}
+
+void SkipElement(const Element &e, BodyReader &in, const std::string &name) {
+    const std::string where = "element '" + e.name + "'";
+    for (uint64_t r = 0; r < e.count; ++r)
+        for (const Property &p : e.props) {
+            if (p.isList) SkipList(in, p, where, name);
+            else in.read(p.type, where);
+        }
+}
+
+}  // namespace
+
+PlyMesh ReadPlyFromMemory(const char *data, size_t size, const std::string &name) {
+    const Header h = ParseHeader(data, size, name);
     PlyMesh mesh;
-    BodyReader in(data + pos, size - pos, format, name);
+    BodyReader in(data + h.bodyStart, size - h.bodyStart, h.format, name);
     bool haveVertices = false;
     uint64_t nVertices = 0;
-    for (const Element &e : elements) {
+    for (const Element &e : h.elements) {
         if (e.props.empty()) continue;  // nothing stored per record
-        const std::string where = "element '" + e.name + "'";
         if (e.name == "vertex") {
-            if (haveVertices) throw fail(0, "more than one vertex element");
+            if (haveVertices) throw PlyError(name, 0, "more than one vertex element");
             haveVertices = true;
-            if (e.count > uint64_t(INT_MAX)) throw fail(0, "too many vertices (" + std::to_string(e.count) + ")");
-            int ix = -1, iy = -1, iz = -1, inx = -1, iny = -1, inz = -1, iu = -1, iv = -1;
-            for (int i = 0; i < int(e.props.size()); ++i) {
-                const std::string &n = e.props[i].name;
-                if (e.props[i].isList) continue;
-                if (n == "x") ix = i;
-                else if (n == "y") iy = i;
-                else if (n == "z") iz = i;
-                else if (n == "nx") inx = i;
-                else if (n == "ny") iny = i;
-                else if (n == "nz") inz = i;
-                else if (n == "u" || n == "s" || n == "texture_u" || n == "texture_s") iu = i;
-                else if (n == "v" || n == "t" || n == "texture_v" || n == "texture_t") iv = i;
-            }
-            if (ix < 0 || iy < 0 || iz < 0) throw fail(0, "vertex element lacks x, y or z");
-            bool hasN = inx >= 0 && iny >= 0 && inz >= 0, hasUV = iu >= 0 && iv >= 0;
-            // Reserve no more than the data could possibly hold.
-            size_t cap = std::min<uint64_t>(e.count, in.remaining() / (format == Format::Ascii ? 2 : 1) + 1);
-            mesh.P.reserve(cap);
-            if (hasN) mesh.N.reserve(cap);
-            if (hasUV) mesh.uv.reserve(cap);
-            std::vector<double> vals(e.props.size());
-            for (uint64_t r = 0; r < e.count; ++r) {
-                for (size_t i = 0; i < e.props.size(); ++i) {
-                    const Property &p = e.props[i];
-                    if (p.isList) {
-                        double c = in.read(p.countType, where);
-                        if (!(c >= 0)) throw fail(0, "negative list length in " + where);
-                        in.skip(p.type, uint64_t(c), where);
-                        vals[i] = 0;
-                    } else {
-                        vals[i] = in.read(p.type, where);
-                    }
-                }
-                mesh.P.emplace_back(vals[ix], vals[iy], vals[iz]);
-                if (hasN) mesh.N.emplace_back(vals[inx], vals[iny], vals[inz]);
-                if (hasUV) mesh.uv.emplace_back(vals[iu], vals[iv]);
-            }
+            ReadVertices(e, h.format, in, name, mesh);
             nVertices = e.count;
         } else if (e.name == "face") {
-            int iIdx = -1;
-            for (int i = 0; i < int(e.props.size()); ++i)
-                if (e.props[i].isList && (e.props[i].name == "vertex_indices" || e.props[i].name == "vertex_index"))
-                    iIdx = i;
-            if (iIdx < 0) throw fail(0, "face element has no vertex_indices list");
-            if (!IsIntegral(e.props[iIdx].type)) throw fail(0, "vertex_indices must have an integer type");
-            size_t cap = std::min<uint64_t>(e.count, in.remaining() / 4 + 1);
-            mesh.indices.reserve(cap * 3);
-            for (uint64_t r = 0; r < e.count; ++r) {
-                for (int i = 0; i < int(e.props.size()); ++i) {
-                    const Property &p = e.props[i];
-                    if (!p.isList) {
-                        in.read(p.type, where);
-                        continue;
-                    }
-                    double c = in.read(p.countType, where);
-                    if (!(c >= 0)) throw fail(0, "negative list length in " + where);
-                    if (i != iIdx) {
-                        in.skip(p.type, uint64_t(c), where);
-                        continue;
-                    }
-                    if (c != 3 && c != 4)
-                        throw fail(0, "face " + std::to_string(r) + " has " + std::to_string(int64_t(c)) +
-                                          " vertices (only triangles and quads are supported)");
-                    int v[4];
-                    for (int k = 0; k < int(c); ++k) {
-                        double x = in.read(p.type, where);
-                        if (!(x >= 0 && x <= double(INT_MAX)))
-                            throw fail(0, "face " + std::to_string(r) + ": vertex index " +
-                                              std::to_string(int64_t(x)) + " out of range");
-                        v[k] = int(x);
-                    }
-                    mesh.indices.insert(mesh.indices.end(), {v[0], v[1], v[2]});
-                    if (c == 4) mesh.indices.insert(mesh.indices.end(), {v[0], v[2], v[3]});
-                }
-            }
+            ReadFaces(e, in, name, mesh);
         } else {
-            for (uint64_t r = 0; r < e.count; ++r)
-                for (const Property &p : e.props) {
-                    if (p.isList) {
-                        double c = in.read(p.countType, where);
-                        if (!(c >= 0)) throw fail(0, "negative list length in " + where);
-                        in.skip(p.type, uint64_t(c), where);
-                    } else {
-                        in.read(p.type, where);
-                    }
-                }
+            SkipElement(e, in, name);
         }
     }
-    if (!haveVertices) throw fail(0, "PLY file has no vertex element");
+    if (!haveVertices) throw PlyError(name, 0, "PLY file has no vertex element");
     for (size_t i = 0; i < mesh.indices.size(); ++i)
         if (uint64_t(mesh.indices[i]) >= nVertices)
-            throw fail(0, "triangle " + std::to_string(i / 3) + " references vertex " +
-                              std::to_string(mesh.indices[i]) + " but there are only " + std::to_string(nVertices) +
-                              " vertices");
+            throw PlyError(name, 0, "triangle " + std::to_string(i / 3) + " references vertex " +
+                                        std::to_string(mesh.indices[i]) + " but there are only " +
+                                        std::to_string(nVertices) + " vertices");
     return mesh;
 }
 

@@ -406,140 +406,181 @@ void VCMIntegrator::lightPass(PassContext &ctx) {
 }
 
 // ---------------------------------------------------------------- camera pass
-void VCMIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const {
-    const Scene &scene = *scene_;
-    Ray ray;
-    const Float w = scene.camera->generateRay(cs, &ray);
-    if (w == 0) return;
-    const int maxCam = set_.maxDepth + 2;
-    PathVertex *z;
-    BSDF *zb;
-    AllocSubpath(arena, maxCam, &z, &zb);
-    RNG mediaRng;
-    RNG *mrng = scene.features.media ? &(mediaRng = CameraSampleMediaRNG(sampler, cs)) : nullptr;
-    const int nC = GenerateCameraSubpath(ctx_, ray, sampler, arena, maxCam, z, zb, mrng);
-    const bool power = ctx_.heuristic == MISHeuristic::Power;
-    const Point2i pixel = rec.pixel();
-    const int64_t own = int64_t(pixel.y - bounds_.pMin.y) * bounds_.width() + (pixel.x - bounds_.pMin.x);
-    uint64_t merges = 0, connections = 0;
-    Spectrum L(0);
-    const VCMWeights weights{merging_ ? &kernel_ : nullptr, merging_, connecting_, power};
-    Float *Bc = static_cast<Float *>(arena.alloc(sizeof(Float) * maxCam, alignof(Float)));
-    Float *eta = static_cast<Float *>(arena.alloc(sizeof(Float) * maxCam, alignof(Float)));
-    VCMCameraEta(weights, z, zb, nC, eta);
-    VCMCameraB(ctx_, z, zb, nC, weights, eta, Bc);
-    bool specularChain = true;  // z_1 .. z_{u-1} all specular (vm mode)
-    for (int u = 1; u < nC; ++u) {
+// One camera sample (step 3): the camera subpath with its eta and B_u, then
+// at each vertex z_u the strategies that end there, each adding to L.
+struct VCMIntegrator::CameraPath {
+    CameraPath(const VCMIntegrator &in, const CameraSample &cs, const Ray &ray, Sampler &sampler, Arena &arena,
+               Point2i pixel)
+        : in(in), ctx(in.ctx_), sampler(sampler), arena(arena), maxCam(in.set_.maxDepth + 2) {
+        AllocSubpath(arena, maxCam, &z, &zb);
+        mrng = in.scene_->features.media ? &(mediaRng = CameraSampleMediaRNG(sampler, cs)) : nullptr;
+        nC = GenerateCameraSubpath(ctx, ray, sampler, arena, maxCam, z, zb, mrng);
+        power = ctx.heuristic == MISHeuristic::Power;
+        own = int64_t(pixel.y - in.bounds_.pMin.y) * in.bounds_.width() + (pixel.x - in.bounds_.pMin.x);
+        weights = VCMWeights{in.merging_ ? &in.kernel_ : nullptr, in.merging_, in.connecting_, power};
+        Bc = static_cast<Float *>(arena.alloc(sizeof(Float) * maxCam, alignof(Float)));
+        eta = static_cast<Float *>(arena.alloc(sizeof(Float) * maxCam, alignof(Float)));
+        VCMCameraEta(weights, z, zb, nC, eta);
+        VCMCameraB(ctx, z, zb, nC, weights, eta, Bc);
+    }
+
+    Float SC(const VCMCameraTerms &terms, Float oz, Float oPrev, bool gu, bool emitter = false) const {
+        return VCMCameraSum(terms, oz, oPrev, gu, emitter, weights);
+    }
+
+    // s = 0: z_u is an emitter (or the infinite lights).
+    void emission(int u, const VCMCameraTerms &terms, bool specularChain) {
+        const PathVertex &zu = z[u], &zp = z[u - 1];
+        const int depthHere = u - 1;  // edges from the camera to z_u, minus 1
+        if (depthHere > in.set_.maxDepth) return;
+        Spectrum Le = EmittedRadiance(ctx, zu, zp);
+        if (Le.isBlack()) return;
+        Float weight;
+        if (!in.connecting_) {
+            weight = specularChain ? 1 : 0;  // vm: emission only through specular chains
+        } else {
+            // z_u as the light origin: other(z_u) = PdfLightOrigin, other(z_{u-1}) = PdfLightDirection; no merge at x_0.
+            weight = 1 / (1 + SC(terms, PdfLightOrigin(ctx, zu, zp), PdfLightDirection(ctx, zu, zp), false, true));
+        }
+        L += zu.throughput() * Le * weight;
+    }
+
+    // s = 1: next-event estimation (as ConnectBDPT), depth u.
+    void nextEvent(int u, const VCMCameraTerms &terms, bool gu) {
         const PathVertex &zu = z[u], &zp = z[u - 1];
         const BSDF &bu = zb[u];
-        const int depthHere = u - 1;  // edges from the camera to z_u, minus 1
-        const VCMCameraTerms terms = VCMCameraAt(ctx_, z, zb, u, Bc[u], eta, weights);
-        auto SC = [&](Float oz, Float oPrev, bool gu, bool emitter = false) {
-            return VCMCameraSum(terms, oz, oPrev, gu, emitter, weights);
-        };
-
-        // s = 0: z_u is an emitter (or the infinite lights).
-        if (depthHere <= set_.maxDepth) {
-            Spectrum Le = EmittedRadiance(ctx_, zu, zp);
-            if (!Le.isBlack()) {
-                Float weight;
-                if (!connecting_) {
-                    weight = specularChain ? 1 : 0;  // vm: emission only through specular chains
-                } else {
-                    // z_u as the light origin: other(z_u) = PdfLightOrigin, other(z_{u-1}) = PdfLightDirection; no merge at x_0.
-                    weight = 1 / (1 + SC(PdfLightOrigin(ctx_, zu, zp), PdfLightDirection(ctx_, zu, zp), false, true));
-                }
-                L += zu.throughput() * Le * weight;
+        Float uSel = sampler.get1D();
+        Point2 uLight = sampler.get2D();
+        PathVertex y0;
+        LightLiSample ls;
+        Spectrum Lw;
+        if (u <= in.set_.maxDepth && SampleLightVertex(ctx, zu, uSel, uLight, &y0, &ls, &Lw) &&
+            EdgeConnectible(ctx, y0, zu)) {
+            Spectrum c = zu.throughput() * EvalBSDF(zu, bu, y0, TransportMode::Radiance) * Lw * ScatterCos(zu, ls.wi);
+            if (!c.isBlack()) c *= Transmittance(ctx, zu, AsInteraction(zu), ls.pLight, mrng);
+            if (!c.isBlack()) {
+                // S_L(0) = R_0 c_{-1}; S_C(u) with other(z_u) = emission density, other(z_{u-1}) from y_0.
+                const Float o0 = PdfArea(ctx, zu, &bu, &zp, y0, TransportMode::Radiance);
+                const Float SL = y0.isDeltaLight() ? 0 : Mis(Remap(o0) / Remap(y0.pdfFwd), power);
+                const Float oz = PdfLightDirection(ctx, y0, zu);
+                const Float oPrev = PdfArea(ctx, zu, &bu, &y0, zp, TransportMode::Importance);
+                L += c / (1 + SL + SC(terms, oz, oPrev, gu));
             }
         }
+    }
+
+    // s >= 2: connections to the own light subpath's vertices y_i (depth i + u).
+    void connectOwnLightSubpath(int u, const VCMCameraTerms &terms, bool gu) {
+        const std::vector<uint32_t> &pathStart = in.pathStart_;
+        if (!(own >= 0 && own + 1 < int64_t(pathStart.size()))) return;
+        for (uint32_t k = pathStart[own]; k < pathStart[own + 1]; ++k) connect(u, terms, gu, in.vertices_[k]);
+    }
+
+    void connect(int u, const VCMCameraTerms &terms, bool gu, const LightVertex &lv) {
+        const PathVertex &zu = z[u], &zp = z[u - 1];
+        const BSDF &bu = zb[u];
+        if (int(lv.depth) + u > in.set_.maxDepth) return;
+        const PathVertex y = AsPathVertex(*in.scene_, lv);
+        if (!EdgeConnectible(ctx, y, zu)) return;
+        BSDF by = RebuildBSDF(ctx, y, TransportMode::Importance, arena);
+        if (!by && !y.inMedium()) return;
+        Spectrum c = lv.throughput() * EvalBSDF(y, by, zu, TransportMode::Importance) *
+                     EvalBSDF(zu, bu, y, TransportMode::Radiance) * zu.throughput();
+        if (c.isBlack()) return;
+        Vec3 d = y.p - zu.p;
+        const Float d2 = d.lengthSquared();
+        d = d / std::sqrt(d2);
+        c *= ScatterCos(y, d) * ScatterCos(zu, d) / d2;
+        if (c.isBlack()) return;
+        ++connections;
+        c *= Transmittance(ctx, y, AsInteraction(y), AsInteraction(zu), mrng);
+        if (c.isBlack()) return;
+        // Light side: o_i from z_u, o_{i-1} from y_i's BSDF with z_u as its successor.
+        const Float oi = PdfArea(ctx, zu, &bu, &zp, y, TransportMode::Radiance);
+        const Float oim1 = ScatterPdf(y, by, -d, Vec3(y.wo), TransportMode::Radiance) * lv.prevGeom;
+        const Float SL = VCMLightSum(lv, oi, oim1, terms.H, weights.sigma(&by), weights);
+        // Camera side: other(z_u) from y_i's BSDF, other(z_{u-1}) from z_u's BSDF with y_i as predecessor.
+        const Float oz = ConvertDensity(ScatterPdf(y, by, Vec3(y.wo), -d, TransportMode::Importance), y, zu);
+        const Float oPrev = PdfArea(ctx, zu, &bu, &y, zp, TransportMode::Importance);
+        L += c / (1 + SL + SC(terms, oz, oPrev, gu));
+    }
+
+    // Merges at z_u with every light vertex within r (Eq. 11).
+    void merge(int u, const VCMCameraTerms &terms) {
+        const PathVertex &zu = z[u], &zp = z[u - 1];
+        const BSDF &bu = zb[u];
+        Spectrum Lm(0);
+        const Float etaU = eta[u];
+        in.grid_.query(zu.p, std::sqrt(etaU / in.kernel_.piN), [&](uint32_t k, Float) {
+            const LightVertex &lv = in.vertices_[k];
+            if (lv.inMedium() || int(lv.depth) + u - 1 > in.set_.maxDepth) return;  // merging on surfaces only
+            const Vec3 wi = lv.wo;  // towards y_{m-1}
+            const Spectrum f = bu.f(Vec3(zu.wo), wi, TransportMode::Radiance);
+            if (f.isBlack()) return;
+            ++merges;
+            Float weight = 1;
+            if (in.connecting_) {
+                // w_VM = eta_u o(z_u) / (c + S_L(m-1) + S_C(u)), o(z_u) = pdfFwd of y_m (vcm.h);
+                // eta at y_{m-1} (the junction of S_L) = eta_u sigma(z_u).
+                const Float oz = Remap(lv.pdfFwd);
+                const Float om1 = bu.pdf(Vec3(zu.wo), wi, TransportMode::Radiance) * lv.prevGeom;
+                const Float SL = VCMLightPrevSum(lv, om1, terms.H, weights);  // S_L(m-1)
+                const Float cRef = VCMPrevConnectible(lv) ? 1 : 0;  // the connection of y_{m-1} and z_u
+                const Float oPrev = ConvertDensity(bu.pdf(wi, Vec3(zu.wo), TransportMode::Importance), zu, zp);
+                weight = Mis(etaU * oz, power) / (cRef + SL + SC(terms, oz, oPrev, true));
+            }
+            Lm += lv.throughput() * f * weight;
+        });
+        // beta_L f beta_C / (pi r_u^2 N) (Eq. 5 with the uniform disk kernel).
+        L += zu.throughput() * Lm / etaU;
+    }
+
+    const VCMIntegrator &in;
+    const BidirContext &ctx;
+    Sampler &sampler;
+    Arena &arena;
+    const int maxCam;
+    PathVertex *z;
+    BSDF *zb;
+    RNG mediaRng;
+    RNG *mrng;
+    int nC;
+    bool power;
+    int64_t own;  // index of the pixel's own light subpath
+    VCMWeights weights;
+    Float *Bc, *eta;
+    uint64_t merges = 0, connections = 0;
+    Spectrum L = Spectrum(0);
+};
+
+void VCMIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const {
+    Ray ray;
+    const Float w = scene_->camera->generateRay(cs, &ray);
+    if (w == 0) return;
+    CameraPath path(*this, cs, ray, sampler, arena, rec.pixel());
+    const PathVertex *z = path.z;
+    bool specularChain = true;  // z_1 .. z_{u-1} all specular (vm mode)
+    for (int u = 1; u < path.nC; ++u) {
+        const PathVertex &zu = z[u];
+        const BSDF &bu = path.zb[u];
+        const VCMCameraTerms terms = VCMCameraAt(ctx_, z, path.zb, u, path.Bc[u], path.eta, path.weights);
+        path.emission(u, terms, specularChain);
         if (!zu.scatters() || (zu.type == VertexType::Surface && !bu)) break;
         const bool connectible = IsConnectible(zu, &bu);
         const bool gu = merging_ && zu.type == VertexType::Surface;  // merging at z_u is a strategy
         if (connectible && connecting_) {
-            // s = 1: next-event estimation (as ConnectBDPT), depth u.
-            Float uSel = sampler.get1D();
-            Point2 uLight = sampler.get2D();
-            PathVertex y0;
-            LightLiSample ls;
-            Spectrum Lw;
-            if (u <= set_.maxDepth && SampleLightVertex(ctx_, zu, uSel, uLight, &y0, &ls, &Lw) &&
-                EdgeConnectible(ctx_, y0, zu)) {
-                Spectrum c =
-                    zu.throughput() * EvalBSDF(zu, bu, y0, TransportMode::Radiance) * Lw * ScatterCos(zu, ls.wi);
-                if (!c.isBlack()) c *= Transmittance(ctx_, zu, AsInteraction(zu), ls.pLight, mrng);
-                if (!c.isBlack()) {
-                    // S_L(0) = R_0 c_{-1}; S_C(u) with other(z_u) = emission density, other(z_{u-1}) from y_0.
-                    const Float o0 = PdfArea(ctx_, zu, &bu, &zp, y0, TransportMode::Radiance);
-                    const Float SL = y0.isDeltaLight() ? 0 : Mis(Remap(o0) / Remap(y0.pdfFwd), power);
-                    const Float oz = PdfLightDirection(ctx_, y0, zu);
-                    const Float oPrev = PdfArea(ctx_, zu, &bu, &y0, zp, TransportMode::Importance);
-                    L += c / (1 + SL + SC(oz, oPrev, gu));
-                }
-            }
-            // s >= 2: connections to the own light subpath's vertices y_i (depth i + u).
-            if (own >= 0 && own + 1 < int64_t(pathStart_.size())) {
-                for (uint32_t k = pathStart_[own]; k < pathStart_[own + 1]; ++k) {
-                    const LightVertex &lv = vertices_[k];
-                    if (int(lv.depth) + u > set_.maxDepth) continue;
-                    const PathVertex y = AsPathVertex(scene, lv);
-                    if (!EdgeConnectible(ctx_, y, zu)) continue;
-                    BSDF by = RebuildBSDF(ctx_, y, TransportMode::Importance, arena);
-                    if (!by && !y.inMedium()) continue;
-                    Spectrum c = lv.throughput() * EvalBSDF(y, by, zu, TransportMode::Importance) *
-                                 EvalBSDF(zu, bu, y, TransportMode::Radiance) * zu.throughput();
-                    if (c.isBlack()) continue;
-                    Vec3 d = y.p - zu.p;
-                    const Float d2 = d.lengthSquared();
-                    d = d / std::sqrt(d2);
-                    c *= ScatterCos(y, d) * ScatterCos(zu, d) / d2;
-                    if (c.isBlack()) continue;
-                    ++connections;
-                    c *= Transmittance(ctx_, y, AsInteraction(y), AsInteraction(zu), mrng);
-                    if (c.isBlack()) continue;
-                    // Light side: o_i from z_u, o_{i-1} from y_i's BSDF with z_u as its successor.
-                    const Float oi = PdfArea(ctx_, zu, &bu, &zp, y, TransportMode::Radiance);
-                    const Float oim1 = ScatterPdf(y, by, -d, Vec3(y.wo), TransportMode::Radiance) * lv.prevGeom;
-                    const Float SL = VCMLightSum(lv, oi, oim1, terms.H, weights.sigma(&by), weights);
-                    // Camera side: other(z_u) from y_i's BSDF, other(z_{u-1}) from z_u's BSDF with y_i as predecessor.
-                    const Float oz = ConvertDensity(ScatterPdf(y, by, Vec3(y.wo), -d, TransportMode::Importance), y, zu);
-                    const Float oPrev = PdfArea(ctx_, zu, &bu, &y, zp, TransportMode::Importance);
-                    L += c / (1 + SL + SC(oz, oPrev, gu));
-                }
-            }
+            path.nextEvent(u, terms, gu);
+            path.connectOwnLightSubpath(u, terms, gu);
         }
-        // Merges at z_u with every light vertex within r (Eq. 11).
-        if (merging_ && IsMergeable(zu, &bu) && eta[u] > 0) {
-            Spectrum Lm(0);
-            const Float etaU = eta[u];
-            grid_.query(zu.p, std::sqrt(etaU / kernel_.piN), [&](uint32_t k, Float) {
-                const LightVertex &lv = vertices_[k];
-                if (lv.inMedium() || int(lv.depth) + u - 1 > set_.maxDepth) return;  // merging on surfaces only
-                const Vec3 wi = lv.wo;  // towards y_{m-1}
-                const Spectrum f = bu.f(Vec3(zu.wo), wi, TransportMode::Radiance);
-                if (f.isBlack()) return;
-                ++merges;
-                Float weight = 1;
-                if (connecting_) {
-                    // w_VM = eta_u o(z_u) / (c + S_L(m-1) + S_C(u)), o(z_u) = pdfFwd of y_m (vcm.h);
-                    // eta at y_{m-1} (the junction of S_L) = eta_u sigma(z_u).
-                    const Float oz = Remap(lv.pdfFwd);
-                    const Float om1 = bu.pdf(Vec3(zu.wo), wi, TransportMode::Radiance) * lv.prevGeom;
-                    const Float SL = VCMLightPrevSum(lv, om1, terms.H, weights);  // S_L(m-1)
-                    const Float cRef = VCMPrevConnectible(lv) ? 1 : 0;  // the connection of y_{m-1} and z_u
-                    const Float oPrev = ConvertDensity(bu.pdf(wi, Vec3(zu.wo), TransportMode::Importance), zu, zp);
-                    weight = Mis(etaU * oz, power) / (cRef + SL + SC(oz, oPrev, true));
-                }
-                Lm += lv.throughput() * f * weight;
-            });
-            // beta_L f beta_C / (pi r_u^2 N) (Eq. 5 with the uniform disk kernel).
-            L += zu.throughput() * Lm / etaU;
+        if (merging_ && IsMergeable(zu, &bu) && path.eta[u] > 0) {
+            path.merge(u, terms);
             if (!connecting_) break;  // vm: merge at the first non-specular vertex only
         }
         specularChain = specularChain && zu.delta();
     }
-    nMerges_ += merges;
-    nConnections_ += connections;
-    rec.addRadiance(L * w);
+    nMerges_ += path.merges;
+    nConnections_ += path.connections;
+    rec.addRadiance(path.L * w);
 }
 
 std::string VCMIntegrator::statistics() const {

@@ -243,6 +243,7 @@ class VCMIntegrator : public PixelSampleIntegrator, public BidirFamily {
 
   private:
     void lightPass(PassContext &ctx);
+    struct CameraPath;  // one camera sample's subpath and strategies (estimate())
     VCMSettings set_;
     FileLoc loc_;
     bool merging_ = false, connecting_ = true;

@@ -101,7 +101,7 @@ struct KernelCase {
 // media: the box filled with fog, a material-less sphere of denser smoke
 // (medium vertices on both subpaths, connected, never merged at); only the
 // fixed kernels, as vcm renders media only with them.
-void CheckRecursiveWeights(MISHeuristic h, bool media = false) {
+std::string WeightsScene(bool media) {
     using namespace bdpt_test;
     std::string objects = Sphere("Material \"mirror\"", 0.5, 0.35, 0.3, 0.35) +
                           Sphere("Material \"plastic\" \"rgb Kd\" [0.3 0.3 0.3] \"rgb Ks\" [0.5 0.5 0.5] \"float roughness\" [0.1]",
@@ -115,128 +115,195 @@ void CheckRecursiveWeights(MISHeuristic h, bool media = false) {
         lights = "MediumInterface \"fog\" \"fog\"\n" + lights;
         objects += Sphere("MediumInterface \"smoke\" \"fog\"\nMaterial \"\"", 0.1, 1.3, 0.2, 0.3);
     }
-    std::string text = BoxScene("bdpt", lights, objects, 16, cameraLine, true);
+    return BoxScene("bdpt", lights, objects, 16, cameraLine, true);
+}
+
+MergeKernel CaseKernel(const KernelCase &kc, const Camera &camera) {
+    const bool adaptive = kc.eta < 0;
+    MergeKernel k;
+    k.piN = 1;
+    k.r2 = adaptive ? 1e-3 : kc.eta;
+    if (adaptive) {
+        // eta at the first mergeable vertex about 1 .. 100 (footprint^2 ~ 1e-4 .. 1e-2 in this box).
+        k.footprint2 = 3e3;
+        k.r2Max = 1e9;
+        k.shrink = kc.shrink;
+        k.pixels = Float(camera.fullResolution.x) * camera.fullResolution.y;
+        k.camera = &camera;
+    }
+    return k;
+}
+
+// What one kernel case checks against: the reference's strategies and the
+// recursion's weights (both pointing at k).
+struct WeightsCase {
+    const BidirContext &ctx;
+    const KernelCase &kc;
+    const MergeKernel &k;
+    const StrategySet &set;
+    const VCMWeights &w;
+};
+
+struct WeightCounts {
+    int checked = 0, withSpecular = 0, lightTraced = 0, shrunk = 0, mediumEnds = 0;
+};
+
+// One camera and one light subpath with the recursion's quantities.
+struct WeightSubpaths {
+    std::vector<PathVertex> cv, lv;
+    std::vector<BSDF> cb, lb;
+    int nC = 0, nL = 0;
+    std::vector<LightVertex> recs;  // the light vertices vcm stores
+    std::vector<Float> B, eta;      // per camera vertex
+    explicit WeightSubpaths(int maxDepth) : cv(maxDepth + 2), lv(maxDepth + 1), cb(maxDepth + 2), lb(maxDepth + 1) {}
+    SubpathView cam() const { return {cv.data(), cb.data(), nC}; }
+    SubpathView light() const { return {lv.data(), lb.data(), nL}; }
+};
+
+// Sample i: a camera subpath through pixel (i % 16, i / 16 % 16) and a light subpath.
+void GenerateWeightSubpaths(const WeightsCase &wc, int i, int maxDepth, Sampler &sampler, Arena &arena, RNG &rng,
+                            bool media, WeightSubpaths &p) {
+    const Camera &camera = *wc.ctx.scene->camera;
+    sampler.startPixelSample({i % 16, (i / 16) % 16}, i / 256);
+    CameraSample cs;
+    Point2 u = sampler.get2D();
+    cs.pFilm = Point2(i % 16 + u.x, (i / 16) % 16 + u.y);
+    cs.pLens = sampler.get2D();
+    Ray ray;
+    camera.generateRay(cs, &ray);
+    rng = RNG(uint64_t(i));
+    RNG *mrng = media ? &rng : nullptr;
+    p.nC = GenerateCameraSubpath(wc.ctx, ray, sampler, arena, maxDepth + 2, p.cv.data(), p.cb.data(), mrng);
+    p.nL = GenerateLightSubpath(wc.ctx, sampler, arena, maxDepth + 1, p.lv.data(), p.lb.data(), mrng);
+    VCMLightVertices(wc.ctx, p.lv.data(), p.lb.data(), p.nL, wc.w, &p.recs);
+    p.B.resize(p.nC);
+    p.eta.resize(p.nC);
+    VCMCameraEta(wc.w, p.cv.data(), p.cb.data(), p.nC, p.eta.data());
+    VCMCameraB(wc.ctx, p.cv.data(), p.cb.data(), p.nC, wc.w, p.eta.data(), p.B.data());
+}
+
+// t = 1: light tracing from every stored vertex, eta at y_i from its footprint.
+void CheckLightTracingWeights(const WeightsCase &wc, const WeightSubpaths &p, Sampler &sampler, WeightCounts &n) {
+    const BidirContext &ctx = wc.ctx;
+    for (const LightVertex &y : p.recs) {
+        const int s = y.depth + 1;
+        const PathVertex &yv = p.lv[s - 1];
+        PathVertex lens;
+        CameraWiSample cws;
+        if (!SampleLensVertex(ctx, yv, sampler.get2D(), &lens, &cws) || !EdgeConnectible(ctx, yv, lens)) continue;
+        const Float ref = MISWeight(ctx, wc.set, p.light(), p.cam(), s, 1, &lens);
+        const Float oi = PdfArea(ctx, lens, nullptr, nullptr, yv, TransportMode::Radiance);
+        const Float oim1 = PdfArea(ctx, yv, &p.lb[s - 1], &lens, p.lv[s - 2], TransportMode::Radiance);
+        Float hy = 0;
+        if (wc.set.merging) {
+            const Vec3 d = yv.p - lens.p;
+            hy = wc.k.firstEta(lens.p, Normalize(d), d.length());
+        }
+        const Float rec = 1 / (1 + VCMLightSum(y, oi, oim1, hy, wc.w.sigma(&p.lb[s - 1]), wc.w));
+        EXPECT_NEAR(rec, ref, 1e-6 * (1 + ref)) << "s=" << s << " t=1 " << wc.kc.name;
+        ++n.lightTraced;
+    }
+}
+
+// s = 0 at camera vertex uu = t - 1 when it is an emitter.
+void CheckEmitterHitWeight(const WeightsCase &wc, const WeightSubpaths &p, int t, WeightCounts &n) {
+    const BidirContext &ctx = wc.ctx;
+    const int uu = t - 1;
+    const PathVertex &z = p.cv[uu];
+    if (EmittedRadiance(ctx, z, p.cv[uu - 1]).isBlack()) return;
+    const Float ref = MISWeight(ctx, wc.set, p.light(), p.cam(), 0, t, nullptr);
+    const Float rec = 1 / (1 + VCMCameraSum(VCMCameraAt(ctx, p.cv.data(), p.cb.data(), uu, p.B[uu], p.eta.data(), wc.w),
+                                            PdfLightOrigin(ctx, z, p.cv[uu - 1]),
+                                            PdfLightDirection(ctx, z, p.cv[uu - 1]), false, true, wc.w));
+    EXPECT_NEAR(rec, ref, 1e-9 * (1 + ref)) << "s=0 t=" << t << " " << wc.kc.name;
+    ++n.checked;
+}
+
+// s >= 2, t: connections of camera vertex t - 1 to every stored light vertex.
+void CheckConnectionWeights(const WeightsCase &wc, const WeightSubpaths &p, int t, ConnectSamples &cu,
+                            WeightCounts &n) {
+    const BidirContext &ctx = wc.ctx;
+    const VCMWeights &w = wc.w;
+    const std::vector<PathVertex> &cv = p.cv, &lv = p.lv;
+    const std::vector<BSDF> &cb = p.cb, &lb = p.lb;
+    const int uu = t - 1;
+    const PathVertex &z = cv[uu];
+    const VCMCameraTerms terms = VCMCameraAt(ctx, cv.data(), cb.data(), uu, p.B[uu], p.eta.data(), w);
+    for (const LightVertex &y : p.recs) {
+        const int s = y.depth + 1;
+        ConnectResult r;
+        if (!ConnectBDPT(ctx, p.light(), p.cam(), s, t, cu, &r)) continue;
+        const PathVertex &yv = lv[s - 1];
+        const Float ref = MISWeight(ctx, wc.set, p.light(), p.cam(), s, t, nullptr);
+        const Float oi = PdfArea(ctx, z, &cb[uu], &cv[uu - 1], yv, TransportMode::Radiance);
+        const Float oim1 = PdfArea(ctx, yv, &lb[s - 1], &z, lv[s - 2], TransportMode::Radiance);
+        const Float oz = PdfArea(ctx, yv, &lb[s - 1], &lv[s - 2], z, TransportMode::Importance);
+        const Float op = PdfArea(ctx, z, &cb[uu], &yv, cv[uu - 1], TransportMode::Importance);
+        const Float rec = 1 / (1 + VCMLightSum(y, oi, oim1, terms.H, w.sigma(&lb[s - 1]), w) +
+                               VCMCameraSum(terms, oz, op, w.merging && !z.inMedium(), false, w));
+        EXPECT_NEAR(rec, ref, 1e-6 * (1 + ref)) << "s=" << s << " t=" << t << " " << wc.kc.name;
+        bool spec = false;
+        for (int q = 1; q < s - 1; ++q) spec |= lv[q].delta();
+        for (int q = 1; q < uu; ++q) spec |= cv[q].delta();
+        n.withSpecular += spec;
+        n.mediumEnds += z.inMedium() || yv.inMedium();
+        ++n.checked;
+    }
+}
+
+// 1500 subpath pairs with one kernel: every strategy's recursive weight
+// against the reference, and enough of each kind checked.
+void CheckKernelCase(const BidirContext &ctx, const KernelCase &kc, MISHeuristic h, bool media, Sampler &sampler) {
+    const int maxDepth = 6;
+    const bool adaptive = kc.eta < 0;
+    const MergeKernel k = CaseKernel(kc, *ctx.scene->camera);
+    StrategySet set;
+    set.merging = adaptive || kc.eta > 0;
+    set.mergeFactor = adaptive ? 0 : kc.eta;
+    set.kernel = adaptive ? &k : nullptr;
+    const VCMWeights w{set.merging ? &k : nullptr, set.merging, true, h == MISHeuristic::Power};
+    const WeightsCase wc{ctx, kc, k, set, w};
+    WeightCounts n;
+    RNG rng;
+    ConnectSamples cu;
+    cu.rng = &rng;
+    Arena arena;
+    for (int i = 0; i < 1500; ++i) {
+        arena.reset();
+        WeightSubpaths p(maxDepth);
+        GenerateWeightSubpaths(wc, i, maxDepth, sampler, arena, rng, media, p);
+        for (int j = 2; j < p.nC; ++j) n.shrunk += p.eta[j - 1] > 0 && p.eta[j] > 0 && p.eta[j] < 0.99 * p.eta[j - 1];
+        CheckLightTracingWeights(wc, p, sampler, n);
+        for (int t = 2; t <= p.nC; ++t) {
+            CheckEmitterHitWeight(wc, p, t, n);
+            const PathVertex &z = p.cv[t - 1];
+            if (z.scatters() && IsConnectible(z, &p.cb[t - 1])) CheckConnectionWeights(wc, p, t, cu, n);
+        }
+    }
+    EXPECT_GE(n.checked, 1000) << kc.name;
+    EXPECT_GE(n.lightTraced, 300) << kc.name;
+    EXPECT_GE(n.withSpecular, 30) << "connections with a specular interior vertex, " << kc.name;
+    if (media) {
+        EXPECT_GE(n.mediumEnds, 300) << "connections at a medium vertex, " << kc.name;
+    }
+    if (adaptive && kc.shrink > 0) {
+        EXPECT_GE(n.shrunk, 300) << "camera vertices with a shrunk radius, " << kc.name;
+    }
+}
+
+void CheckRecursiveWeights(MISHeuristic h, bool media = false) {
     BuildOptions bo;
     bo.quiet = true;
-    RenderJob job = BuildRenderJob(ParseString(text), bo);
+    RenderJob job = BuildRenderJob(ParseString(WeightsScene(media)), bo);
     LightSampler ls(job.scene->lights, "power", FileLoc());
     BidirContext ctx;
     ctx.init(*job.scene, ls, h);
     auto sampler = job.sampler->clone();
-    const int maxDepth = 6;
-    const Camera &camera = *job.scene->camera;
     for (KernelCase kc : {KernelCase{"fixed 0", 0, 0}, KernelCase{"fixed 1e-2", 1e-2, 0}, KernelCase{"fixed 1", 1, 0},
                           KernelCase{"fixed 100", 100, 0}, KernelCase{"adaptive s=10", -1, 10},
                           KernelCase{"adaptive s=1", -1, 1}, KernelCase{"footprint s=0", -1, 0}}) {
-        const bool adaptive = kc.eta < 0;
-        if (media && adaptive) continue;
-        MergeKernel k;
-        k.piN = 1;
-        k.r2 = adaptive ? 1e-3 : kc.eta;
-        if (adaptive) {
-            // eta at the first mergeable vertex about 1 .. 100 (footprint^2 ~ 1e-4 .. 1e-2 in this box).
-            k.footprint2 = 3e3;
-            k.r2Max = 1e9;
-            k.shrink = kc.shrink;
-            k.pixels = Float(camera.fullResolution.x) * camera.fullResolution.y;
-            k.camera = &camera;
-        }
-        StrategySet set;
-        set.merging = adaptive || kc.eta > 0;
-        set.mergeFactor = adaptive ? 0 : kc.eta;
-        set.kernel = adaptive ? &k : nullptr;
-        const VCMWeights w{set.merging ? &k : nullptr, set.merging, true, h == MISHeuristic::Power};
-        int checked = 0, withSpecular = 0, lightTraced = 0, shrunk = 0, mediumEnds = 0;
-        RNG rng;
-        ConnectSamples cu;
-        cu.rng = &rng;
-        Arena arena;
-        for (int i = 0; i < 1500; ++i) {
-            arena.reset();
-            std::vector<PathVertex> cv(maxDepth + 2), lv(maxDepth + 1);
-            std::vector<BSDF> cb(maxDepth + 2), lb(maxDepth + 1);
-            sampler->startPixelSample({i % 16, (i / 16) % 16}, i / 256);
-            CameraSample cs;
-            Point2 u = sampler->get2D();
-            cs.pFilm = Point2(i % 16 + u.x, (i / 16) % 16 + u.y);
-            cs.pLens = sampler->get2D();
-            Ray ray;
-            camera.generateRay(cs, &ray);
-            rng = RNG(uint64_t(i));
-            RNG *mrng = media ? &rng : nullptr;
-            const int nC = GenerateCameraSubpath(ctx, ray, *sampler, arena, maxDepth + 2, cv.data(), cb.data(), mrng);
-            const int nL = GenerateLightSubpath(ctx, *sampler, arena, maxDepth + 1, lv.data(), lb.data(), mrng);
-            std::vector<LightVertex> recs;
-            VCMLightVertices(ctx, lv.data(), lb.data(), nL, w, &recs);
-            std::vector<Float> B(nC), eta(nC);
-            VCMCameraEta(w, cv.data(), cb.data(), nC, eta.data());
-            VCMCameraB(ctx, cv.data(), cb.data(), nC, w, eta.data(), B.data());
-            for (int j = 2; j < nC; ++j) shrunk += eta[j - 1] > 0 && eta[j] > 0 && eta[j] < 0.99 * eta[j - 1];
-            SubpathView cam{cv.data(), cb.data(), nC}, light{lv.data(), lb.data(), nL};
-            // t = 1: light tracing from every stored vertex, eta at y_i from its footprint.
-            for (const LightVertex &y : recs) {
-                const int s = y.depth + 1;
-                const PathVertex &yv = lv[s - 1];
-                PathVertex lens;
-                CameraWiSample cws;
-                if (!SampleLensVertex(ctx, yv, sampler->get2D(), &lens, &cws) || !EdgeConnectible(ctx, yv, lens)) continue;
-                const Float ref = MISWeight(ctx, set, light, cam, s, 1, &lens);
-                const Float oi = PdfArea(ctx, lens, nullptr, nullptr, yv, TransportMode::Radiance);
-                const Float oim1 = PdfArea(ctx, yv, &lb[s - 1], &lens, lv[s - 2], TransportMode::Radiance);
-                Float hy = 0;
-                if (set.merging) {
-                    const Vec3 d = yv.p - lens.p;
-                    hy = k.firstEta(lens.p, Normalize(d), d.length());
-                }
-                const Float rec = 1 / (1 + VCMLightSum(y, oi, oim1, hy, w.sigma(&lb[s - 1]), w));
-                EXPECT_NEAR(rec, ref, 1e-6 * (1 + ref)) << "s=" << s << " t=1 " << kc.name;
-                ++lightTraced;
-            }
-            for (int t = 2; t <= nC; ++t) {
-                const int uu = t - 1;
-                const PathVertex &z = cv[uu];
-                // s = 0: z is an emitter.
-                if (!EmittedRadiance(ctx, z, cv[uu - 1]).isBlack()) {
-                    const Float ref = MISWeight(ctx, set, light, cam, 0, t, nullptr);
-                    const Float rec = 1 / (1 + VCMCameraSum(VCMCameraAt(ctx, cv.data(), cb.data(), uu, B[uu], eta.data(), w),
-                                                            PdfLightOrigin(ctx, z, cv[uu - 1]),
-                                                            PdfLightDirection(ctx, z, cv[uu - 1]), false, true, w));
-                    EXPECT_NEAR(rec, ref, 1e-9 * (1 + ref)) << "s=0 t=" << t << " " << kc.name;
-                    ++checked;
-                }
-                if (!z.scatters() || !IsConnectible(z, &cb[uu])) continue;
-                const VCMCameraTerms terms = VCMCameraAt(ctx, cv.data(), cb.data(), uu, B[uu], eta.data(), w);
-                for (const LightVertex &y : recs) {
-                    const int s = y.depth + 1;
-                    ConnectResult r;
-                    if (!ConnectBDPT(ctx, light, cam, s, t, cu, &r)) continue;
-                    const PathVertex &yv = lv[s - 1];
-                    const Float ref = MISWeight(ctx, set, light, cam, s, t, nullptr);
-                    const Float oi = PdfArea(ctx, z, &cb[uu], &cv[uu - 1], yv, TransportMode::Radiance);
-                    const Float oim1 = PdfArea(ctx, yv, &lb[s - 1], &z, lv[s - 2], TransportMode::Radiance);
-                    const Float oz = PdfArea(ctx, yv, &lb[s - 1], &lv[s - 2], z, TransportMode::Importance);
-                    const Float op = PdfArea(ctx, z, &cb[uu], &yv, cv[uu - 1], TransportMode::Importance);
-                    const Float rec = 1 / (1 + VCMLightSum(y, oi, oim1, terms.H, w.sigma(&lb[s - 1]), w) +
-                                           VCMCameraSum(terms, oz, op, w.merging && !z.inMedium(), false, w));
-                    EXPECT_NEAR(rec, ref, 1e-6 * (1 + ref)) << "s=" << s << " t=" << t << " " << kc.name;
-                    bool spec = false;
-                    for (int q = 1; q < s - 1; ++q) spec |= lv[q].delta();
-                    for (int q = 1; q < uu; ++q) spec |= cv[q].delta();
-                    withSpecular += spec;
-                    mediumEnds += z.inMedium() || yv.inMedium();
-                    ++checked;
-                }
-            }
-        }
-        EXPECT_GE(checked, 1000) << kc.name;
-        EXPECT_GE(lightTraced, 300) << kc.name;
-        EXPECT_GE(withSpecular, 30) << "connections with a specular interior vertex, " << kc.name;
-        if (media) {
-            EXPECT_GE(mediumEnds, 300) << "connections at a medium vertex, " << kc.name;
-        }
-        if (adaptive && kc.shrink > 0) {
-            EXPECT_GE(shrunk, 300) << "camera vertices with a shrunk radius, " << kc.name;
-        }
+        if (media && kc.eta < 0) continue;
+        CheckKernelCase(ctx, kc, h, media, *sampler);
     }
 }
 TEST(VCMWeights, RecursiveEqualsReferenceBalance) { CheckRecursiveWeights(MISHeuristic::Balance); }

@@ -72,24 +72,40 @@ MediaStep TraceThroughMedia(const Scene &scene, Ray *ray, const Medium **medium,
     }
 }
 
-// Random walk shared by both subpaths (Veach 1997, Sec. 10.2): path[n-1] is the
-// origin; fills vertices n.. up to maxVertices, setting pdfFwd of each new
-// vertex and pdfRev of its predecessor.
-// With media, each segment samples a scattering distance in its medium
-// (`medium`, distances from *rng); a scattering there is a medium vertex.
-int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sampler &sampler, Arena &arena,
-               TransportMode mode, int n, int maxVertices, PathVertex *path, BSDF *bsdfs, const Medium *medium,
-               RNG *rng) {
-    GRADUS_STAT_COUNTER("BDPT/Subpath vertices", nVerts);
-    GRADUS_STAT_COUNTER("BDPT/Medium vertices", nMediumVerts);
-    const Scene &scene = *ctx.scene;
-    const bool media = scene.features.media;
-    GRADUS_CHECK(!media || rng);
-    Float pdfFwd = pdfDir;
-    const Float beta0 = beta.maxComponent();
+// One random walk in progress (RandomWalk): the ray to trace, the throughput,
+// the solid-angle density of the next vertex and the medium the ray is in;
+// path[n-1] is the last vertex.
+struct Walk {
+    const BidirContext &ctx;
+    const Scene &scene;
+    Sampler &sampler;
+    Arena &arena;
+    const TransportMode mode;
+    const int maxVertices;
+    PathVertex *path;
+    BSDF *bsdfs;
+    RNG *rng;
+    const bool media;
+    Ray ray;
+    Spectrum beta;
+    const Float beta0;
+    Float pdfFwd;
+    const Medium *medium;
+    int n;
+
+    // What the next segment met: Miss, Surface or Medium; Absorbed and Stuck end the walk.
+    MediaStep trace(SurfaceInteraction *isect, MediumInteraction *mi) {
+        if (!media) {
+            const Scene::SurfaceHit h = scene.intersectSurface(&ray, isect);  // through interfaces
+            if (h == Scene::SurfaceHit::Stuck) return MediaStep::Stuck;
+            return h == Scene::SurfaceHit::Hit ? MediaStep::Surface : MediaStep::Miss;
+        }
+        return TraceThroughMedia(scene, &ray, &medium, *rng, isect, mi, &beta);
+    }
+
     // Russian roulette on the throughput relative to the subpath's start, after
     // vertex v (the n-th); false: the subpath ends.
-    auto roulette = [&](PathVertex &v) {
+    bool roulette(PathVertex &v) {
         if (ctx.rrDepth >= 0 && n > ctx.rrDepth + 1 && n < maxVertices) {
             Float uRR = sampler.get1D();
             Float rel = beta0 > 0 ? beta.maxComponent() / beta0 : 1;
@@ -101,74 +117,61 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
             }
         }
         return true;
-    };
-    while (n < maxVertices) {
-        SurfaceInteraction isect;
-        bool hit;
-        MediumInteraction mi;
-        if (!media) {
-            const Scene::SurfaceHit h = scene.intersectSurface(&ray, &isect);  // through interfaces
-            if (h == Scene::SurfaceHit::Stuck) break;
-            hit = h == Scene::SurfaceHit::Hit;
-        } else {
-            const MediaStep st = TraceThroughMedia(scene, &ray, &medium, *rng, &isect, &mi, &beta);
-            if (st == MediaStep::Absorbed || st == MediaStep::Stuck) break;
-            hit = st == MediaStep::Surface;
-            if (st == MediaStep::Medium) {
-                // A medium vertex: HG phase function (value = pdf, so beta is unchanged).
-                ++nVerts;
-                ++nMediumVerts;
-                PathVertex &prev = path[n - 1];
-                PathVertex &v = path[n];
-                v = PathVertex();
-                v.type = VertexType::Medium;
-                v.medium = medium;
-                v.mediumIndex = MediumIndexOf(scene, medium);
-                v.p = mi.p;
-                v.wo = -Normalize(ray.d);
-                v.setThroughput(beta);
-                v.pdfFwd = ConvertDensity(pdfFwd, prev, v);
-                bsdfs[n] = BSDF();
-                ++n;
-                DebugTrace("%s vertex %d: medium %s p (%.6g, %.6g, %.6g) pdfFwd %.4g",
-                           mode == TransportMode::Radiance ? "camera" : "light", n - 1, medium->name.c_str(), v.p.x,
-                           v.p.y, v.p.z, v.pdfFwd);
-                if (n >= maxVertices) break;
-                sampler.get1D();  // the lobe choice of a surface vertex: keeps the dimensions aligned
-                const Point2 u2 = sampler.get2D();
-                Vec3 wi;
-                const Float pdf = medium->phase.sample(Vec3(v.wo), u2, &wi);
-                if (!(pdf > 0)) break;
-                pdfFwd = pdf;
-                prev.pdfRev = ConvertDensity(pdf, v, prev);  // HG is symmetric: p(wi, wo) = p(wo, wi)
-                if (!roulette(v)) break;
-                ray = Ray(v.p, wi, Infinity);
-                continue;
-            }
-        }
+    }
+
+    // A medium vertex: HG phase function (value = pdf, so beta is unchanged),
+    // then the next direction; false: the walk ends.
+    bool mediumVertex(const MediumInteraction &mi) {
         PathVertex &prev = path[n - 1];
-        if (!hit) {
-            // An escaped camera path ends on the infinite lights.
-            if (mode == TransportMode::Radiance && !scene.infiniteLights.empty()) {
-                PathVertex &v = path[n];
-                v = PathVertex();
-                v.type = VertexType::Light;
-                v.flags = VERTEX_INFINITE;
-                v.light = nullptr;
-                Vec3 d = Normalize(ray.d);
-                v.p = ray.o + d;
-                v.ng = -d;
-                v.wo = -d;
-                v.setThroughput(beta);
-                v.pdfFwd = pdfFwd;
-                bsdfs[n] = BSDF();
-                ++n;
-                DebugTrace("camera vertex %d: escaped towards (%.4f, %.4f, %.4f) (infinite lights)", n - 1, d.x, d.y,
-                           d.z);
-            }
-            break;
-        }
-        ++nVerts;
+        PathVertex &v = path[n];
+        v = PathVertex();
+        v.type = VertexType::Medium;
+        v.medium = medium;
+        v.mediumIndex = MediumIndexOf(scene, medium);
+        v.p = mi.p;
+        v.wo = -Normalize(ray.d);
+        v.setThroughput(beta);
+        v.pdfFwd = ConvertDensity(pdfFwd, prev, v);
+        bsdfs[n] = BSDF();
+        ++n;
+        DebugTrace("%s vertex %d: medium %s p (%.6g, %.6g, %.6g) pdfFwd %.4g",
+                   mode == TransportMode::Radiance ? "camera" : "light", n - 1, medium->name.c_str(), v.p.x, v.p.y,
+                   v.p.z, v.pdfFwd);
+        if (n >= maxVertices) return false;
+        sampler.get1D();  // the lobe choice of a surface vertex: keeps the dimensions aligned
+        const Point2 u2 = sampler.get2D();
+        Vec3 wi;
+        const Float pdf = medium->phase.sample(Vec3(v.wo), u2, &wi);
+        if (!(pdf > 0)) return false;
+        pdfFwd = pdf;
+        prev.pdfRev = ConvertDensity(pdf, v, prev);  // HG is symmetric: p(wi, wo) = p(wo, wi)
+        if (!roulette(v)) return false;
+        ray = Ray(v.p, wi, Infinity);
+        return true;
+    }
+
+    // An escaped camera path ends on the infinite lights.
+    void escaped() {
+        if (mode != TransportMode::Radiance || scene.infiniteLights.empty()) return;
+        PathVertex &v = path[n];
+        v = PathVertex();
+        v.type = VertexType::Light;
+        v.flags = VERTEX_INFINITE;
+        v.light = nullptr;
+        Vec3 d = Normalize(ray.d);
+        v.p = ray.o + d;
+        v.ng = -d;
+        v.wo = -d;
+        v.setThroughput(beta);
+        v.pdfFwd = pdfFwd;
+        bsdfs[n] = BSDF();
+        ++n;
+        DebugTrace("camera vertex %d: escaped towards (%.4f, %.4f, %.4f) (infinite lights)", n - 1, d.x, d.y, d.z);
+    }
+
+    // A surface vertex at isect, then its BSDF's sampled direction; false: the walk ends.
+    bool surfaceVertex(SurfaceInteraction &isect) {
+        PathVertex &prev = path[n - 1];
         PathVertex &v = path[n];
         BSDF bsdf = isect.material->getBSDF(isect, arena, mode);
         MakeSurfaceVertex(ctx, isect, bsdf, &v);
@@ -184,13 +187,18 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
                        double(v.ng.x), double(v.ng.y), double(v.ng.z), tb.r, tb.g, tb.b, v.pdfFwd,
                        bsdf ? "" : " (no BSDF)");
         }
-        if (n >= maxVertices || !bsdf) break;
+        if (n >= maxVertices || !bsdf) return false;
+        return scatter(isect, bsdf, prev, v);
+    }
 
+    // Samples the BSDF of surface vertex v (after prev): densities both ways,
+    // the throughput's factor and the next ray.
+    bool scatter(const SurfaceInteraction &isect, const BSDF &bsdf, PathVertex &prev, PathVertex &v) {
         Vec3 wo = isect.wo;
         Float uc = sampler.get1D();
         Point2 u2 = sampler.get2D();
         BSDFSample bs;
-        if (!bsdf.sample(wo, uc, u2, mode, &bs) || !bs.valid()) break;
+        if (!bsdf.sample(wo, uc, u2, mode, &bs) || !bs.valid()) return false;
         Float pdfRev;
         pdfFwd = bs.pdf;
         if (bs.isSpecular()) {
@@ -202,12 +210,48 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
         beta *= bs.f * (AbsDot(bs.wi, Vec3(v.ns)) / bs.pdf);
         if (mode == TransportMode::Importance) beta *= ShadingCorrection(v, wo, bs.wi);
         prev.pdfRev = ConvertDensity(pdfRev, v, prev);
-        if (beta.isBlack() || !beta.isFinite()) break;
-        if (!roulette(v)) break;
+        if (beta.isBlack() || !beta.isFinite()) return false;
+        if (!roulette(v)) return false;
         if (media) medium = isect.mediumAfter(bs.wi, medium);
         ray = isect.spawnRay(bs.wi);
+        return true;
     }
-    return n;
+};
+
+// Random walk shared by both subpaths (Veach 1997, Sec. 10.2): path[n-1] is the
+// origin; fills vertices n.. up to maxVertices, setting pdfFwd of each new
+// vertex and pdfRev of its predecessor.
+// With media, each segment samples a scattering distance in its medium
+// (`medium`, distances from *rng); a scattering there is a medium vertex.
+int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sampler &sampler, Arena &arena,
+               TransportMode mode, int n, int maxVertices, PathVertex *path, BSDF *bsdfs, const Medium *medium,
+               RNG *rng) {
+    GRADUS_STAT_COUNTER("BDPT/Subpath vertices", nVerts);
+    GRADUS_STAT_COUNTER("BDPT/Medium vertices", nMediumVerts);
+    const Scene &scene = *ctx.scene;
+    const bool media = scene.features.media;
+    GRADUS_CHECK(!media || rng);
+    Walk w{ctx, scene, sampler, arena, mode, maxVertices, path, bsdfs, rng, media,
+           ray, beta, beta.maxComponent(), pdfDir, medium, n};
+    while (w.n < maxVertices) {
+        SurfaceInteraction isect;
+        MediumInteraction mi;
+        const MediaStep st = w.trace(&isect, &mi);
+        if (st == MediaStep::Absorbed || st == MediaStep::Stuck) break;
+        if (st == MediaStep::Medium) {
+            ++nVerts;
+            ++nMediumVerts;
+            if (!w.mediumVertex(mi)) break;
+            continue;
+        }
+        if (st == MediaStep::Miss) {
+            w.escaped();
+            break;
+        }
+        ++nVerts;
+        if (!w.surfaceVertex(isect)) break;
+    }
+    return w.n;
 }
 
 }  // namespace

@@ -361,60 +361,123 @@ bool HasGlossySecondChain(const SubpathShiftContext &sc, const ShiftSubpath &x) 
     return false;
 }
 
+// Point-light paths: cuts camera subpath x after vertex `cut` and appends the
+// point light, as next-event estimation would reach it.
+void EndAtPointLight(const BidirContext &bc, const Light *point, int cut, ShiftSubpath &x) {
+    x.n = cut + 1;
+    PathVertex &v = x.v[x.n];
+    v = PathVertex();
+    v.type = VertexType::Light;
+    v.light = point;
+    v.flags = VERTEX_DELTA_LIGHT;
+    LightLiSample ls;
+    point->sampleLi(AsInteraction(x.v[x.n - 1]), Point2(0.5, 0.5), &ls);
+    v.p = ls.pLight.p;
+    x.b[x.n] = BSDF();
+    ++x.n;
+    // The density of the vertex before the diffuse one as generated from
+    // the light side (stored by the walk for the direction it sampled).
+    if (x.n >= 3)
+        x.v[x.n - 3].pdfRev = PdfArea(bc, x.v[x.n - 2], &x.b[x.n - 2], &x.v[x.n - 1], x.v[x.n - 3],
+                                      TransportMode::Importance);
+}
+
+// Paths checked and what they went through.
+struct CombinedCounts {
+    int paths = 0, withLT = 0, withChain = 0, withGlossy = 0, toEnv = 0, toPoint = 0, oneSided = 0;
+};
+
+// Whether camera path x ends as the check needs (env: on the environment or
+// the point light, 100 of each; else on a surface emitter) with no vertices
+// nearly coinciding.
+bool EndsAsChecked(const BidirContext &bc, const ShiftSubpath &x, bool env, const CombinedCounts &c) {
+    const int n = x.n;
+    const PathVertex &e = x.v[n - 1];
+    const bool pointEnd = e.isDeltaLight() && !e.isInfiniteLight();
+    if (env) {
+        if (n < 3 || !(e.isInfiniteLight() || pointEnd)) return false;
+        if ((pointEnd ? c.toPoint : c.toEnv) >= 100) return false;  // 100 of each kind
+    } else {
+        if (n < 3 || !EmitterOf(bc, e) || e.type != VertexType::Surface) return false;
+        if (EmittedRadiance(bc, x.v[n - 1], x.v[n - 2]).isBlack()) return false;
+    }
+    bool corner = false;
+    for (int k = 1; k + 1 < n; ++k) corner |= Distance(x.v[k].p, x.v[k + 1].p) < 1e-2;
+    return !corner;
+}
+
+// Sums over the strategies (s, t) of x of the combined weights times (1 +
+// rho) (*sum) and of x's BDPT weights (*sumx). False when a light-tracing
+// shift failed (the sums are then partial).
+bool SumStrategyWeights(const SubpathShiftContext &sc, const BidirContext &bc, const ShiftSubpath &x,
+                        const CameraShift &sh, const CameraSample &cs, bool lightTracing, Arena &arena,
+                        SubpathShiftStats *st, double *sum, double *sumx, int *withLT) {
+    const int n = x.n;
+    const PathVertex &e = x.v[n - 1];
+    const bool pointEnd = e.isDeltaLight() && !e.isInfiniteLight();
+    bool ok = true;
+    for (int t = n; t >= 1 && ok; --t) {
+        int s = n - t;
+        if (s == 0 && pointEnd) continue;  // a point is never hit
+        if (t >= 2 && s >= 1 && !IsDiffuseVertex(sc, x.v[t - 1], &x.b[t - 1])) continue;
+        if (s >= 1 && !IsDiffuseVertex(sc, x.v[t], &x.b[t])) continue;
+        ShiftSubpath L, Ly;  // s = 0: no light vertices
+        if (s >= 1) {
+            L = ReversedTail(bc, x, s, arena);
+            Ly = ReversedTail(bc, sh.y, s, arena);
+        }
+        if (t >= 2) {
+            if (s >= 1 && !EdgeConnectible(bc, x.v[t - 1], x.v[t])) continue;
+            Float wx = MISWeight(bc, L.view(), SubpathView{x.v, x.b, t}, s, t, nullptr);
+            Float wy = MISWeight(bc, Ly.view(), SubpathView{sh.y.v, sh.y.b, t}, s, t, nullptr);
+            Float rho = sh.rho[t - 1];
+            *sum += CombinedWeight(wx, wy, rho) * (1 + rho);
+            *sumx += wx;
+        } else if (lightTracing) {
+            PathVertex lens = x.v[0];
+            Float wx = MISWeight(bc, L.view(), SubpathView{&lens, nullptr, 1}, s, 1, &lens);
+            Spectrum fy;
+            Float wy = 0, rho = 0;
+            // The lens raster position of x_1 is the camera sample's.
+            ok = ShiftLightTracingPath(sc, L, s, lens, cs.pFilm, Spectrum(1), {1, 0}, arena, &fy, &wy, &rho, st);
+            if (!ok) break;
+            *sum += CombinedWeight(wx, wy, rho) * (1 + rho);
+            *sumx += wx;
+            ++*withLT;
+        }
+    }
+    return ok;
+}
+
 void CheckCombinedWeightsSumToOne(const std::string &line, bool lightTracing, bool env = false, bool glossy = false) {
     Fixture f(line, 24, 18, env, glossy, glossy);
     const SubpathShiftContext &sc = f.g->shiftContext();
     const BidirContext &bc = f.g->bidirContext();
     std::unique_ptr<Sampler> sampler = f.job.sampler->clone();
     Arena arena;
-    int paths = 0, withLT = 0, withChain = 0, withGlossy = 0, toEnv = 0, toPoint = 0, oneSided = 0;
+    CombinedCounts c;
     const Light *point = nullptr;
     for (const auto &l : f.job.scene->lights)
         if (l->flags & LIGHT_DELTA_POSITION) point = l.get();
-    for (int trial = 0; trial < (env || glossy ? 200000 : 20000) && paths < 200; ++trial) {
+    for (int trial = 0; trial < (env || glossy ? 200000 : 20000) && c.paths < 200; ++trial) {
         Ray ray;
         const CameraSample cs = TrialSample(*sampler, *bc.camera, trial, &ray);
         const int maxV = 6;
         ShiftSubpath x = ArenaSubpath(arena, maxV);
         x.n = GenerateCameraSubpath(bc, ray, *sampler, arena, maxV - 1, x.v, x.b);
-        // Point-light paths: cut the camera subpath after its k-th vertex
-        // (k drawn from the trial index) if that one is diffuse.
+        // Point-light paths: cut after the k-th vertex (k drawn from the trial
+        // index) if that one is diffuse.
         const int cut = 1 + (trial / 2) % 4;
         if (env && point && trial % 2 && cut < x.n && x.v[cut].type == VertexType::Surface &&
-            IsDiffuseVertex(sc, x.v[cut], &x.b[cut])) {
-            x.n = cut + 1;
-            PathVertex &v = x.v[x.n];  // the point light, as next-event estimation would reach it
-            v = PathVertex();
-            v.type = VertexType::Light;
-            v.light = point;
-            v.flags = VERTEX_DELTA_LIGHT;
-            LightLiSample ls;
-            point->sampleLi(AsInteraction(x.v[x.n - 1]), Point2(0.5, 0.5), &ls);
-            v.p = ls.pLight.p;
-            x.b[x.n] = BSDF();
-            ++x.n;
-            // The density of the vertex before the diffuse one as generated from
-            // the light side (stored by the walk for the direction it sampled).
-            if (x.n >= 3)
-                x.v[x.n - 3].pdfRev = PdfArea(bc, x.v[x.n - 2], &x.b[x.n - 2], &x.v[x.n - 1], x.v[x.n - 3],
-                                              TransportMode::Importance);
-        }
+            IsDiffuseVertex(sc, x.v[cut], &x.b[cut]))
+            EndAtPointLight(bc, point, cut, x);
+        if (!EndsAsChecked(bc, x, env, c)) continue;
         const int n = x.n;
         const PathVertex &e = x.v[n - 1];
         const bool pointEnd = e.isDeltaLight() && !e.isInfiniteLight();
-        if (env) {
-            if (n < 3 || !(e.isInfiniteLight() || pointEnd)) continue;
-            if ((pointEnd ? toPoint : toEnv) >= 100) continue;  // 100 of each kind
-        } else {
-            if (n < 3 || !EmitterOf(bc, e) || e.type != VertexType::Surface) continue;
-            if (EmittedRadiance(bc, x.v[n - 1], x.v[n - 2]).isBlack()) continue;
-        }
-        bool corner = false;
-        for (int k = 1; k + 1 < n; ++k) corner |= Distance(x.v[k].p, x.v[k + 1].p) < 1e-2;
-        if (corner) continue;
         PrepareSubpath(sc, &x);
         const bool glossyChain = HasGlossySecondChain(sc, x);
-        if (glossy && !glossyChain && paths >= 2 * withGlossy) continue;  // at least a third through glossy chains
+        if (glossy && !glossyChain && c.paths >= 2 * c.withGlossy) continue;  // at least a third through glossy chains
         CameraShift sh;
         SubpathShiftStats st;
         ShiftCameraSubpath(sc, x, cs, {1, 0}, arena, &sh, &st);
@@ -426,69 +489,38 @@ void CheckCombinedWeightsSumToOne(const std::string &line, bool lightTracing, bo
         for (int k = 1; k < n; ++k) grazing |= !(sh.rho[k] > 1e-6 && sh.rho[k] < 1e6);
         if (grazing) continue;
         double sum = 0, sumx = 0;
-        bool ok = true;
-        for (int t = n; t >= 1 && ok; --t) {
-            int s = n - t;
-            if (s == 0 && pointEnd) continue;  // a point is never hit
-            if (t >= 2 && s >= 1 && !IsDiffuseVertex(sc, x.v[t - 1], &x.b[t - 1])) continue;
-            if (s >= 1 && !IsDiffuseVertex(sc, x.v[t], &x.b[t])) continue;
-            ShiftSubpath L, Ly;  // s = 0: no light vertices
-            if (s >= 1) {
-                L = ReversedTail(bc, x, s, arena);
-                Ly = ReversedTail(bc, sh.y, s, arena);
-            }
-            if (t >= 2) {
-                if (s >= 1 && !EdgeConnectible(bc, x.v[t - 1], x.v[t])) continue;
-                Float wx = MISWeight(bc, L.view(), SubpathView{x.v, x.b, t}, s, t, nullptr);
-                Float wy = MISWeight(bc, Ly.view(), SubpathView{sh.y.v, sh.y.b, t}, s, t, nullptr);
-                Float rho = sh.rho[t - 1];
-                sum += CombinedWeight(wx, wy, rho) * (1 + rho);
-                sumx += wx;
-            } else if (lightTracing) {
-                PathVertex lens = x.v[0];
-                Float wx = MISWeight(bc, L.view(), SubpathView{&lens, nullptr, 1}, s, 1, &lens);
-                Spectrum fy;
-                Float wy = 0, rho = 0;
-                // The lens raster position of x_1 is the camera sample's.
-                ok = ShiftLightTracingPath(sc, L, s, lens, cs.pFilm, Spectrum(1), {1, 0}, arena, &fy, &wy, &rho, &st);
-                if (!ok) break;
-                sum += CombinedWeight(wx, wy, rho) * (1 + rho);
-                sumx += wx;
-                ++withLT;
-            }
-        }
         // The camera-subpath shift succeeded but the light-tracing shift did
         // not: the integrator then falls back for one strategy only, and the
         // path's weights no longer sum to one. Rare numerical cases only.
-        if (!ok) {
-            ++oneSided;
+        if (!SumStrategyWeights(sc, bc, x, sh, cs, lightTracing, arena, &st, &sum, &sumx, &c.withLT)) {
+            ++c.oneSided;
             continue;
         }
         bool chain = false;
         for (int k = 1; k < n; ++k) chain |= x.deltaSample[k] != 0;
-        withChain += chain;
-        withGlossy += glossyChain;
-        toEnv += e.isInfiniteLight();
-        toPoint += pointEnd;
+        c.withChain += chain;
+        c.withGlossy += glossyChain;
+        c.toEnv += e.isInfiniteLight();
+        c.toPoint += pointEnd;
         EXPECT_NEAR(sumx, 1.0, 1e-4) << "BDPT weights of the enumerated strategies";
         EXPECT_NEAR(sum, 1.0, 2e-3) << "path of " << n << " vertices, chain " << chain << ", glossy chain " << glossyChain
                                     << ", trial " << trial
                                     << (e.isInfiniteLight() ? ", to the environment" : pointEnd ? ", to a point" : "");
-        ++paths;
+        ++c.paths;
     }
-    EXPECT_GE(paths, 100);
-    EXPECT_LE(oneSided, paths / 50) << "paths whose light-tracing strategy alone failed to shift";
+    EXPECT_GE(c.paths, 100);
+    EXPECT_LE(c.oneSided, c.paths / 50) << "paths whose light-tracing strategy alone failed to shift";
     if (env) {
-        EXPECT_EQ(toEnv, 100);
-        EXPECT_EQ(toPoint, 100);
+        EXPECT_EQ(c.toEnv, 100);
+        EXPECT_EQ(c.toPoint, 100);
     }
     if (glossy) {
-        EXPECT_GE(withGlossy, 60) << "paths whose second chain holds glossy vertices";
+        EXPECT_GE(c.withGlossy, 60) << "paths whose second chain holds glossy vertices";
     }
     std::printf("%s%s: %d paths (%d light-tracing strategies, %d with specular chains, %d with glossy second chains; "
                 "%d to the environment, %d to the point light; %d with only the light-tracing shift failed)\n",
-                line.c_str(), glossy ? " (glossy box)" : "", paths, withLT, withChain, withGlossy, toEnv, toPoint,
-                oneSided);
+                line.c_str(), glossy ? " (glossy box)" : "", c.paths, c.withLT, c.withChain, c.withGlossy, c.toEnv,
+                c.toPoint, c.oneSided);
 }
 
 TEST(GBDPTShift, CombinedWeightsOfAllStrategiesSumToOne) {

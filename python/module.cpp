@@ -268,6 +268,76 @@ py::dict StatsToPython(const RenderOutput &out) {
     return d;
 }
 
+// What the render thread and the watching Python thread share.
+struct RenderWatch {
+    std::mutex m;
+    std::condition_variable cv;
+    bool done = false;
+    std::atomic<int> sppDone{0}, sppTotal{-1};
+    std::exception_ptr failure;
+    RenderOutput out;
+};
+
+// The render thread: loads and renders into w.out (or sets w.failure), then w.done.
+void RenderThread(const PyScene &s, const BuildOptions &bo, RenderOptions &ro, const std::string &commandLine,
+                  RenderWatch &w) {
+    try {
+        double loadSeconds = 0;
+        RenderJob job = LoadRenderJob(s.path, s.gltf, bo, &loadSeconds);
+        ResolveSampleCount(job, bo, &ro);
+        w.sppTotal = ro.spp;
+        RenderResult r = RenderLoadedJob(job, ro, s.path, commandLine, loadSeconds);
+        w.out.image = std::move(r.image);
+        w.out.stats = r.stats;
+        w.out.counters = StatRegistry::get().snapshot();
+        w.out.statistics = FormatStats(w.out.counters) + job.integrator->statistics();
+        w.out.notes = job.warnings;
+    } catch (...) {
+        w.failure = std::current_exception();
+    }
+    std::lock_guard<std::mutex> lock(w.m);
+    w.done = true;
+    w.cv.notify_all();
+}
+
+double SecondsSince(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Until the render thread is done: every 50 ms (GIL released while waiting)
+// checks for Ctrl-C and calls `progress` on new samples. The first Python
+// exception is kept in *pyError and interrupts the render.
+void WatchRender(RenderWatch &w, const py::object &progress, std::chrono::steady_clock::time_point t0,
+                 int *reported, std::optional<py::error_already_set> *pyError) {
+    auto stop = [&](py::error_already_set &&e) {
+        if (!*pyError) pyError->emplace(std::move(e));
+        RequestInterrupt();
+    };
+    while (true) {
+        bool finished;
+        {
+            py::gil_scoped_release nogil;
+            std::unique_lock<std::mutex> lock(w.m);
+            finished = w.cv.wait_for(lock, std::chrono::milliseconds(50), [&] { return w.done; });
+        }
+        if (finished) break;
+        if (*pyError) continue;
+        if (PyErr_CheckSignals() != 0) {
+            stop(py::error_already_set());
+            continue;
+        }
+        const int now = w.sppDone;
+        if (!progress.is_none() && now != *reported && w.sppTotal >= 0) {
+            *reported = now;
+            try {
+                progress(now, int(w.sppTotal), SecondsSince(t0));
+            } catch (py::error_already_set &e) {
+                stop(std::move(e));
+            }
+        }
+    }
+}
+
 // Renders on a thread of its own while this (Python) thread, with the GIL
 // released between polls, watches for Ctrl-C (PyErr_CheckSignals) and calls
 // `progress`. A Python exception there (KeyboardInterrupt, or one raised by
@@ -285,14 +355,8 @@ py::dict Render(const PyScene &s, const std::string &integrator, long long spp, 
     ro.nthreads = threads;
     ro.timeLimit = time;
     ro.quiet = true;
-
-    std::mutex m;
-    std::condition_variable cv;
-    bool done = false;
-    std::atomic<int> sppDone{0}, sppTotal{-1};
-    std::exception_ptr failure;
-    RenderOutput out;
-    ro.afterPass = [&](const RenderStats &st) { sppDone = st.spp; };
+    RenderWatch w;
+    ro.afterPass = [&w](const RenderStats &st) { w.sppDone = st.spp; };
 
     const auto t0 = std::chrono::steady_clock::now();
     std::unique_lock<std::mutex> renderLock(gRenderMutex, std::defer_lock);
@@ -301,57 +365,11 @@ py::dict Render(const PyScene &s, const std::string &integrator, long long spp, 
         renderLock.lock();
     }
     ResetInterrupt();
-    std::thread worker([&] {
-        try {
-            double loadSeconds = 0;
-            RenderJob job = LoadRenderJob(s.path, s.gltf, bo, &loadSeconds);
-            ResolveSampleCount(job, bo, &ro);
-            sppTotal = ro.spp;
-            RenderResult r = RenderLoadedJob(job, ro, s.path, commandLine, loadSeconds);
-            out.image = std::move(r.image);
-            out.stats = r.stats;
-            out.counters = StatRegistry::get().snapshot();
-            out.statistics = FormatStats(out.counters) + job.integrator->statistics();
-            out.notes = job.warnings;
-        } catch (...) {
-            failure = std::current_exception();
-        }
-        std::lock_guard<std::mutex> lock(m);
-        done = true;
-        cv.notify_all();
-    });
-
+    std::thread worker([&] { RenderThread(s, bo, ro, commandLine, w); });
     std::optional<py::error_already_set> pyError;
     int reported = -1;
-    auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
-    auto stop = [&](py::error_already_set &&e) {
-        if (!pyError) pyError.emplace(std::move(e));
-        RequestInterrupt();
-    };
     try {
-        while (true) {
-            bool finished;
-            {
-                py::gil_scoped_release nogil;
-                std::unique_lock<std::mutex> lock(m);
-                finished = cv.wait_for(lock, std::chrono::milliseconds(50), [&] { return done; });
-            }
-            if (finished) break;
-            if (pyError) continue;
-            if (PyErr_CheckSignals() != 0) {
-                stop(py::error_already_set());
-                continue;
-            }
-            const int now = sppDone;
-            if (!progress.is_none() && now != reported && sppTotal >= 0) {
-                reported = now;
-                try {
-                    progress(now, int(sppTotal), elapsed());
-                } catch (py::error_already_set &e) {
-                    stop(std::move(e));
-                }
-            }
-        }
+        WatchRender(w, progress, t0, &reported, &pyError);
     } catch (...) {  // never leave the thread running
         RequestInterrupt();
         py::gil_scoped_release nogil;
@@ -366,16 +384,16 @@ py::dict Render(const PyScene &s, const std::string &integrator, long long spp, 
     renderLock.unlock();
     ResetInterrupt();
     if (pyError) throw std::move(*pyError);
-    if (failure) {
+    if (w.failure) {
         try {
-            std::rethrow_exception(failure);
+            std::rethrow_exception(w.failure);
         } catch (const Error &e) {
             RaiseFromError(e, s.path);
         }
     }
-    if (!progress.is_none() && out.stats.spp != reported) progress(out.stats.spp, int(sppTotal), elapsed());
-    py::dict d = ImageToPython(out.image);
-    d["stats"] = StatsToPython(out);
+    if (!progress.is_none() && w.out.stats.spp != reported) progress(w.out.stats.spp, int(w.sppTotal), SecondsSince(t0));
+    py::dict d = ImageToPython(w.out.image);
+    d["stats"] = StatsToPython(w.out);
     return d;
 }
 

@@ -131,26 +131,6 @@ void GVCMIntegrator::finish(const Film &film, const RenderStats &stats, Image *o
     GBDPTIntegrator::finish(film, stats, out);
 }
 
-// An offset merge: value f(y)|T'|/p(x) (times the camera weight), its VCM
-// weight and rho = |T'| p_y / p_x (Eq. 23 through CombinedWeight).
-struct GVCMIntegrator::Offset {
-    Spectrum f;
-    Float w = 1, rho = 1;
-};
-
-// The base's half of a case-2 offset (case2Base).
-struct GVCMIntegrator::Case2Base {
-    int d = 0, k = 0;
-    ChainInterior in;      // the chain's interior (k > 0)
-    ManifoldChain chain;   // y_d .. y_m (k > 0)
-    Vec3 dirX;             // direction at y_d
-    Float gX = 0, pX = 0;  // G~ and y_d's directional density
-    Spectrum fcosX{1};     // prod f|cos| of the chain's Dirac vertices
-    Float probX = 1;       // prod of their lobe probabilities
-    Spectrum tX{0};        // T(x) = E(y_d -> dirX) fcosX G~
-    Counter failure = NumCounters;  // NumCounters: none
-};
-
 // E(y_d -> dir): emission (times the emitter's cosine; a point light's
 // intensity) or the BSDF times the shading cosine, and y_d's directional density.
 Spectrum GVCMIntegrator::emitFrom(const ShiftSubpath &L, int d, const Vec3 &dir, Float *pdf) const {

@@ -124,8 +124,9 @@ class GVCMIntegrator : public GBDPTIntegrator {
     void addStrategies(const CameraState &st, GradientSample *out) const override;
 
   private:
+    friend struct GVCMTestAccess;  // tests/gvcm: the estimator's pieces
     GVCMIntegrator(const EntityDesc &desc, const GVCMSettings &set);
-    struct Offset;
+    struct Offset;     // defined below (after Counter)
     struct Case2Base;
     struct SampleMerges;
     struct VertexMerges;
@@ -183,6 +184,25 @@ class GVCMIntegrator : public GBDPTIntegrator {
     mutable std::atomic<uint64_t> counters_[NumCounters] = {};
     mutable std::atomic<uint64_t> walkStatus_[size_t(ManifoldStatus::Count)] = {};
     void count(Counter c, uint64_t n = 1) const { counters_[c].fetch_add(n, std::memory_order_relaxed); }
+
+    // An offset merge: value f(y)|T'|/p(x) (times the camera weight), its VCM
+    // weight and rho = |T'| p_y / p_x (Eq. 23 through CombinedWeight).
+    struct Offset {
+        Spectrum f;
+        Float w = 1, rho = 1;
+    };
+    // The base's half of a case-2 offset (case2Base).
+    struct Case2Base {
+        int d = 0, k = 0;
+        ChainInterior in;      // the chain's interior (k > 0)
+        ManifoldChain chain;   // y_d .. y_m (k > 0)
+        Vec3 dirX;             // direction at y_d
+        Float gX = 0, pX = 0;  // G~ and y_d's directional density
+        Spectrum fcosX{1};     // prod f|cos| of the chain's Dirac vertices
+        Float probX = 1;       // prod of their lobe probabilities
+        Spectrum tX{0};        // T(x) = E(y_d -> dirX) fcosX G~
+        Counter failure = NumCounters;  // NumCounters: none
+    };
 };
 
 }  // namespace gradus

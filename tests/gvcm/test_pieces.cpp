@@ -1,0 +1,422 @@
+// Tests of G-VCM's estimator pieces (integrators/gvcm; gradient-domain-vcm.md)
+// on random paths of a small box (matte walls, a glossy plastic back wall, an
+// area light, a glass and a mirror sphere), each against an evaluation that
+// does not go through the code under test:
+//  - the offsets' values f(x')|T'|/p(x*), as ratios to the base's Eq. 5 value,
+//    and their rho = |T'| p(x')/p(x*), case 1 (Eqs. 16-17) and case 2 (Eqs.
+//    18-20, empty and specular chains): the paths re-evaluated from their
+//    vertex positions (BSDF values and densities, emission, cosines, distances)
+//    in the measure of the film point and the areas of the connectable
+//    vertices, where the camera shift (the film point moved by one pixel) has
+//    Jacobian 1 and the camera's film-to-direction map and a specular chain's
+//    solid angle per area come from finite differences; the offset's specular
+//    chain is found by an own Newton search on the emission direction;
+//  - the merges' MIS weights (Eq. 13 for the base and for the offset, Eq. 22)
+//    against every strategy's density of the path enumerated explicitly, and
+//    the pair's Eq. 23 weights with all other strategies' summing to one.
+// Tolerances: positions are Embree's single-precision hits; the reference
+// takes directions from positions where the code keeps the sampled directions
+// (differences ~1e-6 rad for edges >= 0.05, corners excluded), which bounds
+// the agreement of values that depend on directions only at ~1e-5 relative
+// (the plastic lobe's relative derivative is < 10 per rad). Finite differences
+// of chains through the glass sphere: 1e-3 rad steps on single-precision hits
+// (as tests/gbdpt ChainSolidAngleMatchesFiniteDifferences, 2e-3 per chain).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <vector>
+
+#include "gbdpt_test_util.h"
+#include "integrators/gradient/camera_shift.h"
+#include "integrators/gvcm/gvcm.h"
+#include "lights/light.h"
+#include "materials/material.h"
+
+namespace gradus {
+
+// The estimator's private pieces (gvcm.h's friend).
+struct GVCMTestAccess {
+    using Offset = GVCMIntegrator::Offset;
+    using Case2Base = GVCMIntegrator::Case2Base;
+    static void begin(GVCMIntegrator &g, const Scene &scene, const MergeKernel &k) {
+        g.scene_ = &scene;
+        g.kernel_ = k;
+    }
+    static VCMWeights weights(const GVCMIntegrator &g) { return {&g.kernel_, true, g.set_.lightTracing, false, true}; }
+    static bool case1(const GVCMIntegrator &g, const CameraShift &sh, int u, const BSDF &bu, const LightVertex &lv,
+                      const Spectrum &f, Float etaX, const VCMCameraTerms *terms, Offset *o) {
+        return g.case1(sh, u, bu, lv, f, 1, etaX, terms, weights(g), o);
+    }
+    static bool case2(const GVCMIntegrator &g, const ShiftSubpath &L, int m, const CameraShift &sh, int u,
+                      const LightVertex &lv, const VCMCameraTerms *terms, Float etaX, Arena &arena, Offset *o) {
+        Case2Base cb;
+        g.case2Base(L, m, arena, &cb);
+        return g.case2(L, cb, sh, u, lv, terms, etaX, arena, o);
+    }
+};
+
+namespace {
+
+using Offset = GVCMTestAccess::Offset;
+constexpr int kW = 24, kH = 18;
+
+std::string BoxText() {
+    const char *matte = "Material \"matte\" \"rgb Kd\" [0.65 0.6 0.55]";
+    return test::TestSceneHeader("0 1.1 -3.4  0 0.8 0  0 1 0", 45, kW, kH,
+                                 "Integrator \"gvcm\" \"float radius\" [0.02]") +
+           "WorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [6 6 6]\n" +
+           test::Quad("Material \"matte\" \"rgb Kd\" [0 0 0]", "-0.4 1.95 -0.1  0.4 1.95 -0.1  0.4 1.95 0.6  -0.4 1.95 0.6") +
+           "AttributeEnd\n" + test::Quad(matte, "-1.2 0 -1.5  1.2 0 -1.5  1.2 0 1.2  -1.2 0 1.2") +
+           test::Quad(matte, "-1.2 2 -1.5  -1.2 2 1.2  1.2 2 1.2  1.2 2 -1.5") +
+           test::Quad("Material \"plastic\" \"rgb Kd\" [0.3 0.35 0.4] \"rgb Ks\" [0.4 0.4 0.4] \"float roughness\" [0.15]",
+                      "-1.2 0 1.2  1.2 0 1.2  1.2 2 1.2  -1.2 2 1.2") +
+           test::Quad("Material \"matte\" \"rgb Kd\" [0.6 0.2 0.15]", "-1.2 0 -1.5  -1.2 0 1.2  -1.2 2 1.2  -1.2 2 -1.5") +
+           test::Quad("Material \"matte\" \"rgb Kd\" [0.15 0.5 0.2]", "1.2 0 -1.5  1.2 2 -1.5  1.2 2 1.2  1.2 0 1.2") +
+           "AttributeBegin\nMaterial \"glass\"\nTranslate 0.35 0.4 0.1\nShape \"sphere\" \"float radius\" [0.4]\n"
+           "AttributeEnd\nAttributeBegin\nMaterial \"mirror\"\nTranslate -0.5 0.35 0.5\n"
+           "Shape \"sphere\" \"float radius\" [0.35]\nAttributeEnd\nWorldEnd\n";
+}
+
+enum class KernelKind { Fixed, Footprint };
+
+struct Fixture {
+    RenderJob job;
+    GVCMIntegrator *g = nullptr;
+    const BidirContext *bc = nullptr;
+    const SubpathShiftContext *sc = nullptr;
+    std::unique_ptr<Sampler> sampler;
+    VCMWeights W;
+    explicit Fixture(KernelKind kind = KernelKind::Fixed) : job(gbdpttest::MakeJob(BoxText(), 1, 0)) {
+        job.integrator->preprocess(*job.scene, *job.film);
+        g = dynamic_cast<GVCMIntegrator *>(job.integrator.get());
+        // eta = pi r^2 N with r = 0.02 and N = the film's pixels: ~0.54, of the
+        // order of the box's area densities, so that merges and connections
+        // share the weights. Footprint: G-VCM Sec. 6's per-path radius (about
+        // r = 0.02 at the first connectable vertex) shrunk by 0.25^tau per vertex.
+        MergeKernel k;
+        k.piN = Pi * kW * kH;
+        k.r2 = 0.02 * 0.02;
+        if (kind == KernelKind::Footprint) {
+            k.footprint2 = 0.02;
+            k.r2Max = 1;
+            k.shrink = 1;
+            k.pixels = kW * kH;
+            k.camera = job.scene->camera.get();
+        }
+        GVCMTestAccess::begin(*g, *job.scene, k);
+        bc = &g->bidirContext();
+        sc = &g->shiftContext();
+        sampler = job.sampler->clone();
+        W = GVCMTestAccess::weights(*g);
+    }
+    const Camera &camera() const { return *job.scene->camera; }
+};
+
+ShiftSubpath ArenaSubpath(Arena &arena, int n) {
+    ShiftSubpath p;
+    p.v = new (arena.alloc(sizeof(PathVertex) * n, alignof(PathVertex))) PathVertex[n];
+    p.b = new (arena.alloc(sizeof(BSDF) * n, alignof(BSDF))) BSDF[n];
+    p.deltaSample = static_cast<uint8_t *>(arena.alloc(n));
+    return p;
+}
+
+// A camera subpath through an interior pixel (its neighbours inside the film)
+// and its shift by `off` pixels.
+struct CameraPath {
+    CameraSample cs;
+    Point2i off;
+    ShiftSubpath x;
+    CameraShift sh;
+};
+bool TraceCamera(Fixture &f, int trial, int maxV, Arena &arena, CameraPath *c) {
+    const Point2i px{1 + trial % (kW - 2), 1 + (trial / (kW - 2)) % (kH - 2)};
+    f.sampler->startPixelSample(px, trial);
+    c->cs = {Point2(px.x + f.sampler->get1D(), px.y + f.sampler->get1D()), f.sampler->get2D()};
+    c->off = trial % 2 ? Point2i{1, 0} : Point2i{0, 1};
+    Ray ray;
+    if (f.camera().generateRay(c->cs, &ray) == 0) return false;
+    c->x = ArenaSubpath(arena, maxV);
+    c->x.n = GenerateCameraSubpath(*f.bc, ray, *f.sampler, arena, maxV, c->x.v, c->x.b);
+    PrepareSubpath(*f.sc, &c->x);
+    SubpathShiftStats st;
+    ShiftCameraSubpath(*f.sc, c->x, c->cs, c->off, arena, &c->sh, &st);
+    return true;
+}
+
+// A light subpath (prepared: specular vertices marked).
+ShiftSubpath TraceLight(Fixture &f, int maxV, Arena &arena) {
+    ShiftSubpath L = ArenaSubpath(arena, maxV);
+    L.n = GenerateLightSubpath(*f.bc, *f.sampler, arena, maxV, L.v, L.b);
+    PrepareSubpath(*f.sc, &L);
+    return L;
+}
+
+// Vertices closer than 0.05 (box corners): single-precision hits dominate their directions.
+bool HasCorner(const ShiftSubpath &x, int n) {
+    for (int k = 1; k + 1 < n; ++k)
+        if (Distance(x.v[k].p, x.v[k + 1].p) < 0.05) return true;
+    return false;
+}
+
+Vec3 Dir(const Point3 &from, const Point3 &to) { return Normalize(to - from); }
+double Lum(const Spectrum &s) { return (s.r + s.g + s.b) / 3; }
+
+// |cos| / d^2 at `to` (geometric normal n) seen from `from`.
+double AreaFactor(const Point3 &from, const Point3 &to, const Vec3 &n) {
+    const Vec3 d = to - from;
+    return AbsDot(Normalize(d), n) / d.lengthSquared();
+}
+
+// The camera's importance and density per film area at film point p (pixel
+// units): We cos(theta) |d omega / d p| and p_dir |d omega / d p|, the solid
+// angle per film area by central differences of the camera rays (double
+// precision; 1e-3 pixel steps).
+struct FilmFactors {
+    double we = 0, pdf = 0;
+};
+FilmFactors Film(const Camera &cam, Point2 p, Point2 lens) {
+    const double h = 1e-3;
+    auto dir = [&](double dx, double dy) {
+        Ray r;
+        cam.generateRay({Point2(p.x + dx, p.y + dy), lens}, &r);
+        return Normalize(r.d);
+    };
+    const Vec3 dwx = (dir(h, 0) - dir(-h, 0)) / (2 * h), dwy = (dir(0, h) - dir(0, -h)) / (2 * h);
+    const double dOmega = Cross(dwx, dwy).length();
+    Ray r;
+    cam.generateRay({p, lens}, &r);
+    Point2 raster;
+    const Spectrum We = cam.We(r, &raster);
+    Float pdfPos, pdfDir;
+    cam.pdfWe(r, &pdfPos, &pdfDir);
+    return {Lum(We) * AbsDot(Normalize(r.d), Vec3(cam.lensNormal())) * dOmega, pdfDir * dOmega};
+}
+
+// f|cos| and the lobe probability of the specular lobe of b scattering wo into
+// wi (the lobe found by sampling with a few random numbers).
+bool SpecularLobe(const BSDF &b, const Vec3 &wo, const Vec3 &wi, TransportMode mode, Spectrum *fcos, double *prob) {
+    for (Float uc : {0.02, 0.5, 0.98})
+        for (Float u0 : {0.02, 0.5, 0.98}) {
+            BSDFSample s;
+            if (!b.sample(wo, uc, Point2(u0, 0.5), mode, &s) || !s.isSpecular()) continue;
+            if (Dot(Normalize(s.wi), wi) > 1 - 1e-7) {
+                *fcos = s.f * AbsDot(s.wi, Vec3(b.ns()));
+                *prob = s.pdf;
+                return true;
+            }
+        }
+    return false;
+}
+
+// The camera part z_0 .. z_b (z_1 .. z_{b-1} specular) in the film measure:
+// f = We cos |dw/dp| prod R_i, p = p_dir |dw/dp| prod prob_i.
+bool FirstChain(const Fixture &f, const ShiftSubpath &z, Point2 pFilm, Point2 lens, int b, Spectrum *F, double *P) {
+    const FilmFactors ff = Film(f.camera(), pFilm, lens);
+    *F = Spectrum(ff.we);
+    *P = ff.pdf;
+    for (int i = 1; i < b; ++i) {
+        Spectrum R;
+        double prob;
+        if (!SpecularLobe(z.b[i], Dir(z.v[i].p, z.v[i - 1].p), Dir(z.v[i].p, z.v[i + 1].p), TransportMode::Radiance, &R,
+                          &prob))
+            return false;
+        *F *= R;
+        *P *= prob;
+    }
+    return true;
+}
+
+// A vertex at unit distance from p in direction d facing p (densities per solid angle).
+PathVertex DirPoint(const Point3 &p, const Vec3 &d) {
+    PathVertex v;
+    v.p = p + d;
+    v.ng = v.ns = -d;
+    return v;
+}
+
+// E(y_d -> dir): emission times the emitter's cosine at the light origin (d = 0),
+// else the BSDF (importance) times the shading cosine; and p_omega(y_d -> dir).
+Spectrum Emit(const Fixture &f, const ShiftSubpath &L, int d, const Vec3 &dir, double *pdf) {
+    const PathVertex &y = L.v[d];
+    const PathVertex t = DirPoint(y.p, dir);
+    *pdf = PdfArea(*f.bc, y, &L.b[d], d > 0 ? &L.v[d - 1] : nullptr, t, TransportMode::Importance);
+    if (d == 0) return EmittedRadiance(*f.bc, y, t) * AbsDot(Vec3(y.ng), dir);
+    return L.b[d].f(Dir(y.p, L.v[d - 1].p), dir, TransportMode::Importance) * AbsDot(Vec3(y.ns), dir);
+}
+
+// The light prefix y_0 .. y_{m-1} of L and a photon y_m at p on the surface of
+// camera vertex z (BSDF zb), with the densities the light subpath would have
+// given it (and the reverse density of y_{m-2} through it); lv its record. False
+// when y_{m-1} cannot send light to p (specular, occluded, black).
+bool SyntheticPhoton(const Fixture &f, const ShiftSubpath &L, int m, const PathVertex &z, const BSDF &zb,
+                     const Point3 &p, Arena &arena, ShiftSubpath *Lp, LightVertex *lv) {
+    const PathVertex &yp = L.v[m - 1];
+    if (yp.delta() || yp.isDeltaLight() || (m >= 2 && (yp.type != VertexType::Surface || !L.b[m - 1]))) return false;
+    *Lp = ArenaSubpath(arena, m + 1);
+    for (int i = 0; i < m; ++i) Lp->v[i] = L.v[i], Lp->b[i] = L.b[i], Lp->deltaSample[i] = L.deltaSample[i];
+    PathVertex &y = Lp->v[m];
+    y = z;
+    y.p = p;
+    y.flags = 0;
+    y.rrScale = 1;
+    y.wo = Dir(p, yp.p);
+    y.setThroughput(Spectrum(0.5, 0.6, 0.7));  // cancels in every ratio here
+    Lp->b[m] = zb;
+    Lp->deltaSample[m] = 0;
+    Lp->n = m + 1;
+    if (!EdgeConnectible(*f.bc, yp, y) || !f.job.scene->unoccluded(AsInteraction(yp), AsInteraction(y))) return false;
+    y.pdfFwd = PdfArea(*f.bc, yp, &L.b[m - 1], m >= 2 ? &L.v[m - 2] : nullptr, y, TransportMode::Importance);
+    if (m >= 2) Lp->v[m - 2].pdfRev = PdfArea(*f.bc, yp, &L.b[m - 1], &y, L.v[m - 2], TransportMode::Radiance);
+    double pdf;
+    if (!(y.pdfFwd > 0) || Emit(f, *Lp, m - 1, Dir(yp.p, p), &pdf).isBlack()) return false;
+    std::vector<LightVertex> recs;
+    VCMLightVertices(*f.bc, Lp->v, Lp->b, m + 1, f.W, &recs);
+    if (recs.empty() || recs.back().depth != m) return false;
+    *lv = recs.back();
+    return true;
+}
+
+// The first connectable camera vertex b (z_1 .. z_{b-1} specular), or -1.
+int FirstConnectable(const Fixture &f, const ShiftSubpath &x) {
+    for (int i = 1; i < x.n; ++i) {
+        if (x.v[i].type != VertexType::Surface || !x.b[i]) return -1;
+        if (!x.v[i].delta()) return f.W.mergeable(x.v[i], &x.b[i]) ? i : -1;
+        if (!x.deltaSample[i]) return -1;  // near-specular glossy: not in this box
+    }
+    return -1;
+}
+
+// The base's eta_u and the camera terms of z_u of a camera subpath (as addStrategies computes them).
+VCMCameraTerms Terms(const Fixture &f, const ShiftSubpath &z, int n, int u, Arena &arena, Float *etaU) {
+    Float *eta = static_cast<Float *>(arena.alloc(sizeof(Float) * n, alignof(Float)));
+    Float *B = static_cast<Float *>(arena.alloc(sizeof(Float) * n, alignof(Float)));
+    VCMCameraEta(f.W, z.v, z.b, n, eta);
+    VCMCameraB(*f.bc, z.v, z.b, n, f.W, eta, B);
+    *etaU = eta[u];
+    return VCMCameraAt(*f.bc, z.v, z.b, u, B[u], eta, f.W);
+}
+
+// Component-wise |a / b - 1| (components of b above 1e-3 of its largest).
+double RelErr(const Spectrum &a, const Spectrum &b) {
+    const double m = std::max({b.r, b.g, b.b});
+    double e = 0;
+    for (int c = 0; c < 3; ++c)
+        if (b[c] > 1e-3 * m) e = std::max(e, std::abs(a[c] / b[c] - 1));
+    return e;
+}
+
+// The tolerance of a value whose reference takes directions from the
+// positions of edges with the given smallest d |cos| (at either end): hits are
+// single precision (|p| < 3, rays < 6 long: position errors below 1e-6), so a
+// direction moves by up to 1e-6 / d, a cosine relatively by 1e-6 / (d |cos|),
+// and a BSDF value (the plastic's lobe) by at most twice that; 1e-5 for the rest
+// (the camera's film factors by differences, float-packed throughputs).
+double Tolerance(double minDCos) { return 1e-5 + 2e-6 / minDCos; }
+
+struct ErrStats {
+    int n = 0;
+    double max = 0;
+    void add(double e) {
+        ++n;
+        max = std::max(max, e);
+    }
+};
+
+// ---------------------------------------------------------------- case 1
+// Merges at z_u past the reconnection vertex r = b + 1 (empty second chain)
+// with photons at z_u from random light prefixes. In the film + area measure
+// the shift keeps the film point's offset (Jacobian 1) and z_r, so
+//   o.f / f_x = [F(z') g(z'_b, z_r) f(z'_b -> z_r -> next)] / [the same for z]
+// with F the first chain's film-measure factor (FirstChain), g = f(z_{b-1} ->
+// z_b -> z_r) |cos_b| |cos_r| / d^2 the reconnection, `next` z_{r+1} or, at
+// u = r, the photon's y_{m-1}; every factor after z_r is shared. rho: the same
+// with densities (film density, lobe probabilities, p_omega(z_b) |cos_r| / d^2,
+// and p_omega(z_r -> z_{r+1}) for u > r).
+void CheckCase1(KernelKind kind) {
+    Fixture f(kind);
+    Arena arena;
+    ErrStats ef, er;
+    int atR = 0, pastR = 0, firstChains = 0, ownKernel = 0;
+    for (int trial = 0; trial < 30000 && (ef.n < 300 || firstChains < 60); ++trial) {
+        arena.reset();
+        CameraPath c;
+        if (!TraceCamera(f, trial, 6, arena, &c)) continue;
+        const ShiftSubpath &x = c.x, &y = c.sh.y;
+        const int b = FirstConnectable(f, x), r = c.sh.r;
+        if (b < 1 || r != b + 1 || c.sh.validUpTo < r || HasCorner(x, c.sh.validUpTo + 1) || HasCorner(y, r)) continue;
+        if (b == 1 && ef.n >= 300) continue;  // then only offsets through specular first chains
+        ShiftSubpath L = TraceLight(f, 4, arena);
+        for (int u = r; u <= c.sh.validUpTo; ++u) {
+            if (x.v[u].type != VertexType::Surface || !x.b[u] || !f.W.mergeable(x.v[u], &x.b[u])) continue;
+            ShiftSubpath Lp;
+            LightVertex lv;
+            const int m = 1 + trial % L.n;
+            if (!SyntheticPhoton(f, L, m, x.v[u], x.b[u], x.v[u].p, arena, &Lp, &lv)) continue;
+            Float etaX, etaY;
+            const int ny = std::min(y.n, c.sh.validUpTo + 1);
+            Terms(f, x, x.n, u, arena, &etaX);
+            const VCMCameraTerms ty = Terms(f, y, ny, u, arena, &etaY);
+            const Spectrum fu = x.b[u].f(Vec3(x.v[u].wo), lv.wo, TransportMode::Radiance);
+            Offset o;
+            if (!GVCMTestAccess::case1(*f.g, c.sh, u, x.b[u], lv, fu, etaX, &ty, &o)) continue;
+            const Spectrum fx = x.v[u].throughput() * fu * lv.throughput() / etaX;
+            // The reference.
+            Spectrum Fx, Fy;
+            double Px, Py;
+            const Point2 pY(c.cs.pFilm.x + c.off.x, c.cs.pFilm.y + c.off.y);
+            if (!FirstChain(f, x, c.cs.pFilm, c.cs.pLens, b, &Fx, &Px) || !FirstChain(f, y, pY, c.cs.pLens, b, &Fy, &Py))
+                continue;
+            const Point3 &zr = x.v[r].p;
+            const Vec3 nr(x.v[r].ng);
+            const Point3 next = u > r ? x.v[r + 1].p : Lp.v[m - 1].p;
+            double minDCos = 1;
+            for (int side = 0; side < 2; ++side) {
+                const ShiftSubpath &z = side ? y : x;
+                const Vec3 wo = Dir(z.v[b].p, z.v[b - 1].p), wi = Dir(z.v[b].p, zr);
+                Spectrum &F = side ? Fy : Fx;
+                double &P = side ? Py : Px;
+                F *= z.b[b].f(wo, wi, TransportMode::Radiance) * AbsDot(wi, Vec3(z.v[b].ns)) *
+                     AreaFactor(z.v[b].p, zr, nr) * x.b[r].f(-wi, Dir(zr, next), TransportMode::Radiance);
+                P *= z.b[b].pdf(wo, wi, TransportMode::Radiance) * AreaFactor(z.v[b].p, zr, nr);
+                if (u > r) P *= x.b[r].pdf(-wi, Dir(zr, next), TransportMode::Radiance);
+                const double d = Distance(z.v[b].p, zr), dn = Distance(zr, next);
+                minDCos = std::min({minDCos, d * AbsDot(wi, Vec3(z.v[b].ns)), d * AbsDot(wi, nr),
+                                    dn * AbsDot(Dir(zr, next), nr)});
+            }
+            const Spectrum ratio = SafeDiv(o.f, fx), ref = SafeDiv(Fy, Fx);
+            const double eF = RelErr(ratio, ref), eR = std::abs(o.rho / (Py / Px) - 1);
+            const double tol = Tolerance(minDCos);
+            EXPECT_LT(eF, tol) << "u " << u << " r " << r << " b " << b << " trial " << trial << ": o.f / f_x "
+                                << ratio.r << " " << ratio.g << " " << ratio.b << ", reference " << ref.r << " "
+                                << ref.g << " " << ref.b;
+            EXPECT_LT(eR, tol) << "u " << u << " r " << r << " b " << b << " trial " << trial << ": rho " << o.rho
+                                << ", reference " << Py / Px;
+            ef.add(eF);
+            er.add(eR);
+            atR += u == r;
+            pastR += u > r;
+            firstChains += b > 1;
+            ownKernel += std::abs(etaY / etaX - 1) > 1e-3;
+        }
+    }
+    EXPECT_GE(atR, 100);
+    EXPECT_GE(pastR, 100);
+    EXPECT_GE(firstChains, 60) << "offsets whose first chain holds specular vertices";
+    if (kind == KernelKind::Footprint) {
+        EXPECT_GE(ownKernel, 200) << "offsets whose own kernel differs from the base's";
+    }
+    std::printf("case 1 (%s kernel): %d offsets (%d at u = r, %d past r, %d through specular first chains); max "
+                "relative error of the value %.2e, of rho %.2e\n",
+                kind == KernelKind::Fixed ? "fixed" : "footprint", ef.n, atR, pastR, firstChains, ef.max, er.max);
+}
+
+}  // namespace
+}  // namespace gradus
+
+using namespace gradus;
+
+TEST(GVCMPieces, Case1OffsetMatchesReevaluatedPath) { CheckCase1(KernelKind::Fixed); }
+TEST(GVCMPieces, Case1OffsetKeepsTheBaseKernel) { CheckCase1(KernelKind::Footprint); }

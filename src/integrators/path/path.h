@@ -51,6 +51,7 @@ class PathIntegrator : public PixelSampleIntegrator {
                                    const HGPhase *phase, const Medium *medium, const SurfaceInteraction *surface,
                                    Sampler &sampler, RNG &rng) const;
     bool survivesRoulette(Spectrum *beta, Float etaScale, int bounces, Sampler &sampler) const;
+    struct VolumePath;  // one path of LiVolumetric (volpath.cpp)
     bool volumetric_ = false;  // the scene has media or BSSRDFs: estimate() takes LiVolumetric
     PathSettings set_;
     FileLoc loc_;

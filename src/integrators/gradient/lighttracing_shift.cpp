@@ -34,63 +34,59 @@ struct LightChain {
     WalkedInterior walked;
 };
 
-// Offset b (`yHit`, with direction woY1 towards the camera) connected to c:
-// reconnection for an empty chain (k = 0), else a manifold walk.
-bool ShiftChain(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s, int c,
-                const SurfaceInteraction &yHit, const Vec3 &woY1, const Vec3 &wiX1, Arena &arena, LightChain *ch,
-                SubpathShiftStats *st) {
-    const Scene &scene = *ctx.bidir->scene;
-    const PathVertex &x1 = light.v[s - 1], &xc = light.v[c];
-    const int k = s - 2 - c;
-    if (k == 0 && xc.isInfiniteLight()) {
-        // Environment shift (as the camera subpath's): the offset b keeps the
-        // direction towards the light at infinity, J = 1, if it escapes.
-        st->shift.attempt(ShiftType::Environment);
-        SurfaceInteraction hit;
-        if (TraceSurface(scene, Interaction(yHit.p, yHit.n, woY1).spawnRay(wiX1), &hit)) {
-            st->shift.fail(ShiftFailure::Occluded);
-            return false;
-        }
-        st->shift.success(ShiftType::Environment);
-        ch->J = 1;
-        ch->wiY1 = wiX1;
-        ch->towardCamX = ch->towardCamY = -wiX1;
-        return true;
-    }
-    if (k == 0) {
-        ReconnectionShift rc;
-        if (!ReconnectToVertex(scene, x1.p, Interaction(yHit.p, yHit.n, woY1), xc, &st->shift, &rc)) return false;
-        st->shift.success(ShiftType::Reconnection);
-        ch->J = rc.jacobian;
-        ch->wiY1 = rc.wi;
-        ch->towardCamX = -wiX1;
-        ch->towardCamY = -ch->wiY1;
-        return true;
-    }
-    ChainInterior in;
-    if (k + 2 > kMaxManifoldVertices) {
-        ++st->longChains;
+// Empty chain towards a light at infinity: the environment shift (as the
+// camera subpath's): the offset b keeps the direction towards the light at
+// infinity, J = 1, if it escapes.
+bool EnvironmentChain(const Scene &scene, const SurfaceInteraction &yHit, const Vec3 &woY1, const Vec3 &wiX1,
+                      LightChain *ch, SubpathShiftStats *st) {
+    st->shift.attempt(ShiftType::Environment);
+    SurfaceInteraction hit;
+    if (TraceSurface(scene, Interaction(yHit.p, yHit.n, woY1).spawnRay(wiX1), &hit)) {
+        st->shift.fail(ShiftFailure::Occluded);
         return false;
     }
-    // Chain from b = x1 (camera side) to c; interior j is light vertex s-2-j.
-    bool glossy = false;
+    st->shift.success(ShiftType::Environment);
+    ch->J = 1;
+    ch->wiY1 = wiX1;
+    ch->towardCamX = ch->towardCamY = -wiX1;
+    return true;
+}
+
+// Empty chain: the offset b reconnects to c.
+bool ReconnectionChain(const Scene &scene, const PathVertex &x1, const PathVertex &xc, const SurfaceInteraction &yHit,
+                       const Vec3 &woY1, const Vec3 &wiX1, LightChain *ch, SubpathShiftStats *st) {
+    ReconnectionShift rc;
+    if (!ReconnectToVertex(scene, x1.p, Interaction(yHit.p, yHit.n, woY1), xc, &st->shift, &rc)) return false;
+    st->shift.success(ShiftType::Reconnection);
+    ch->J = rc.jacobian;
+    ch->wiY1 = rc.wi;
+    ch->towardCamX = -wiX1;
+    ch->towardCamY = -ch->wiY1;
+    return true;
+}
+
+// The base's k chain interiors from b = x1 (camera side) towards c; interior
+// j is light vertex s-2-j. Sets in, chainX and discX; *glossy: some interior
+// is a near-specular glossy vertex.
+bool BaseChainInterior(const Scene &scene, const ShiftSubpath &light, int s, int k, ChainInterior *in, LightChain *ch,
+                       bool *glossy, SubpathShiftStats *st) {
     for (int j = 0; j < k; ++j) {
         const PathVertex &v = light.v[s - 2 - j];
-        if (!VertexInteraction(scene, v, light.v[s - 1 - j].p, &in.si[j])) {
+        if (!VertexInteraction(scene, v, light.v[s - 1 - j].p, &in->si[j])) {
             st->shift.fail(ShiftFailure::Geometry);
             return false;
         }
         const BSDF &b = light.b[s - 2 - j];
-        in.bsdf[j] = &b;
-        in.wo[j] = Normalize(light.v[s - 1 - j].p - v.p);  // towards the camera side
-        in.wi[j] = Normalize(light.v[s - 3 - j].p - v.p);
-        in.transmit[j] = Transmits(in.wo[j], in.wi[j], Vec3(b.ns()));
-        in.specular[j] = light.deltaSample[s - 2 - j] != 0;
-        in.geomId[j] = v.geomId;
-        if (!in.specular[j]) {
+        in->bsdf[j] = &b;
+        in->wo[j] = Normalize(light.v[s - 1 - j].p - v.p);  // towards the camera side
+        in->wi[j] = Normalize(light.v[s - 3 - j].p - v.p);
+        in->transmit[j] = Transmits(in->wo[j], in->wi[j], Vec3(b.ns()));
+        in->specular[j] = light.deltaSample[s - 2 - j] != 0;
+        in->geomId[j] = v.geomId;
+        if (!in->specular[j]) {
             // Near-specular glossy vertex: its direction towards c is a variable (J_b).
-            glossy = true;
-            Spectrum fc = b.f(in.wo[j], in.wi[j], TransportMode::Radiance) * AbsDot(in.wi[j], Vec3(b.ns()));
+            *glossy = true;
+            Spectrum fc = b.f(in->wo[j], in->wi[j], TransportMode::Radiance) * AbsDot(in->wi[j], Vec3(b.ns()));
             if (fc.isBlack()) {
                 st->shift.fail(ShiftFailure::Geometry);
                 return false;
@@ -99,14 +95,74 @@ bool ShiftChain(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s
             continue;
         }
         BSDFSample sx;
-        if (!DeltaLobe(b, in.wo[j], in.transmit[j], TransportMode::Radiance, &sx) ||
-            Dot(sx.wi, in.wi[j]) < 1 - kShiftDirTol) {
+        if (!DeltaLobe(b, in->wo[j], in->transmit[j], TransportMode::Radiance, &sx) ||
+            Dot(sx.wi, in->wi[j]) < 1 - kShiftDirTol) {
             st->shift.fail(ShiftFailure::Geometry);
             return false;
         }
         ch->chainX *= sx.f * AbsDot(sx.wi, Vec3(b.ns()));
         ch->discX *= sx.pdf;
     }
+    return true;
+}
+
+// Each glossy interior g of the light path (vertex s-2-j) enters rho
+// (ShiftLightTracingPath) with its MIS densities of common/ in both
+// directions: p_omega,g towards b times the edge geometry there (the
+// light-tracing strategy's density of the next vertex), and the edge
+// geometry of g's edge towards c, which the camera side's density
+// p_omega,g |cos|/d^2 carries beyond the ratio p_y,g / p_x,g of its rho:
+//   glossyRho = prod_g (p_y,g Gb_y Gc_x) / (p_x,g Gb_x Gc_y).
+bool GlossyChainRho(const ShiftSubpath &light, int s, int c, const SurfaceInteraction &yHit, const ChainInterior &in,
+                    LightChain *ch, SubpathShiftStats *st) {
+    const PathVertex &x1 = light.v[s - 1], &xc = light.v[c];
+    const int k = s - 2 - c;
+    auto chainPos = [&](bool off, int i) -> Point3 {  // chain vertex i: b, interiors, c
+        if (!off) return i == 0 ? x1.p : i == k + 1 ? xc.p : light.v[s - 1 - i].p;
+        return i == 0 ? yHit.p : i == k + 1 ? xc.p : ch->offChain.v[i].sp.p;
+    };
+    auto chainNormal = [&](bool off, int i) -> Vec3 {
+        if (!off) return i == 0 ? Vec3(x1.ng) : i == k + 1 ? Vec3(xc.ng) : Vec3(light.v[s - 1 - i].ng);
+        return i == 0 ? Vec3(yHit.n) : i == k + 1 ? Vec3(xc.ng) : Vec3(ch->walked.si[i - 1].n);
+    };
+    const bool cSurf = xc.onSurface();
+    for (int j = 0; j < k; ++j) {
+        if (in.specular[j]) continue;
+        Float f[2];
+        for (int off = 0; off < 2; ++off) {
+            const BSDF &bg = off ? ch->walked.bsdf[j] : light.b[s - 2 - j];
+            Point3 pg = chainPos(off, j + 1), pb = chainPos(off, j), pc = chainPos(off, j + 2);
+            Float pdf = bg.pdf(Normalize(pc - pg), Normalize(pb - pg), TransportMode::Importance);
+            Float gb = EdgeGeometry(pg, pb, chainNormal(off, j), true);
+            Float gc = EdgeGeometry(pg, pc, chainNormal(off, j + 2), j + 2 < k + 1 || cSurf);
+            f[off] = pdf * gb / gc;
+        }
+        if (!(f[0] > 0) || !(f[1] > 0)) {
+            st->shift.fail(ShiftFailure::Geometry);
+            return false;
+        }
+        ch->glossyRho *= f[1] / f[0];
+    }
+    return true;
+}
+
+// Offset b (`yHit`, with direction woY1 towards the camera) connected to c:
+// reconnection for an empty chain (k = 0), else a manifold walk.
+bool ShiftChain(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s, int c,
+                const SurfaceInteraction &yHit, const Vec3 &woY1, const Vec3 &wiX1, Arena &arena, LightChain *ch,
+                SubpathShiftStats *st) {
+    const Scene &scene = *ctx.bidir->scene;
+    const PathVertex &x1 = light.v[s - 1], &xc = light.v[c];
+    const int k = s - 2 - c;
+    if (k == 0 && xc.isInfiniteLight()) return EnvironmentChain(scene, yHit, woY1, wiX1, ch, st);
+    if (k == 0) return ReconnectionChain(scene, x1, xc, yHit, woY1, wiX1, ch, st);
+    ChainInterior in;
+    if (k + 2 > kMaxManifoldVertices) {
+        ++st->longChains;
+        return false;
+    }
+    bool glossy = false;
+    if (!BaseChainInterior(scene, light, s, k, &in, ch, &glossy, st)) return false;
     st->glossyChains += glossy;
     ManifoldChain base;
     // The walk ends on c's shape (an area light's emitting shape for a light vertex).
@@ -122,41 +178,7 @@ bool ShiftChain(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s
     ch->discY = ch->walked.prob;
     for (int j = 0; j < k; ++j) ch->chainY *= ch->walked.fcos[j];
     ch->wiY1 = Normalize(ch->offChain.v[1].sp.p - yHit.p);
-    if (glossy) {
-        // Each glossy interior g of the light path (vertex s-2-j) enters rho
-        // (ShiftLightTracingPath) with its MIS densities of common/ in both
-        // directions: p_omega,g towards b times the edge geometry there (the
-        // light-tracing strategy's density of the next vertex), and the edge
-        // geometry of g's edge towards c, which the camera side's density
-        // p_omega,g |cos|/d^2 carries beyond the ratio p_y,g / p_x,g of its rho:
-        //   glossyRho = prod_g (p_y,g Gb_y Gc_x) / (p_x,g Gb_x Gc_y).
-        auto chainPos = [&](bool off, int i) -> Point3 {  // chain vertex i: b, interiors, c
-            if (!off) return i == 0 ? x1.p : i == k + 1 ? xc.p : light.v[s - 1 - i].p;
-            return i == 0 ? yHit.p : i == k + 1 ? xc.p : ch->offChain.v[i].sp.p;
-        };
-        auto chainNormal = [&](bool off, int i) -> Vec3 {
-            if (!off) return i == 0 ? Vec3(x1.ng) : i == k + 1 ? Vec3(xc.ng) : Vec3(light.v[s - 1 - i].ng);
-            return i == 0 ? Vec3(yHit.n) : i == k + 1 ? Vec3(xc.ng) : Vec3(ch->walked.si[i - 1].n);
-        };
-        const bool cSurf = xc.onSurface();
-        for (int j = 0; j < k; ++j) {
-            if (in.specular[j]) continue;
-            Float f[2];
-            for (int off = 0; off < 2; ++off) {
-                const BSDF &bg = off ? ch->walked.bsdf[j] : light.b[s - 2 - j];
-                Point3 pg = chainPos(off, j + 1), pb = chainPos(off, j), pc = chainPos(off, j + 2);
-                Float pdf = bg.pdf(Normalize(pc - pg), Normalize(pb - pg), TransportMode::Importance);
-                Float gb = EdgeGeometry(pg, pb, chainNormal(off, j), true);
-                Float gc = EdgeGeometry(pg, pc, chainNormal(off, j + 2), j + 2 < k + 1 || cSurf);
-                f[off] = pdf * gb / gc;
-            }
-            if (!(f[0] > 0) || !(f[1] > 0)) {
-                st->shift.fail(ShiftFailure::Geometry);
-                return false;
-            }
-            ch->glossyRho *= f[1] / f[0];
-        }
-    }
+    if (glossy && !GlossyChainRho(light, s, c, yHit, in, ch, st)) return false;
     ch->towardCamX = Normalize(light.v[c + 1].p - xc.p);
     ch->towardCamY = Normalize(ch->offChain.v[k].sp.p - xc.p);
     return true;

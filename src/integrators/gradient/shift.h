@@ -9,8 +9,9 @@
 //
 // Vertex classification (Kettunen et al. 2015, Sec. 5; DESIGN "Numbers"):
 // a vertex is Rough when the lowest roughness of its BSDF components is at
-// least `shiftThreshold` (default 0.001); smooth and near-specular vertices
-// are shifted by half-vector copy (or replay), rough ones may be reconnected.
+// least `shiftThreshold` (default kDefaultShiftThreshold, materials/bsdf.h);
+// smooth and near-specular vertices are shifted by half-vector copy (or
+// replay), rough ones may be reconnected.
 #pragma once
 #include <atomic>
 #include <cmath>

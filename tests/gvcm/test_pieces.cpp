@@ -1,26 +1,20 @@
 // Tests of G-VCM's estimator pieces (integrators/gvcm; gradient-domain-vcm.md)
 // on random paths of a small box (matte walls, a glossy plastic back wall, an
 // area light, a glass and a mirror sphere), each against an evaluation that
-// does not go through the code under test:
-//  - the offsets' values f(x')|T'|/p(x*), as ratios to the base's Eq. 5 value,
-//    and their rho = |T'| p(x')/p(x*), case 1 (Eqs. 16-17) and case 2 (Eqs.
-//    18-20, empty and specular chains): the paths re-evaluated from their
-//    vertex positions (BSDF values and densities, emission, cosines, distances)
-//    in the measure of the film point and the areas of the connectable
-//    vertices, where the camera shift (the film point moved by one pixel) has
-//    Jacobian 1 and the camera's film-to-direction map and a specular chain's
-//    solid angle per area come from finite differences; the offset's specular
-//    chain is found by an own Newton search on the emission direction;
-//  - the merges' MIS weights (Eq. 13 for the base and for the offset, Eq. 22)
-//    against every strategy's density of the path enumerated explicitly, and
-//    the pair's Eq. 23 weights with all other strategies' summing to one.
-// Tolerances: positions are Embree's single-precision hits; the reference
-// takes directions from positions where the code keeps the sampled directions
-// (differences ~1e-6 rad for edges >= 0.05, corners excluded), which bounds
-// the agreement of values that depend on directions only at ~1e-5 relative
-// (the plastic lobe's relative derivative is < 10 per rad). Finite differences
-// of chains through the glass sphere: 1e-3 rad steps on single-precision hits
-// (as tests/gbdpt ChainSolidAngleMatchesFiniteDifferences, 2e-3 per chain).
+// does not go through the code under test: the offsets' values f(x')|T'|/p(x*),
+// as ratios to the base's Eq. 5 value, and their rho = |T'| p(x')/p(x*), case 1
+// (Eqs. 16-17) and case 2 (Eqs. 18-20, empty and specular chains), from the
+// paths re-evaluated from their vertex positions (BSDF values and densities,
+// emission, cosines, distances) in the measure of the film point and the areas
+// of the connectable vertices, where the camera shift (the film point moved by
+// one pixel) has Jacobian 1; the camera's film-to-direction map and a specular
+// chain's solid angle per area from finite differences, the offset's specular
+// chain from an own Newton search on the emission direction.
+// Tolerances, per path: positions are Embree's single-precision hits (errors
+// below 1e-6 in this box) and the reference takes directions from positions
+// where the code keeps sampled directions, so a direction differs by up to
+// 1e-6 / d and a cosine relatively by 1e-6 / (d |cos|) (Tolerance); a chain's
+// finite differences add their noise and truncation (Case2Reference).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -61,7 +55,7 @@ struct GVCMTestAccess {
 namespace {
 
 using Offset = GVCMTestAccess::Offset;
-constexpr int kW = 24, kH = 18;
+constexpr int kW = 64, kH = 48;
 
 std::string BoxText() {
     const char *matte = "Material \"matte\" \"rgb Kd\" [0.65 0.6 0.55]";
@@ -211,12 +205,24 @@ bool SpecularLobe(const BSDF &b, const Vec3 &wo, const Vec3 &wi, TransportMode m
     return false;
 }
 
+// d |cos| at both ends of the edge a - b (normals na, nb; zero: none).
+double DCos(const Point3 &a, const Vec3 &na, const Point3 &b, const Vec3 &nb) {
+    const Vec3 w = Dir(a, b);
+    const double d = Distance(a, b);
+    return std::min(na.lengthSquared() == 0 ? 1.0 : d * AbsDot(w, na), nb.lengthSquared() == 0 ? 1.0 : d * AbsDot(w, nb));
+}
+
 // The camera part z_0 .. z_b (z_1 .. z_{b-1} specular) in the film measure:
-// f = We cos |dw/dp| prod R_i, p = p_dir |dw/dp| prod prob_i.
-bool FirstChain(const Fixture &f, const ShiftSubpath &z, Point2 pFilm, Point2 lens, int b, Spectrum *F, double *P) {
+// f = We cos |dw/dp| prod R_i, p = p_dir |dw/dp| prod prob_i; *minDCos takes
+// the edges' d |cos| (directions from positions).
+bool FirstChain(const Fixture &f, const ShiftSubpath &z, Point2 pFilm, Point2 lens, int b, Spectrum *F, double *P,
+                double *minDCos) {
     const FilmFactors ff = Film(f.camera(), pFilm, lens);
     *F = Spectrum(ff.we);
     *P = ff.pdf;
+    for (int i = 1; i <= b; ++i)
+        *minDCos = std::min(*minDCos, DCos(z.v[i - 1].p, i > 1 ? Vec3(z.v[i - 1].ns) : Vec3(0, 0, 0), z.v[i].p,
+                                           Vec3(z.v[i].ns)));
     for (int i = 1; i < b; ++i) {
         Spectrum R;
         double prob;
@@ -365,14 +371,14 @@ void CheckCase1(KernelKind kind) {
             const Spectrum fx = x.v[u].throughput() * fu * lv.throughput() / etaX;
             // The reference.
             Spectrum Fx, Fy;
-            double Px, Py;
+            double Px, Py, minDCos = 1;
             const Point2 pY(c.cs.pFilm.x + c.off.x, c.cs.pFilm.y + c.off.y);
-            if (!FirstChain(f, x, c.cs.pFilm, c.cs.pLens, b, &Fx, &Px) || !FirstChain(f, y, pY, c.cs.pLens, b, &Fy, &Py))
+            if (!FirstChain(f, x, c.cs.pFilm, c.cs.pLens, b, &Fx, &Px, &minDCos) ||
+                !FirstChain(f, y, pY, c.cs.pLens, b, &Fy, &Py, &minDCos))
                 continue;
             const Point3 &zr = x.v[r].p;
             const Vec3 nr(x.v[r].ng);
             const Point3 next = u > r ? x.v[r + 1].p : Lp.v[m - 1].p;
-            double minDCos = 1;
             for (int side = 0; side < 2; ++side) {
                 const ShiftSubpath &z = side ? y : x;
                 const Vec3 wo = Dir(z.v[b].p, z.v[b - 1].p), wi = Dir(z.v[b].p, zr);
@@ -413,6 +419,358 @@ void CheckCase1(KernelKind kind) {
                 kind == KernelKind::Fixed ? "fixed" : "footprint", ef.n, atR, pastR, firstChains, ef.max, er.max);
 }
 
+// ---------------------------------------------------------------- case 2
+// The offset of a merge at z_b is the connected path y_0 .. y_d, y'_{d+1} ..
+// y'_{m-1}, z'_b .. z'_0 (Eqs. 18-19: f(x') / p'(x*), the base's photon density
+// and kernel). Relative to the base's Eq. 5 value:
+//   o.f / f_x = [E(y_d -> w') R' G'] / [E(y_d -> w) R G]
+//               x f(z'_{b-1} -> z'_b -> y'_{m-1}) / f(z_{b-1} -> z_b -> y_{m-1}) x F(z') / F(z)
+// with E the emission (times its cosine) or the BSDF (times the shading
+// cosine) at y_d, R the chain's specular f|cos| (1 for an empty chain), G the
+// solid angle at y_d per area at the chain's end (|cos| / d^2 for an empty
+// chain) and F the camera's first chain in the film measure; rho likewise with
+// p_omega(y_d) G prod(lobe probabilities) and the camera's film densities.
+
+// A specular chain traced from o (normal on) along dir, each vertex taking the
+// lobe (reflection or transmission) of `transmit`, to the next surface.
+struct Chain {
+    Point3 end, last;  // the end point; the last specular vertex (or o)
+    Vec3 endN;
+    int endGeom = -1;
+    Spectrum R{1};     // prod f|cos| (importance)
+    double prob = 1;   // prod of the lobe probabilities
+};
+bool TraceChain(const Fixture &f, Arena &arena, const Point3 &o, const Vec3 &on, const Vec3 &dir,
+                const std::vector<bool> &transmit, Chain *c) {
+    *c = Chain();
+    Point3 p = o;
+    Vec3 pn = on, d = dir;
+    c->last = o;
+    for (size_t j = 0;; ++j) {
+        SurfaceInteraction si;
+        if (!f.job.scene->intersect(Interaction(p, Normal3(pn), Vec3()).spawnRay(d), &si) || !si.material) return false;
+        if (j == transmit.size()) {
+            c->end = si.p;
+            c->endN = Vec3(si.n);
+            c->endGeom = si.geomId;
+            return true;
+        }
+        const Vec3 wo = -d;
+        BSDF b = si.material->getBSDF(si, arena, TransportMode::Importance);
+        if (!b || !b.isSpecular()) return false;
+        bool found = false;
+        for (Float uc : {0.02, 0.5, 0.98})
+            for (Float u0 : {0.02, 0.5, 0.98}) {
+                BSDFSample s;
+                if (found || !b.sample(wo, uc, Point2(u0, 0.5), TransportMode::Importance, &s) || !s.valid() ||
+                    s.isTransmission() != transmit[j])
+                    continue;
+                found = true;
+                c->R *= s.f * AbsDot(s.wi, Vec3(b.ns()));
+                c->prob *= s.pdf;
+                d = Normalize(s.wi);
+            }
+        if (!found) return false;
+        p = si.p;
+        pn = Vec3(si.n);
+        c->last = p;
+    }
+}
+
+// The chain's solid angle at its start per area at its end, by central
+// differences of eps rad about dir.
+double ChainG(const Fixture &f, Arena &arena, const Point3 &o, const Vec3 &on, const Vec3 &dir,
+              const std::vector<bool> &transmit, const Chain &c, double eps) {
+    Vec3 t[2];
+    CoordinateSystem(dir, &t[0], &t[1]);
+    Vec3 e[2];
+    for (int a = 0; a < 2; ++a) {
+        Chain cp, cm;
+        if (!TraceChain(f, arena, o, on, Normalize(dir + t[a] * eps), transmit, &cp) ||
+            !TraceChain(f, arena, o, on, Normalize(dir - t[a] * eps), transmit, &cm) || cp.endGeom != c.endGeom ||
+            cm.endGeom != c.endGeom)
+            return 0;
+        e[a] = (cp.end - cm.end) / (2 * eps);
+    }
+    return 1 / AbsDot(Cross(e[0], e[1]), c.endN);
+}
+
+// The direction at o whose chain ends at `target` (on the plane of normal tn):
+// Newton on the end point's tangent coordinates, derivatives by 1e-5 rad differences.
+bool SolveChain(const Fixture &f, Arena &arena, const Point3 &o, const Vec3 &on, Vec3 dir,
+                const std::vector<bool> &transmit, const Point3 &target, const Vec3 &tn, int geom, Vec3 *out,
+                Chain *c) {
+    Vec3 s[2];
+    CoordinateSystem(tn, &s[0], &s[1]);
+    auto residual = [&](const Vec3 &d, double r[2], Chain *ch) {
+        if (!TraceChain(f, arena, o, on, d, transmit, ch) || ch->endGeom != geom) return false;
+        for (int a = 0; a < 2; ++a) r[a] = Dot(ch->end - target, s[a]);
+        return true;
+    };
+    for (int it = 0; it < 30; ++it) {
+        double r[2];
+        if (!residual(dir, r, c)) return false;
+        if (std::hypot(r[0], r[1]) < 1e-7) {
+            *out = dir;
+            return true;
+        }
+        Vec3 t[2];
+        CoordinateSystem(dir, &t[0], &t[1]);
+        double J[2][2];
+        for (int a = 0; a < 2; ++a) {
+            double ra[2];
+            Chain ca;
+            if (!residual(Normalize(dir + t[a] * 1e-5), ra, &ca)) return false;
+            for (int q = 0; q < 2; ++q) J[q][a] = (ra[q] - r[q]) / 1e-5;
+        }
+        const double det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
+        if (!(std::abs(det) > 0)) return false;
+        const double da = (J[1][1] * r[0] - J[0][1] * r[1]) / det, db = (J[0][0] * r[1] - J[1][0] * r[0]) / det;
+        // Damped: halve the step until the chain still ends on the target's
+        // surface closer to it.
+        bool better = false;
+        for (double step = 1; step > 1e-3 && !better; step /= 2) {
+            const Vec3 next = Normalize(dir - (t[0] * da + t[1] * db) * step);
+            double rn[2];
+            Chain cn;
+            if (residual(next, rn, &cn) && std::hypot(rn[0], rn[1]) < std::hypot(r[0], r[1])) {
+                dir = next;
+                better = true;
+            }
+        }
+        if (!better) return false;
+    }
+    return false;
+}
+
+// The reference of a case-2 offset: value ratio and rho (above). L holds the
+// light subpath to the photon y_m, z and y the base and offset camera subpaths
+// with first connectable vertex b. False when the own search misses the chain.
+struct Case2Ref {
+    Spectrum ratio;
+    double rho = 0, tol = 0;
+};
+bool Case2Reference(const Fixture &f, Arena &arena, const ShiftSubpath &L, int m, const CameraPath &c, int b,
+                    Case2Ref *ref) {
+    int d = m - 1;
+    while (d > 0 && L.v[d].delta()) --d;
+    const PathVertex &yd = L.v[d], &ym = L.v[m], &zo = c.sh.y.v[b];
+    std::vector<bool> transmit;
+    for (int i = d + 1; i < m; ++i)
+        transmit.push_back(Transmits(Dir(L.v[i].p, L.v[i - 1].p), Dir(L.v[i].p, L.v[i + 1].p), Vec3(L.v[i].ns)));
+    const Vec3 on = yd.ng.isZero() ? Dir(yd.p, L.v[d + 1].p) : Vec3(yd.ng);
+    const Vec3 wX = Dir(yd.p, L.v[d + 1].p);
+    Vec3 wY;
+    Spectrum RX(1), RY(1);
+    double gX, gY, probX = 1, probY = 1;
+    Point3 lastY = yd.p;
+    double minDCos = 1, gErr = 0;
+    if (d == m - 1) {  // empty chain: connections of y_d to the photon and to z'_b
+        wY = Dir(yd.p, zo.p);
+        gX = AreaFactor(yd.p, ym.p, Vec3(ym.ng));
+        gY = AreaFactor(yd.p, zo.p, Vec3(zo.ng));
+        for (const PathVertex *e : {&ym, &zo})
+            minDCos = std::min({minDCos, Distance(yd.p, e->p) * AbsDot(Dir(yd.p, e->p), Vec3(e->ng)),
+                                yd.ng.isZero() ? 1.0 : Distance(yd.p, e->p) * AbsDot(Dir(yd.p, e->p), on)});
+    } else {
+        Chain cx, cy;
+        // The base chain retraced from y_d towards y_{d+1} (a direction from
+        // single-precision positions, magnified along the chain) ends at y_m.
+        if (!TraceChain(f, arena, yd.p, on, wX, transmit, &cx) || Distance(cx.end, ym.p) > 1e-3) return false;
+        // The offset chain followed from the base's as its end moves to z'_b in
+        // 16 steps along the surface (the branch a manifold walk follows).
+        wY = wX;
+        for (int step = 1; step <= 16; ++step) {
+            const Point3 target = ym.p + (zo.p - ym.p) * (step / 16.0);
+            if (!SolveChain(f, arena, yd.p, on, wY, transmit, target, Vec3(zo.ng), cx.endGeom, &wY, &cy)) return false;
+        }
+        // G by central differences: 1e-3 rad steps on single-precision hits
+        // (~1e-6 at lengths ~1: 2e-3 relative, tests/gbdpt) and the truncation,
+        // estimated by the change from twice the step (4 times the error), per
+        // chain; a quarter of the step where a step leaves the end's surface.
+        for (double eps : {1e-3, 2.5e-4}) {
+            gX = ChainG(f, arena, yd.p, on, wX, transmit, cx, eps);
+            gY = ChainG(f, arena, yd.p, on, wY, transmit, cy, eps);
+            const double gX2 = ChainG(f, arena, yd.p, on, wX, transmit, cx, 2 * eps);
+            const double gY2 = ChainG(f, arena, yd.p, on, wY, transmit, cy, 2 * eps);
+            if (!(gX > 0) || !(gY > 0) || !(gX2 > 0) || !(gY2 > 0)) continue;
+            gErr = 4e-3 * (1e-3 / eps) + std::abs(gX2 / gX - 1) / 3 + std::abs(gY2 / gY - 1) / 3;
+            gX += (gX - gX2) / 3;  // Richardson: the O(eps^2) term removed (gErr bounds it before)
+            gY += (gY - gY2) / 3;
+            break;
+        }
+        if (!(gErr > 0)) return false;
+        RX = cx.R, RY = cy.R, probX = cx.prob, probY = cy.prob;
+        lastY = cy.last;
+    }
+    double pX, pY;
+    const Spectrum EX = Emit(f, L, d, wX, &pX), EY = Emit(f, L, d, wY, &pY);
+    const ShiftSubpath &x = c.x, &y = c.sh.y;
+    const Spectrum fX = x.b[b].f(Dir(x.v[b].p, x.v[b - 1].p), Dir(ym.p, L.v[m - 1].p), TransportMode::Radiance);
+    const Spectrum fY = y.b[b].f(Dir(zo.p, y.v[b - 1].p), Dir(zo.p, lastY), TransportMode::Radiance);
+    Spectrum FX, FY;
+    double PX, PY;
+    const Point2 pFilmY(c.cs.pFilm.x + c.off.x, c.cs.pFilm.y + c.off.y);
+    if (!FirstChain(f, x, c.cs.pFilm, c.cs.pLens, b, &FX, &PX, &minDCos) ||
+        !FirstChain(f, y, pFilmY, c.cs.pLens, b, &FY, &PY, &minDCos))
+        return false;
+    ref->ratio = SafeDiv(EY * RY * gY * fY * FY, EX * RX * gX * fX * FX);
+    ref->rho = (PY * pY * gY * probY) / (PX * pX * gX * probX);
+    ref->tol = Tolerance(minDCos) + gErr;
+    return true;
+}
+
+// Empty chains (Eq. 18) with photons from random light prefixes placed up to
+// 0.015 (about the kernel's radius) from z_b on its plane, for random camera
+// subpaths (z_b behind specular first chains too). Footprint kernel: the
+// estimate keeps the base's (Eq. 18's pi r^2).
+void CheckCase2Empty(KernelKind kind) {
+    Fixture f(kind);
+    Arena arena;
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> U(-0.015, 0.015);
+    ErrStats ef, er;
+    int firstChains = 0, failed = 0, ownKernel = 0;
+    for (int trial = 0; trial < 30000 && (ef.n < 300 || firstChains < 60); ++trial) {
+        arena.reset();
+        CameraPath c;
+        if (!TraceCamera(f, trial, 6, arena, &c)) continue;
+        const ShiftSubpath &x = c.x, &y = c.sh.y;
+        const int b = FirstConnectable(f, x);
+        if (b < 1 || c.sh.validUpTo < b || (c.sh.r >= 0 && b >= c.sh.r) || HasCorner(x, b + 1) || HasCorner(y, b + 1))
+            continue;
+        if (b == 1 && ef.n >= 300) continue;  // then only z_b behind specular first chains
+        ShiftSubpath L = TraceLight(f, 4, arena), Lp;
+        const int m = 1 + trial % L.n;
+        Vec3 t1, t2;
+        CoordinateSystem(Vec3(x.v[b].ng), &t1, &t2);
+        LightVertex lv;
+        const Point3 p = x.v[b].p + t1 * U(rng) + t2 * U(rng);
+        if (!SyntheticPhoton(f, L, m, x.v[b], x.b[b], p, arena, &Lp, &lv)) continue;
+        Float etaX, etaY;
+        Terms(f, x, x.n, b, arena, &etaX);
+        const VCMCameraTerms ty = Terms(f, y, std::min(y.n, c.sh.validUpTo + 1), b, arena, &etaY);
+        Offset o;
+        if (!GVCMTestAccess::case2(*f.g, Lp, m, c.sh, b, lv, &ty, etaX, arena, &o)) {
+            ++failed;  // occluded or black
+            continue;
+        }
+        Case2Ref ref;
+        ASSERT_TRUE(Case2Reference(f, arena, Lp, m, c, b, &ref));
+        const Spectrum fx = x.v[b].throughput() * x.b[b].f(Vec3(x.v[b].wo), lv.wo, TransportMode::Radiance) *
+                            lv.throughput() / etaX;
+        const Spectrum ratio = SafeDiv(o.f, fx);
+        const double eF = RelErr(ratio, ref.ratio), eR = std::abs(o.rho / ref.rho - 1);
+        EXPECT_LT(eF, ref.tol) << "b " << b << " m " << m << " trial " << trial << ": o.f / f_x " << ratio.r << " "
+                               << ratio.g << " " << ratio.b << ", reference " << ref.ratio.r << " " << ref.ratio.g
+                               << " " << ref.ratio.b;
+        EXPECT_LT(eR, ref.tol) << "b " << b << " m " << m << " trial " << trial << ": rho " << o.rho
+                               << ", reference " << ref.rho;
+        ef.add(eF);
+        er.add(eR);
+        firstChains += b > 1;
+        ownKernel += std::abs(etaY / etaX - 1) > 1e-3;
+    }
+    EXPECT_GE(ef.n, 300);
+    EXPECT_GE(firstChains, 60) << "merges at z_b behind specular first chains";
+    if (kind == KernelKind::Footprint) {
+        EXPECT_GE(ownKernel, 200) << "offsets whose own kernel differs from the base's";
+    }
+    std::printf("case 2, empty chains (%s kernel): %d offsets (%d behind specular first chains, %d occluded or black); max "
+                "relative error of the value %.2e, of rho %.2e\n",
+                kind == KernelKind::Fixed ? "fixed" : "footprint", ef.n, firstChains, failed, ef.max, er.max);
+}
+
+// Specular chains (Eqs. 19-20): photons of random light subpaths after ideal
+// specular vertices (the glass sphere's caustics, the mirror's reflections),
+// the camera aimed at them (z_1 = y_m, b = 1); the offset chain from y_d to
+// z'_1 found by the reference's own Newton search.
+void CheckCase2Chains() {
+    Fixture f;
+    Arena arena;
+    ErrStats ef, er;
+    int byK[4] = {}, fromLight = 0, failed = 0, missed = 0;
+    std::vector<double> errs;
+    const Camera &cam = f.camera();
+    for (int trial = 0; trial < 200000 && ef.n < 200; ++trial) {
+        arena.reset();
+        f.sampler->startPixelSample({trial % kW, (trial / kW) % kH}, trial / (kW * kH));
+        ShiftSubpath L = TraceLight(f, 6, arena);
+        for (int m = 2; m < L.n; ++m) {
+            const PathVertex &ym = L.v[m];
+            if (ym.delta() || !L.v[m - 1].delta() || !f.W.mergeable(ym, &L.b[m])) continue;
+            int d = m - 1;
+            bool ideal = true;
+            while (d > 0 && L.v[d].delta()) ideal = ideal && L.deltaSample[d--];
+            if (!ideal || L.v[d].isDeltaLight()) continue;
+            // The camera aimed at the photon: z_1 = y_m.
+            CameraWiSample cws;
+            if (!cam.sampleWi(AsInteraction(ym), Point2(0.5, 0.5), &cws)) continue;
+            CameraPath c;
+            c.cs = {cws.pRaster, Point2(0.5, 0.5)};
+            c.off = trial % 2 ? Point2i{1, 0} : Point2i{0, 1};
+            if (c.cs.pFilm.x < 1 || c.cs.pFilm.x > kW - 2 || c.cs.pFilm.y < 1 || c.cs.pFilm.y > kH - 2) continue;
+            Ray ray;
+            if (cam.generateRay(c.cs, &ray) == 0) continue;
+            c.x = ArenaSubpath(arena, 4);
+            c.x.n = GenerateCameraSubpath(*f.bc, ray, *f.sampler, arena, 4, c.x.v, c.x.b);
+            PrepareSubpath(*f.sc, &c.x);
+            if (c.x.n < 2 || Distance(c.x.v[1].p, ym.p) > 1e-4 || FirstConnectable(f, c.x) != 1) continue;
+            SubpathShiftStats st;
+            ShiftCameraSubpath(*f.sc, c.x, c.cs, c.off, arena, &c.sh, &st);
+            const ShiftSubpath &x = c.x, &y = c.sh.y;
+            if (c.sh.validUpTo < 1 || HasCorner(y, 2)) continue;
+            std::vector<LightVertex> recs;
+            VCMLightVertices(*f.bc, L.v, L.b, L.n, f.W, &recs);
+            const LightVertex *lv = nullptr;
+            for (const LightVertex &r : recs)
+                if (r.depth == m) lv = &r;
+            ASSERT_NE(lv, nullptr);
+            Float etaX, etaY;
+            Terms(f, x, x.n, 1, arena, &etaX);
+            const VCMCameraTerms ty = Terms(f, y, std::min(y.n, c.sh.validUpTo + 1), 1, arena, &etaY);
+            Offset o;
+            if (!GVCMTestAccess::case2(*f.g, L, m, c.sh, 1, *lv, &ty, etaX, arena, &o)) {
+                ++failed;  // the walk failed or was not reversible, occluded
+                continue;
+            }
+            Case2Ref ref;
+            if (!Case2Reference(f, arena, L, m, c, 1, &ref)) {
+                ++missed;
+                continue;
+            }
+            const Spectrum fx = x.v[1].throughput() * x.b[1].f(Vec3(x.v[1].wo), lv->wo, TransportMode::Radiance) *
+                                lv->throughput() / etaX;
+            const Spectrum ratio = SafeDiv(o.f, fx);
+            const double eF = RelErr(ratio, ref.ratio), eR = std::abs(o.rho / ref.rho - 1);
+            EXPECT_LT(eF, ref.tol) << "k " << m - 1 - d << " trial " << trial << ": o.f / f_x " << ratio.r << " "
+                                   << ratio.g << " " << ratio.b << ", reference " << ref.ratio.r << " "
+                                   << ref.ratio.g << " " << ref.ratio.b;
+            EXPECT_LT(eR, ref.tol) << "k " << m - 1 - d << " trial " << trial << ": rho " << o.rho << ", reference "
+                                   << ref.rho;
+            ef.add(eF);
+            er.add(eR);
+            errs.push_back(std::max(eF, eR));
+            ++byK[std::min(m - 1 - d, 3)];
+            fromLight += d == 0;
+            break;  // one photon per light subpath
+        }
+    }
+    EXPECT_GE(ef.n, 200);
+    EXPECT_GE(byK[1], 20) << "one-vertex chains (the mirror)";
+    EXPECT_GE(byK[2] + byK[3], 40) << "chains through the glass sphere";
+    EXPECT_LE(missed, ef.n / 20) << "chains the reference's search did not find";
+    // Most chains' finite differences are far from their tolerance's truncation
+    // bound: the median error is at the level of the hits' noise (1e-6 over
+    // 1e-3 rad steps).
+    std::sort(errs.begin(), errs.end());
+    const double median = errs.empty() ? 1 : errs[errs.size() / 2];
+    EXPECT_LT(median, 1e-3);
+    std::printf("case 2, specular chains: %d offsets (%d of one vertex, %d of two, %d longer; %d from the light), %d "
+                "fell back, %d missed by the reference; relative errors: median %.2e, max of the value %.2e, of rho %.2e\n",
+                ef.n, byK[1], byK[2], byK[3], fromLight, failed, missed, median, ef.max, er.max);
+}
+
 }  // namespace
 }  // namespace gradus
 
@@ -420,3 +778,6 @@ using namespace gradus;
 
 TEST(GVCMPieces, Case1OffsetMatchesReevaluatedPath) { CheckCase1(KernelKind::Fixed); }
 TEST(GVCMPieces, Case1OffsetKeepsTheBaseKernel) { CheckCase1(KernelKind::Footprint); }
+TEST(GVCMPieces, Case2EmptyChainMatchesReevaluatedPath) { CheckCase2Empty(KernelKind::Fixed); }
+TEST(GVCMPieces, Case2EmptyChainKeepsTheBaseKernel) { CheckCase2Empty(KernelKind::Footprint); }
+TEST(GVCMPieces, Case2SpecularChainMatchesReevaluatedPath) { CheckCase2Chains(); }

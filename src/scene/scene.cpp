@@ -93,7 +93,7 @@ std::string SceneFeatures::describe() const {
        << " instances: " << numInstancedTriangles << "), spheres: " << numSpheres << ", other analytic shapes: " << numAnalytic
        << ", curve segments: " << numCurveSegments << ", lights: " << numLights << "\n"
        << "  specular surfaces: " << yn(specularSurfaces) << "\n"
-       << "  near-specular surfaces (roughness < 0.001): " << yn(nearSpecularSurfaces) << "\n"
+       << "  near-specular surfaces (roughness < " << kDefaultShiftThreshold << "): " << yn(nearSpecularSurfaces) << "\n"
        << "  lowest material roughness: " << minRoughness << "\n"
        << "  delta lights: " << yn(deltaLights) << ", infinite lights: " << yn(infiniteLights)
        << ", area lights: " << yn(areaLights) << "\n"

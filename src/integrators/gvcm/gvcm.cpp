@@ -306,8 +306,8 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, const Case2Base &cb, const Cam
     return true;
 }
 
-Float GVCMMergeWeight(const VCMCameraTerms &t, const PathVertex &z, const PathVertex &zPrev, const BSDF &bz,
-                      const LightVertex &lv, const VCMWeights &W) {
+Float GVCMIntegrator::mergeWeight(const VCMCameraTerms &t, const PathVertex &z, const PathVertex &zPrev,
+                                  const BSDF &bz, const LightVertex &lv, const VCMWeights &W) {
     // w_VM = eta_u o(z_u) / (c + S_L(m-1) + S_C(u)) (vcm.h; S_L's junction eta_u sigma(z_u)).
     const Vec3 wi = lv.wo;  // towards y_{m-1}
     const Float oz = Remap(lv.pdfFwd);
@@ -464,7 +464,7 @@ void GVCMIntegrator::mergePhoton(SampleMerges &sm, VertexMerges &vm, uint32_t id
     const LightVertex &lv = vertices_[idx];
     ++sm.merges;
     // Eq. 13: the base's w_VM (with connections; G-PM's merges are the only strategy).
-    const Float wx = connections_ ? GVCMMergeWeight(vm.terms, zu, zp, bu, lv, sm.W) : 1;
+    const Float wx = connections_ ? mergeWeight(vm.terms, zu, zp, bu, lv, sm.W) : 1;
     // Eq. 5 with the uniform kernel: beta_L f beta_C / (pi r_u^2 N), N folded into w_VM.
     const Spectrum fx = zu.throughput() * f * lv.throughput() * (st.w / vm.etaU);
     out->primal += fx * wx;
@@ -504,7 +504,7 @@ bool GVCMIntegrator::case1(const CameraShift &sh, int u, const BSDF &bu, const L
     // The estimate keeps the base's kernel; the weight takes the offset's own eta (Eq. 23).
     o->f = yu.throughput() * fo * lv.throughput() * (w / etaX);
     o->rho = sh.rho[u];
-    if (terms) o->w = GVCMMergeWeight(*terms, yu, yp, bu, lv, W);
+    if (terms) o->w = mergeWeight(*terms, yu, yp, bu, lv, W);
     const bool ok = !o->f.isBlack() && o->w > 0;
     count(ok ? Case1Shifted : FallbackBlocked);
     return ok;

@@ -144,6 +144,11 @@ class GVCMIntegrator : public GBDPTIntegrator {
     void gatherPhotons(const PathVertex &zu, const BSDF &bu, int u, Float etaU, Found *found) const;
     void mergePhoton(SampleMerges &sm, VertexMerges &vm, uint32_t idx, const Spectrum &f, bool chosen,
                      GradientSample *out) const;
+    // Eq. 13 (vcm.h) for the merge of light vertex y_m = lv at camera vertex z
+    // (from zPrev; BSDF bz) with z's camera terms t: the base's w_x, and a
+    // case-1 offset's w_y with the offset's own terms (Eq. 22).
+    static Float mergeWeight(const VCMCameraTerms &t, const PathVertex &z, const PathVertex &zPrev, const BSDF &bz,
+                             const LightVertex &lv, const VCMWeights &W);
     // The offsets' B_u and eta (whole subpath), camera terms at z'_u: computed when first needed.
     const Float *offsetB(SampleMerges &sm, int k) const;
     const VCMCameraTerms *offsetTerms(SampleMerges &sm, VertexMerges &vm, int k) const;

@@ -70,38 +70,4 @@ class PixelSampleIntegrator : public Integrator, public SampleEstimator {
     const Scene *scene_ = nullptr;
 };
 
-// ---- Pass bookkeeping of the Metropolis integrators (mlt, pmlt)
-// A render's mutations are dealt to the chains round-robin by a running
-// index: chain i performs ChainShare(x, i, chains) of the first x, so any split
-// into passes gives every chain the same mutations.
-inline int64_t ChainShare(int64_t x, int64_t i, int64_t chains) { return x > i ? (x - i - 1) / chains + 1 : 0; }
-
-// Ends a Metropolis render: an interrupt can skip chains of the last pass, so
-// the main image's R, G, B are scaled by issued / performed mutations (the
-// factor is returned); writes <prefix>_b, _mutations, _chains and _warning.
-// Writes <prefix>_b, _mutations, _chains and _warning.
-inline void WriteMetropolisMetadata(Metadata *m, const std::string &prefix, double b, int64_t performed,
-                                    int64_t chains, const std::string &warning) {
-    (*m)[prefix + "_b"] = MetaValue::Double(b);
-    (*m)[prefix + "_mutations"] = MetaValue::Int(performed);
-    (*m)[prefix + "_chains"] = MetaValue::Int(chains);
-    if (!warning.empty()) (*m)[prefix + "_warning"] = warning;
-}
-
-inline double FinishMetropolisImage(Image *out, const std::string &prefix, double b, int64_t issued,
-                                    int64_t performed, int64_t chains, const std::string &warning) {
-    double rescale = 1;
-    if (performed > 0 && performed != issued) {
-        rescale = double(issued) / double(performed);
-        const auto &names = out->channelNames();
-        for (int ch = 0; ch < out->numChannels(); ++ch) {
-            if (names[size_t(ch)] != "R" && names[size_t(ch)] != "G" && names[size_t(ch)] != "B") continue;
-            for (int y = 0; y < out->height(); ++y)
-                for (int x = 0; x < out->width(); ++x) out->at(x, y, ch) = float(out->at(x, y, ch) * rescale);
-        }
-    }
-    WriteMetropolisMetadata(&out->metadata, prefix, b, performed, chains, warning);
-    return rescale;
-}
-
 }  // namespace gradus

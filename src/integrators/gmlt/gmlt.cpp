@@ -47,7 +47,8 @@ std::vector<ParamInfo> GMLTParameters() { return Table().describe(); }
 
 GMLTIntegrator::GMLTIntegrator(const EntityDesc &desc) : GMLTIntegrator(desc, Table().parse(desc)) {}
 
-GMLTIntegrator::GMLTIntegrator(const EntityDesc &desc, const GMLTSettings &s) : PMLTIntegrator(desc, s), gset_(s) {
+GMLTIntegrator::GMLTIntegrator(const EntityDesc &desc, const GMLTSettings &s)
+    : PMLTIntegrator(desc, s, kMutationTag), gset_(s) {
     // Eq. 11 with alpha = 0 vanishes on paths whose gradient is 0, which the
     // chains could then never visit: the coarse primal would miss them.
     if (!(gset_.alpha > 0))
@@ -139,84 +140,79 @@ double GMLTIntegrator::candidateWeight(const Sample &smp, int64_t k, int s, int 
     return std::isfinite(w) ? w : 0;
 }
 
-void GMLTIntegrator::runPass(PassContext &ctx) {
-    Float weights[pmlt::kMutationTypes];
-    selectionWeights(weights);
-    const double b = b_;
-    const pmlt::Mutator &mut = *mut_;
-    runChains(ctx, kMutationTag, [&](Chain &ch, int64_t count, pmlt::State &xs, Arena &cur, RNG &rng,
+int64_t GMLTIntegrator::runMutations(Chain &ch, int64_t count, pmlt::State &xs, Arena &cur, RNG &rng,
                                      SampleRecorder &rec, Worker &wk) {
-        pmlt::State ys;
-        pmlt::MutationStats mst;
-        int64_t shifts[kShiftStatuses] = {};
-        int dx = ch.dir;
-        Target tx = evaluate(xs, dx, cur, &mst);
-        ++shifts[int(tx.status)];
-        if (!(tx.f > 0)) return;  // not reached: alpha > 0 and I(x) > 0
-        RNGSampler u(rng);
-        ItemCounts cnt;
-        // Splats of state z with weight w (expected values, as pmlt): the
-        // gradient f*(z) into dx / dy by Eq. 10's extended filter (negative
-        // directions land at the neighbour, sign flipped: GradientFilm), the
-        // coarse primal (1/4) F(x) (Sec. 4.3), both times b w / f(z).
-        auto splat = [&](const pmlt::State &s, int dir, const Target &t, double w) {
-            if (!(w > 0)) return;
-            GradientSplat g;
-            g.pixel = Point2i{int(std::floor(s.e.pRaster.x)), int(std::floor(s.e.pRaster.y))};
-            g.value.primal = s.e.F * 0.25;
-            g.value.diff[dir] = t.diff;
-            g.value.active[dir] = true;
-            gfilm_.splatLightTracing(rec, g, Float(b * w / t.f));
-        };
-        for (int64_t k = 0; k < count; ++k) {
-            double wsum = 0;
-            const int type = SelectMutation(mut, xs.x, weights, rng.uniform(), &wsum);
-            double ratio = 0;
-            const pmlt::ProposalResult res = mut.propose(MutationType(type), xs, u, wk.arena, &ys, &ratio, &mst);
-            const int dy = std::min(int(rng.uniform() * 4), 3);  // uniform direction: a symmetric proposal (Sec. 4.2.1)
-            Target ty;
-            Float a = 0;
-            if (res == pmlt::ProposalResult::Proposed && direct_ && ys.x.size() <= 3) {
-                ++cnt.zero[type];  // outside the chains' target (directsamples)
-            } else if (res == pmlt::ProposalResult::Proposed) {
-                ty = evaluate(ys, dy, wk.arena, &mst);
-                ++shifts[int(ty.status)];
-                // Metropolis-Hastings on the extended space: pmlt's ratio is
-                // I(y) T(y -> x) / (I(x) T(x -> y)); the target is f (Eq. 11).
-                const double r =
-                    ratio * (double(xs.e.I) / double(ys.e.I)) * (ty.f / tx.f) * SelectionRatio(mut, type, ys.x, weights, wsum);
-                a = std::isfinite(r) ? Float(std::min(1.0, r)) : 0;
-            }
-            cnt.record(type, res, a);
-            splat(ys, dy, ty, a);
-            splat(xs, dx, tx, 1 - a);
-            if (a > 0 && rng.uniform() < a) {
-                ++cnt.acc[type];
-                std::swap(xs, ys);
-                tx = ty;
-                dx = dy;
-                cur.reset();
-                pmlt::BuildBSDFs(ctx_, xs.x, cur, &xs.bsdf);
-            }
-            if (densityLayer_ >= 0) {
-                rec.splat(xs.e.pRaster, Spectrum(1), densityLayer_);
-                if (tx.n == 1) rec.splat(xs.e.pRaster, Spectrum(1), irreversibleLayer_);
-            }
-            wk.arena.reset();
-        }
-        ch.dir = int8_t(dx);
-        flushCounts(cnt, mst, count);
-        for (int s = 0; s < kShiftStatuses; ++s) shiftCounts_[s] += shifts[s];
-        nNearSpecular_ += mst.nearSpecularShifts;
-    });
+    ChainWalk w(xs);
+    w.dx = ch.dir;
+    w.tx = evaluate(xs, w.dx, cur, &w.mst);
+    ++w.shifts[int(w.tx.status)];
+    if (!(w.tx.f > 0)) return 0;  // not reached: alpha > 0 and I(x) > 0
+    RNGSampler u(rng);
+    for (int64_t k = 0; k < count; ++k) mutate(w, u, rng, rec, cur, wk.arena);
+    ch.dir = int8_t(w.dx);
+    flushCounts(w.cnt, w.mst);
+    for (int s = 0; s < kShiftStatuses; ++s) shiftCounts_[s] += w.shifts[s];
+    nNearSpecular_ += w.mst.nearSpecularShifts;
+    return count;
+}
+
+void GMLTIntegrator::mutate(ChainWalk &w, Sampler &u, RNG &rng, SampleRecorder &rec, Arena &cur,
+                            Arena &arena) const {
+    // 1. A new base path by one of pmlt's mutations and a uniform direction:
+    // a symmetric proposal of the direction (Sec. 4.2.1).
+    const Proposal p = proposeMutation(w.xs, rng, u, arena, &w.ys, &w.mst);
+    const int dy = std::min(int(rng.uniform() * 4), 3);
+    // 2. Acceptance.
+    Target ty;
+    Float a = 0;
+    if (p.res == pmlt::ProposalResult::Proposed && outsideTarget(w.ys)) {
+        ++w.cnt.zero[p.type];  // outside the chains' target (directsamples)
+    } else if (p.res == pmlt::ProposalResult::Proposed) {
+        ty = evaluate(w.ys, dy, arena, &w.mst);
+        ++w.shifts[int(ty.status)];
+        // Metropolis-Hastings on the extended space: pmlt's ratio is
+        // I(y) T(y -> x) / (I(x) T(x -> y)); the target is f (Eq. 11).
+        const double r = p.ratio * (double(w.xs.e.I) / double(w.ys.e.I)) * (ty.f / w.tx.f) *
+                         SelectionRatio(*mut_, p.type, w.ys.x, weights_, p.wsum);
+        a = std::isfinite(r) ? Float(std::min(1.0, r)) : 0;
+    }
+    w.cnt.record(p.type, p.res, a);
+    // 3. Splats of y and z.
+    splatState(rec, w.ys, dy, ty, a);
+    splatState(rec, w.xs, w.dx, w.tx, 1 - a);
+    // 4. The step, and the state layers of the chain's state after it.
+    if (acceptStep(a, rng, w.xs, w.ys, cur)) {
+        ++w.cnt.acc[p.type];
+        w.tx = ty;
+        w.dx = dy;
+    }
+    if (densityLayer_ >= 0) {
+        rec.splat(w.xs.e.pRaster, Spectrum(1), densityLayer_);
+        if (w.tx.n == 1) rec.splat(w.xs.e.pRaster, Spectrum(1), irreversibleLayer_);
+    }
+    arena.reset();
+}
+
+void GMLTIntegrator::splatState(SampleRecorder &rec, const pmlt::State &s, int dir, const Target &t,
+                                double w) const {
+    // Splats of state z with weight w (expected values, as pmlt): the
+    // gradient f*(z) into dx / dy by Eq. 10's extended filter (negative
+    // directions land at the neighbour, sign flipped: GradientFilm), the
+    // coarse primal (1/4) F(x) (Sec. 4.3), both times b w / f(z).
+    if (!(w > 0)) return;
+    GradientSplat g;
+    g.pixel = Point2i{int(std::floor(s.e.pRaster.x)), int(std::floor(s.e.pRaster.y))};
+    g.value.primal = s.e.F * 0.25;
+    g.value.diff[dir] = t.diff;
+    g.value.active[dir] = true;
+    gfilm_.splatLightTracing(rec, g, Float(expectedValueScale(w, t.f)));
 }
 
 void GMLTIntegrator::finish(const Film &film, const RenderStats &stats, Image *out) {
     const bool direct = direct_ != nullptr;
     Image directImage;
     if (direct) directImage = out->layerRGB("");  // the path tracer's direct light (the film's main image)
-    const int64_t performed = nMutations_.load();
-    rescale_ = performed > 0 && performed != mutationsIssued_ ? double(mutationsIssued_) / double(performed) : 1;
+    rescale_ = rescale();
     finishGradients(film, stats, gset_.norm, gset_.alpha, out, rescale_);
     if (direct) {
         // Direct light is added after the solve (Sec. 7), to the primal and every reconstruction.
@@ -237,7 +233,7 @@ void GMLTIntegrator::finish(const Film &film, const RenderStats &stats, Image *o
             out->setLayerRGB(name, im);
         }
     }
-    WriteMetropolisMetadata(&out->metadata, "gmlt", b_, performed, int64_t(chains_.size()), warning_);
+    WriteMetropolisMetadata(&out->metadata, name(), b_, nMutations_.load(), int64_t(chains_.size()), warning_);
 }
 
 std::string GMLTIntegrator::statistics() const {

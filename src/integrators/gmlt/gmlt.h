@@ -75,7 +75,6 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
     explicit GMLTIntegrator(const EntityDesc &desc);
     std::string name() const override { return "gmlt"; }
     void preprocess(const Scene &scene, Film &film) override;
-    void runPass(PassContext &ctx) override;
     void finish(const Film &film, const RenderStats &stats, Image *out) override;
     double finishEstimate() const override { return reconstructionEstimate(gset_.norm, gset_.alpha); }
     std::string statistics() const override;
@@ -102,12 +101,31 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
     double candidateWeight(const Sample &smp, int64_t k, int s, int t, const ConnectSamples &cu, double lum,
                            uint64_t key, Arena &arena) const override;
     void prepareBootstrap(PassContext &ctx, uint64_t key) override;
+    int64_t runMutations(Chain &ch, int64_t count, pmlt::State &x, Arena &cur, RNG &rng, SampleRecorder &rec,
+                         Worker &wk) override;
 
   private:
+    static constexpr int kShiftStatuses = 6;
+    // One chain's extended state z = (x, d) during a pass (x: the chain's
+    // rebuilt state, y: the proposal's), with its counts.
+    struct ChainWalk {
+        explicit ChainWalk(pmlt::State &x) : xs(x) {}
+        pmlt::State &xs;
+        pmlt::State ys;
+        Target tx;
+        int dx = 0;
+        pmlt::MutationStats mst;
+        ItemCounts cnt;
+        int64_t shifts[kShiftStatuses] = {};
+    };
+    // One mutation of the walk: proposal (base path and direction),
+    // acceptance on the extended space, splats, the step.
+    void mutate(ChainWalk &w, Sampler &u, RNG &rng, SampleRecorder &rec, Arena &cur, Arena &arena) const;
+    // Splats of state s with direction dir and weight w (expected values).
+    void splatState(SampleRecorder &rec, const pmlt::State &s, int dir, const Target &t, double w) const;
+
     GMLTIntegrator(const EntityDesc &desc, const GMLTSettings &s);
     GMLTSettings gset_;
-    std::unique_ptr<pmlt::Mutator> mut_;
-    static constexpr int kShiftStatuses = 6;
     mutable std::atomic<int64_t> shiftCounts_[kShiftStatuses] = {};
     mutable std::atomic<int64_t> nBootstrapDropped_{0}, nBootstrapShifted_{0}, nRouletteDropped_{0};
     std::atomic<int64_t> nNearSpecular_{0};  // chain shifts that moved a near-specular vertex

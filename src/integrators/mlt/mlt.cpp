@@ -21,6 +21,7 @@ namespace {
 constexpr uint64_t kBootstrapTag = 0x6d6c740000000001ULL;
 constexpr uint64_t kChainTag = 0x6d6c740000000002ULL;
 constexpr uint64_t kMutationTag = 0x6d6c740000000003ULL;
+constexpr uint32_t kMLTStateMagic = 0x544c4d32;  // "2MLT"
 
 ParamTable<MLTSettings> Table() {
     using S = MLTSettings;
@@ -59,7 +60,10 @@ Float Target(const Spectrum &L, bool *nonFinite) {
 
 std::vector<ParamInfo> MLTParameters() { return Table().describe(); }
 
-MLTIntegrator::MLTIntegrator(const EntityDesc &desc) : set_(Table().parse(desc)), loc_(desc.loc) {}
+MLTIntegrator::MLTIntegrator(const EntityDesc &desc)
+    : MetropolisIntegrator("mlt", kMLTStateMagic, {kBootstrapTag, kChainTag, kMutationTag}),
+      set_(Table().parse(desc)),
+      loc_(desc.loc) {}
 
 void MLTIntegrator::preprocess(const Scene &scene, Film &film) {
     // N_d (mlt.h: bootstrapvertices): an equal share of the vertex cap per
@@ -150,17 +154,15 @@ Spectrum MLTIntegrator::contribution(PrimarySampler &u, int depth, Arena &arena,
 }
 
 // ---------------------------------------------------------------- bootstrap and chain starts
-void MLTIntegrator::bootstrap(PassContext &ctx) {
-    const int64_t depths = set_.maxDepth + 1;
-    const int64_t n = rowStart_.back();
+int64_t MLTIntegrator::rowOf(int64_t i) const {
+    return int64_t(std::upper_bound(rowStart_.begin(), rowStart_.end(), i) - rowStart_.begin()) - 1;
+}
+
+std::vector<double> MLTIntegrator::evaluateBootstrap(PassContext &ctx, uint64_t key) {
     // State (d, k) draws its numbers from key (seed, k x depths + d), its
     // index when every depth has the same N_d.
-    auto stateKey = [depths](int64_t d, int64_t k) { return uint64_t(k * depths + d); };
-    auto rowOf = [this](int64_t i) {
-        return int64_t(std::upper_bound(rowStart_.begin(), rowStart_.end(), i) - rowStart_.begin()) - 1;
-    };
-    const uint64_t key = ctx.seed() ^ kBootstrapTag;
-    std::vector<double> weight(size_t(n), 0.0);
+    const int64_t n = rowStart_.back();
+    std::vector<double> I(size_t(n), 0.0);
     std::atomic<uint64_t> bad{0};
     ctx.parallelFor(n, 1024, [&](int64_t i0, int64_t i1, Worker &wk) {
         PrimarySampler u(set_.sigma, set_.largeStepProbability);
@@ -173,7 +175,7 @@ void MLTIntegrator::bootstrap(PassContext &ctx) {
             u.restart(&rng);
             Point2 p;
             bool nf = false;
-            weight[size_t(i)] = Target(contribution(u, int(d), wk.arena, &p), &nf);
+            I[size_t(i)] = Target(contribution(u, int(d), wk.arena, &p), &nf);
             nonFinite += nf;
             wk.arena.reset();
         }
@@ -181,8 +183,19 @@ void MLTIntegrator::bootstrap(PassContext &ctx) {
     });
     ctx.addNonFinite(bad);
     nNonFinite_ += int64_t(bad.load());
-    cdf_.resize(size_t(n));
-    double sum = 0;
+    return I;
+}
+
+MetropolisIntegrator::BootstrapWeights MLTIntegrator::weighBootstrap(PassContext &ctx, uint64_t key) {
+    bootstrapI_ = evaluateBootstrap(ctx, key);
+    // b: the integral of I over all depths and primary sample space, estimated
+    // by N_d uniform states per depth, b = sum_d (1 / N_d) sum_k I_dk (pbrt-v3
+    // Sec. 16.4.5 with N_d = bootstrapsamples: the image is b / (mutations per
+    // pixel) times the summed splats of L / I; Metropolis estimates of
+    // integrals, Sec. 13.4.5). State (d, k) weighs I_dk / N_d.
+    const int64_t depths = set_.maxDepth + 1;
+    BootstrapWeights w;
+    w.weights.resize(bootstrapI_.size());
     nBootstrapNonZero_ = 0;
     std::vector<double> invN(static_cast<size_t>(depths));
     for (int64_t d = 0; d < depths; ++d) invN[size_t(d)] = 1.0 / double(perDepth_[size_t(d)]);
@@ -190,218 +203,199 @@ void MLTIntegrator::bootstrap(PassContext &ctx) {
     for (int64_t k = 0; k + 1 < int64_t(rowStart_.size()); ++k)
         for (int64_t i = rowStart_[size_t(k)]; i < rowStart_[size_t(k) + 1]; ++i) {
             const size_t d = size_t(i - rowStart_[size_t(k)]);
-            sum += weight[size_t(i)] * invN[d];
-            bDepth_[d] += weight[size_t(i)] * invN[d];
-            cdf_[size_t(i)] = sum;
-            nBootstrapNonZero_ += weight[size_t(i)] > 0;
+            w.weights[size_t(i)] = bootstrapI_[size_t(i)] * invN[d];
+            bDepth_[d] += bootstrapI_[size_t(i)] * invN[d];
+            nBootstrapNonZero_ += bootstrapI_[size_t(i)] > 0;
         }
-    // b: the integral of I over all depths and primary sample space, estimated
-    // by N_d uniform states per depth, b = sum_d (1 / N_d) sum_k I_dk (pbrt-v3
-    // Sec. 16.4.5 with N_d = bootstrapsamples: the image is b / (mutations per
-    // pixel) times the summed splats of L / I; Metropolis estimates of
-    // integrals, Sec. 13.4.5).
-    b_ = sum;
-    if (!(b_ > 0)) {
-        b_ = 0;
-        warning_ = "mlt: none of the " + std::to_string(n) +
-                   " bootstrap paths carries light (b = 0); no chains run and the image is black "
-                   "(raise \"bootstrapsamples\" if the light is hard to reach)";
-        std::fprintf(stderr, "warning: %s\n", warning_.c_str());
-        cdf_.clear();
-        return;
-    }
+    return w;
+}
+
+std::string MLTIntegrator::emptyBootstrapWarning() const {
+    return "mlt: none of the " + std::to_string(rowStart_.back()) +
+           " bootstrap paths carries light (b = 0); no chains run and the image is black "
+           "(raise \"bootstrapsamples\" if the light is hard to reach)";
+}
+
+bool MLTIntegrator::allocateChains(uint64_t n) {
+    if (n != uint64_t(set_.chains) && n != 0) return false;
+    chains_.clear();
+    chains_.reserve(size_t(n));
+    for (uint64_t c = 0; c < n; ++c) chains_.emplace_back(PrimarySampler(set_.sigma, set_.largeStepProbability));
+    return true;
+}
+
+int64_t MLTIntegrator::startChain(int64_t c, RNG &pick, uint64_t key, Worker &wk) {
     // Chain starts: bootstrap state (d, k) with probability (I_dk / N_d) / b.
     // With b from the same samples, E[b g(X_0)] = sum_d (1 / N_d) sum_k E[I_dk g(x_dk)]
     // = the integral of I g for any g, and every later state keeps that (the
     // kernel leaves I invariant): no start-up bias (pbrt-v3 Secs. 13.4.3, 16.4.5).
-    const int nChains = set_.chains;
-    chains_.clear();
-    chains_.reserve(size_t(nChains));
-    for (int c = 0; c < nChains; ++c) chains_.emplace_back(PrimarySampler(set_.sigma, set_.largeStepProbability));
-    const uint64_t chainKey = ctx.seed() ^ kChainTag;
-    std::atomic<int64_t> mismatch{0};
-    ctx.parallelFor(nChains, 8, [&](int64_t c0, int64_t c1, Worker &wk) {
-        for (int64_t c = c0; c < c1; ++c) {
-            RNG pick(Hash(chainKey, uint64_t(c)));
-            const double x = pick.uniform() * sum;
-            int64_t k = std::upper_bound(cdf_.begin(), cdf_.end(), x) - cdf_.begin();
-            k = std::min(k, n - 1);
-            Chain &ch = chains_[size_t(c)];
-            const int64_t row = rowOf(k), d = k - rowStart_[size_t(row)];
-            RNG rng(Hash(key, stateKey(d, row)));
-            ch.u.restart(&rng);
-            ch.depth = int(d);
-            bool nf = false;
-            ch.L = contribution(ch.u, ch.depth, wk.arena, &ch.pRaster);
-            ch.I = Target(ch.L, &nf);
-            ch.u.setRNG(nullptr);
-            wk.arena.reset();
-            // The re-evaluated start must be the bootstrap state itself.
-            if (ch.I != weight[size_t(k)]) ++mismatch;
-        }
-    });
-    nStartMismatch_ += mismatch.load();
+    const int64_t k = drawCandidate(pick);
+    Chain &ch = chains_[size_t(c)];
+    const int64_t row = rowOf(k), d = k - rowStart_[size_t(row)];
+    RNG rng(Hash(key, stateKey(d, row)));
+    ch.u.restart(&rng);
+    ch.depth = int(d);
+    bool nf = false;
+    ch.L = contribution(ch.u, ch.depth, wk.arena, &ch.pRaster);
+    ch.I = Target(ch.L, &nf);
+    ch.u.setRNG(nullptr);
+    wk.arena.reset();
+    // The re-evaluated start must be the bootstrap state itself.
+    return ch.I != bootstrapI_[size_t(k)] ? 1 : 0;
 }
 
-namespace {
-constexpr uint32_t kMLTStateMagic = 0x544c4d32;  // "2MLT"
-}  // namespace
-
-std::string MLTIntegrator::saveState() const {
-    std::string s;
-    PutBytes(&s, kMLTStateMagic);
-    PutBytes(&s, b_);
-    PutBytes(&s, mutationsIssued_);
-    for (const auto *c : {&nMutations_, &nSmall_, &nLarge_, &nSmallAccepted_, &nLargeAccepted_, &nZeroProposals_,
-                          &nNonFinite_, &nStartMismatch_})
-        PutBytes(&s, int64_t(c->load()));
-    PutBytes(&s, nBootstrapNonZero_);
-    PutBytes(&s, uint64_t(bDepth_.size()));
-    for (double v : bDepth_) PutBytes(&s, v);
-    PutBytes(&s, uint64_t(warning_.size()));
-    s += warning_;
-    PutBytes(&s, uint64_t(chains_.size()));
-    for (const Chain &c : chains_) {
-        PutBytes(&s, int32_t(c.depth));
-        PutBytes(&s, c.L);
-        PutBytes(&s, c.I);
-        PutBytes(&s, c.pRaster);
-        c.u.save(&s);
-    }
-    return s;
+// ---------------------------------------------------------------- checkpoints
+// After the driver's framing: the counters, N_d's b_d, the warning; per
+// chain its depth, contribution, luminance, raster position and sampler.
+void MLTIntegrator::saveCounters(std::string *s) const {
+    for (const auto *c : {&nSmall_, &nLarge_, &nSmallAccepted_, &nLargeAccepted_, &nZeroProposals_, &nNonFinite_,
+                          &nStartMismatch_})
+        PutBytes(s, int64_t(c->load()));
+    PutBytes(s, nBootstrapNonZero_);
+    PutBytes(s, uint64_t(bDepth_.size()));
+    for (double v : bDepth_) PutBytes(s, v);
+    PutBytes(s, uint64_t(warning_.size()));
+    *s += warning_;
 }
 
-void MLTIntegrator::loadState(const std::string &s) {
-    size_t at = 0;
-    uint32_t magic = 0;
-    auto bad = [] { throw Error("checkpoint: mlt state is inconsistent"); };
-    if (!GetBytes(s, &at, &magic) || magic != kMLTStateMagic) bad();
-    if (!GetBytes(s, &at, &b_) || !GetBytes(s, &at, &mutationsIssued_)) bad();
-    for (auto *c : {&nMutations_, &nSmall_, &nLarge_, &nSmallAccepted_, &nLargeAccepted_, &nZeroProposals_,
-                    &nNonFinite_, &nStartMismatch_}) {
+bool MLTIntegrator::loadCounters(const std::string &s, size_t *at) {
+    for (auto *c : {&nSmall_, &nLarge_, &nSmallAccepted_, &nLargeAccepted_, &nZeroProposals_, &nNonFinite_,
+                    &nStartMismatch_}) {
         int64_t v;
-        if (!GetBytes(s, &at, &v)) bad();
+        if (!GetBytes(s, at, &v)) return false;
         c->store(v);
     }
     uint64_t n = 0;
-    if (!GetBytes(s, &at, &nBootstrapNonZero_) || !GetBytes(s, &at, &n) || n > uint64_t(set_.maxDepth) + 1) bad();
+    if (!GetBytes(s, at, &nBootstrapNonZero_) || !GetBytes(s, at, &n) || n > uint64_t(set_.maxDepth) + 1)
+        return false;
     bDepth_.assign(size_t(n), 0.0);
     for (double &v : bDepth_)
-        if (!GetBytes(s, &at, &v)) bad();
-    if (!GetBytes(s, &at, &n) || n > s.size() - at) bad();
-    warning_ = s.substr(at, n);
-    at += n;
-    if (!GetBytes(s, &at, &n)) bad();
-    if (n != uint64_t(set_.chains) && n != 0) bad();
-    chains_.clear();
-    chains_.reserve(n);
-    for (uint64_t k = 0; k < n; ++k) {
-        Chain c(PrimarySampler(set_.sigma, set_.largeStepProbability));
-        int32_t depth;
-        if (!GetBytes(s, &at, &depth) || !GetBytes(s, &at, &c.L) || !GetBytes(s, &at, &c.I) || !GetBytes(s, &at, &c.pRaster) ||
-            !c.u.load(s, &at))
-            bad();
-        c.depth = depth;
-        chains_.push_back(std::move(c));
-    }
-    if (at != s.size()) bad();
+        if (!GetBytes(s, at, &v)) return false;
+    if (!GetBytes(s, at, &n) || n > s.size() - *at) return false;
+    warning_ = s.substr(*at, n);
+    *at += n;
+    return true;
 }
 
-void MLTIntegrator::beginPass(PassContext &ctx) {
-    if (ctx.pass() == 0) bootstrap(ctx);
+void MLTIntegrator::saveChain(int64_t c, std::string *s) const {
+    const Chain &ch = chains_[size_t(c)];
+    PutBytes(s, int32_t(ch.depth));
+    PutBytes(s, ch.L);
+    PutBytes(s, ch.I);
+    PutBytes(s, ch.pRaster);
+    ch.u.save(s);
+}
+
+bool MLTIntegrator::loadChain(int64_t c, const std::string &s, size_t *at) {
+    Chain &ch = chains_[size_t(c)];
+    int32_t depth;
+    if (!GetBytes(s, at, &depth) || !GetBytes(s, at, &ch.L) || !GetBytes(s, at, &ch.I) ||
+        !GetBytes(s, at, &ch.pRaster) || !ch.u.load(s, at))
+        return false;
+    ch.depth = depth;
+    return true;
 }
 
 // ---------------------------------------------------------------- mutations
-void MLTIntegrator::runPass(PassContext &ctx) {
-    if (chains_.empty()) return;
-    const int64_t nChains = int64_t(chains_.size());
-    const int64_t M = int64_t(ctx.sampleCount()) * pixels_.area();
-    const int64_t first = mutationsIssued_;
-    mutationsIssued_ += M;
-    // Mutation j of the render goes to chain j mod chains: chain i's share of [0, x).
-    const double b = b_;
+void MLTIntegrator::beginChains(PassContext &) {
     // largestepmis (mlt.h): the large steps' density per mutation at each depth,
     // q_d = largestepprobability x b_d / b, b_d / b being the probability that a
     // chain starts at depth d. The large steps' own estimate is normalised by
     // their realised count, M x largestepprobability x (chains at d) / chains.
-    std::vector<double> qLarge(size_t(set_.maxDepth) + 1, 0.0), largeNorm(qLarge.size(), 0.0);
+    if (chains_.empty()) return;
+    const double b = b_;
+    const int64_t nChains = int64_t(chains_.size());
+    qLarge_.assign(size_t(set_.maxDepth) + 1, 0.0);
+    largeNorm_.assign(qLarge_.size(), 0.0);
     if (set_.largeStepMIS) {
         const std::vector<int64_t> perDepth = chainsPerDepth();
-        for (size_t d = 0; d < qLarge.size() && d < bDepth_.size(); ++d) {
-            qLarge[d] = double(set_.largeStepProbability) * bDepth_[d] / b;
-            if (perDepth[d] > 0) largeNorm[d] = double(nChains) / (double(set_.largeStepProbability) * double(perDepth[d]));
+        for (size_t d = 0; d < qLarge_.size() && d < bDepth_.size(); ++d) {
+            qLarge_[d] = double(set_.largeStepProbability) * bDepth_[d] / b;
+            if (perDepth[d] > 0)
+                largeNorm_[d] = double(nChains) / (double(set_.largeStepProbability) * double(perDepth[d]));
         }
     }
-    ctx.forEachItem(nChains, kMutationTag, [&](int64_t i, RNG &rng, SampleRecorder &rec, Worker &wk) {
-        const int64_t count = ChainShare(first + M, i, nChains) - ChainShare(first, i, nChains);
-        Chain &c = chains_[size_t(i)];
-        if (count == 0 || !(c.I > 0)) return;
-        c.u.setRNG(&rng);
-        int64_t small = 0, large = 0, smallAcc = 0, largeAcc = 0, zero = 0, nonFinite = 0;
-        for (int64_t k = 0; k < count; ++k) {
-            c.u.propose();
-            const bool isLarge = c.u.largeStep();
-            Point2 pY;
-            const Spectrum LY = contribution(c.u, c.depth, wk.arena, &pY);
-            wk.arena.reset();
-            bool nf = false;
-            const Float IY = Target(LY, &nf);
-            nonFinite += nf;
-            zero += IY == 0;
-            // Acceptance: Metropolis-Hastings a = min(1, I(y) T(y->x) / (I(x) T(x->y)))
-            // (pbrt-v3 Sec. 13.4.1) with Kelemen et al.'s symmetric small and large
-            // steps, T(x->y) = T(y->x): a = min(1, I(y) / I(x)). I(x) > 0 for every
-            // chain state, and a zero or non-finite proposal has a = 0: no 0/0.
-            const Float a = IY > 0 ? std::min<Float>(1, IY / c.I) : 0;
-            // Expected values (Veach and Guibas 1997, "use of expected values";
-            // pbrt-v3 Sec. 13.4.1): the proposal y with weight a and the current
-            // state x with 1 - a, each as b L / I (pbrt-v3 Sec. 16.4.5).
-            if (set_.largeStepMIS) {
-                // Kelemen et al. 2002, Sec. 4: balance heuristic of the chain (density
-                // I / b) and the large steps (density q_d), weights w_c = (I/b) / (I/b + q_d)
-                // and w_l = q_d / (I/b + q_d). Chain states keep pbrt-v3's estimate
-                // b L / I times w_c (expected values as below); a large step adds
-                // L w_l / (its density per mutation at this depth, 1 / largeNorm).
-                const size_t d = size_t(c.depth);
-                const double q = qLarge[d];
-                if (IY > 0) {
-                    const double denY = IY / b + q;
-                    const double wY = (a + (isLarge ? largeNorm[d] * q : 0)) / denY;
-                    rec.splat(pY, LY * Float(wY));
-                }
-                if (a < 1) rec.splat(c.pRaster, c.L * Float((1 - a) / (c.I / b + q)));
-            } else {
-                if (a > 0) rec.splat(pY, LY * (b * a / IY));
-                if (a < 1) rec.splat(c.pRaster, c.L * (b * (1 - a) / c.I));
-            }
-            (isLarge ? large : small) += 1;
-            if (rng.uniform() < a) {
-                c.u.accept();
-                c.L = LY;
-                c.I = IY;
-                c.pRaster = pY;
-                (isLarge ? largeAcc : smallAcc) += 1;
-            } else {
-                c.u.reject();
-            }
-        }
-        c.u.setRNG(nullptr);
-        nMutations_ += count;
-        nSmall_ += small;
-        nLarge_ += large;
-        nSmallAccepted_ += smallAcc;
-        nLargeAccepted_ += largeAcc;
-        nZeroProposals_ += zero;
-        nNonFinite_ += nonFinite;
-        ctx.addNonFinite(uint64_t(nonFinite));
-    });
 }
 
-void MLTIntegrator::finish(const Film &, const RenderStats &, Image *out) {
+int64_t MLTIntegrator::mutateChain(PassContext &ctx, int64_t i, int64_t count, RNG &rng, SampleRecorder &rec,
+                                   Worker &wk) {
+    Chain &c = chains_[size_t(i)];
+    if (!(c.I > 0)) return 0;
+    c.u.setRNG(&rng);
+    StepCounts n;
+    for (int64_t k = 0; k < count; ++k) mutate(c, rng, rec, wk.arena, &n);
+    c.u.setRNG(nullptr);
+    nSmall_ += n.small;
+    nLarge_ += n.large;
+    nSmallAccepted_ += n.smallAccepted;
+    nLargeAccepted_ += n.largeAccepted;
+    nZeroProposals_ += n.zero;
+    nNonFinite_ += n.nonFinite;
+    ctx.addNonFinite(uint64_t(n.nonFinite));
+    return count;
+}
+
+void MLTIntegrator::mutate(Chain &c, RNG &rng, SampleRecorder &rec, Arena &arena, StepCounts *n) const {
+    // 1. Proposal y (a small or large step of u) and its contribution.
+    c.u.propose();
+    const bool isLarge = c.u.largeStep();
+    Point2 pY;
+    const Spectrum LY = contribution(c.u, c.depth, arena, &pY);
+    arena.reset();
+    bool nf = false;
+    const Float IY = Target(LY, &nf);
+    n->nonFinite += nf;
+    n->zero += IY == 0;
+    // 2. Acceptance: Metropolis-Hastings a = min(1, I(y) T(y->x) / (I(x) T(x->y)))
+    // (pbrt-v3 Sec. 13.4.1) with Kelemen et al.'s symmetric small and large
+    // steps, T(x->y) = T(y->x): a = min(1, I(y) / I(x)). I(x) > 0 for every
+    // chain state, and a zero or non-finite proposal has a = 0: no 0/0.
+    const Float a = IY > 0 ? std::min<Float>(1, IY / c.I) : 0;
+    // 3. Splats of y and x.
+    splatMutation(c, LY, IY, pY, a, isLarge, rec);
+    // 4. The step.
+    (isLarge ? n->large : n->small) += 1;
+    if (rng.uniform() < a) {
+        c.u.accept();
+        c.L = LY;
+        c.I = IY;
+        c.pRaster = pY;
+        (isLarge ? n->largeAccepted : n->smallAccepted) += 1;
+    } else {
+        c.u.reject();
+    }
+}
+
+void MLTIntegrator::splatMutation(const Chain &c, const Spectrum &LY, Float IY, Point2 pY, Float a, bool isLarge,
+                                  SampleRecorder &rec) const {
+    // Expected values (Veach and Guibas 1997, "use of expected values";
+    // pbrt-v3 Sec. 13.4.1): the proposal y with weight a and the current
+    // state x with 1 - a, each as b L / I (pbrt-v3 Sec. 16.4.5).
+    if (set_.largeStepMIS) {
+        // Kelemen et al. 2002, Sec. 4: balance heuristic of the chain (density
+        // I / b) and the large steps (density q_d), weights w_c = (I/b) / (I/b + q_d)
+        // and w_l = q_d / (I/b + q_d). Chain states keep pbrt-v3's estimate
+        // b L / I times w_c (expected values as below); a large step adds
+        // L w_l / (its density per mutation at this depth, 1 / largeNorm).
+        const double b = b_;
+        const size_t d = size_t(c.depth);
+        const double q = qLarge_[d];
+        if (IY > 0) {
+            const double denY = IY / b + q;
+            const double wY = (a + (isLarge ? largeNorm_[d] * q : 0)) / denY;
+            rec.splat(pY, LY * Float(wY));
+        }
+        if (a < 1) rec.splat(c.pRaster, c.L * Float((1 - a) / (c.I / b + q)));
+    } else {
+        if (a > 0) rec.splat(pY, LY * expectedValueScale(a, IY));
+        if (a < 1) rec.splat(c.pRaster, c.L * expectedValueScale(1 - a, c.I));
+    }
+}
+
+void MLTIntegrator::finish(const Film &film, const RenderStats &stats, Image *out) {
     // The film divides by the samples per pixel of the passes run; an
     // interrupt can skip chains of the last pass: scale by issued / performed.
-    rescale_ = FinishMetropolisImage(out, "mlt", b_, mutationsIssued_, nMutations_.load(), int64_t(chains_.size()),
-                                     warning_);
+    MetropolisIntegrator::finish(film, stats, out);
     out->metadata["mlt_bootstrap_nonzero"] = MetaValue::Int(nBootstrapNonZero_);
 }
 
@@ -446,9 +440,7 @@ std::string MLTIntegrator::statistics() const {
     o << "  proposals without contribution: " << nZeroProposals_ << "; non-finite contributions (rejected): "
       << nNonFinite_ << "\n";
     if (nStartMismatch_ > 0) o << "  chain starts differing from their bootstrap state: " << nStartMismatch_ << "\n";
-    if (rescale_ != 1) o << "  interrupted pass: image scaled by " << rescale_ << " (mutations issued / run)\n";
-    if (!warning_.empty()) o << "  " << warning_ << "\n";
-    return o.str();
+    return o.str() + driverStatistics();
 }
 
 }  // namespace gradus

@@ -20,7 +20,8 @@
 // Passes: the render's "spp" is mutations per pixel (mutationsperpixel
 // without --spp); a pass of k spp runs k x (pixels) mutations, dealt to the
 // chains round-robin by a running mutation index, so any number of passes
-// gives exactly b / (mutations per pixel). Random numbers are keyed by
+// gives exactly b / (mutations per pixel) (the Metropolis driver,
+// metropolis/metropolis.h, shared with pmlt and gmlt). Random numbers are keyed by
 // (seed, bootstrap index), (seed, chain) and (seed, pass, chain): images do
 // not depend on the thread count.
 //
@@ -63,7 +64,7 @@
 #include <vector>
 
 #include "integrators/common/bidir.h"
-#include "render/integrator.h"
+#include "integrators/metropolis/metropolis.h"
 #include "integrators/mlt/primary_sample.h"
 #include "render/params.h"
 #include "lights/light_sampler.h"
@@ -82,26 +83,16 @@ struct MLTSettings {
     bool largeStepMIS;
 };
 
-class MLTIntegrator : public Integrator {
+class MLTIntegrator : public MetropolisIntegrator {
   public:
     explicit MLTIntegrator(const EntityDesc &desc);
     std::string name() const override { return "mlt"; }
     void preprocess(const Scene &scene, Film &film) override;
     int defaultSamplesPerPixel() const override { return set_.mutationsPerPixel; }
-    void beginPass(PassContext &ctx) override;
-    void runPass(PassContext &ctx) override;
     void finish(const Film &film, const RenderStats &stats, Image *out) override;
     std::string statistics() const override;
-    // Checkpoints: b, the chains (states, contributions, raster positions),
-    // the running mutation index and the counters.
-    std::string saveState() const override;
-    void loadState(const std::string &state) override;
-    bool independentPasses() const override { return false; }
 
     const MLTSettings &settings() const { return set_; }
-    double b() const { return b_; }
-    // Set when the bootstrap found no light-carrying path (the image is black).
-    const std::string &warning() const { return warning_; }
 
     // Counts of the render so far (statistics(), tests).
     struct Counts {
@@ -130,8 +121,36 @@ class MLTIntegrator : public Integrator {
         Float I = 0;     // its luminance (> 0 for an active chain)
         Point2 pRaster;  // its raster position
     };
-    void bootstrap(PassContext &ctx);
-    void startChains(PassContext &ctx);
+    // Counts of one chain's mutations in a pass (added to the totals after it).
+    struct StepCounts {
+        int64_t small = 0, large = 0, smallAccepted = 0, largeAccepted = 0, zero = 0, nonFinite = 0;
+    };
+
+    // The driver's hooks (metropolis/metropolis.h).
+    BootstrapWeights weighBootstrap(PassContext &ctx, uint64_t key) override;
+    std::string emptyBootstrapWarning() const override;
+    int chainsParameter() const override { return set_.chains; }
+    bool allocateChains(uint64_t n) override;
+    int64_t chainCount() const override { return int64_t(chains_.size()); }
+    int64_t startChain(int64_t c, RNG &pick, uint64_t key, Worker &wk) override;
+    void releaseBootstrap() override { std::vector<double>().swap(bootstrapI_); }
+    void beginChains(PassContext &ctx) override;
+    int64_t mutateChain(PassContext &ctx, int64_t c, int64_t count, RNG &rng, SampleRecorder &rec,
+                        Worker &wk) override;
+    void saveCounters(std::string *s) const override;
+    bool loadCounters(const std::string &s, size_t *at) override;
+    void saveChain(int64_t c, std::string *s) const override;
+    bool loadChain(int64_t c, const std::string &s, size_t *at) override;
+
+    // Bootstrap: I of every state (d, k), at index rowStart_[k] + d.
+    std::vector<double> evaluateBootstrap(PassContext &ctx, uint64_t key);
+    // The row k of bootstrap index i, and the key of state (d, k)'s numbers.
+    int64_t rowOf(int64_t i) const;
+    uint64_t stateKey(int64_t d, int64_t k) const { return uint64_t(k * (set_.maxDepth + 1) + d); }
+    // One mutation of chain c: proposal, acceptance, splats, the step.
+    void mutate(Chain &c, RNG &rng, SampleRecorder &rec, Arena &arena, StepCounts *n) const;
+    void splatMutation(const Chain &c, const Spectrum &LY, Float IY, Point2 pY, Float a, bool isLarge,
+                       SampleRecorder &rec) const;
 
     MLTSettings set_;
     FileLoc loc_;
@@ -143,17 +162,15 @@ class MLTIntegrator : public Integrator {
     // layout, index-major as pbrt-v3's interleaved index: row k holds state k
     // of every depth with N_d > k, so state (d, k) is at rowStart_[k] + d.
     std::vector<int64_t> perDepth_, rowStart_;
-    std::vector<double> cdf_;  // running sums of the bootstrap weights I / N_d
-    double b_ = 0;
+    std::vector<double> bootstrapI_;  // I of the bootstrap states (until the chains start)
     std::vector<double> bDepth_;  // b's share of each depth, b_d = (1 / N_d) sum_k I_dk
-    std::string warning_;
     std::vector<Chain> chains_;
-    int64_t mutationsIssued_ = 0;  // running mutation index (round-robin over the chains)
+    // largestepmis (beginChains): q_d and the large steps' normaliser per depth.
+    std::vector<double> qLarge_, largeNorm_;
 
-    std::atomic<int64_t> nMutations_{0}, nSmall_{0}, nLarge_{0}, nSmallAccepted_{0}, nLargeAccepted_{0};
-    std::atomic<int64_t> nZeroProposals_{0}, nNonFinite_{0}, nStartMismatch_{0};
+    std::atomic<int64_t> nSmall_{0}, nLarge_{0}, nSmallAccepted_{0}, nLargeAccepted_{0};
+    std::atomic<int64_t> nZeroProposals_{0}, nNonFinite_{0};
     int64_t nBootstrapNonZero_ = 0;
-    double rescale_ = 1;  // applied by finish() when an interrupted pass skipped chains
 };
 
 }  // namespace gradus

@@ -25,6 +25,7 @@ constexpr uint64_t kChainTag = 0x706d6c7400000002ULL;
 constexpr uint64_t kMutationTag = 0x706d6c7400000003ULL;
 constexpr uint64_t kConnectTag = 0x706d6c7400000004ULL;
 constexpr uint64_t kDirectionTag = 0x706d6c7400000005ULL;
+constexpr uint32_t kPMLTStateMagic = 0x324c4d50;  // "PML2" (chains with their direction)
 
 }  // namespace
 
@@ -76,11 +77,16 @@ ConnectSamples ConnectNumbers(uint64_t key, int64_t k, int s, int t) {
 
 std::vector<ParamInfo> PMLTParameters() { return PMLTParamTable().describe(); }
 
-PMLTIntegrator::PMLTIntegrator(const EntityDesc &desc) : PMLTIntegrator(desc, PMLTParamTable().parse(desc)) {}
+PMLTIntegrator::PMLTIntegrator(const EntityDesc &desc)
+    : PMLTIntegrator(desc, PMLTParamTable().parse(desc), kMutationTag) {}
 
-PMLTIntegrator::PMLTIntegrator(const EntityDesc &desc, const PMLTSettings &set) : set_(set), loc_(desc.loc) {
+PMLTIntegrator::PMLTIntegrator(const EntityDesc &desc, const PMLTSettings &set, uint64_t mutationTag)
+    : MetropolisIntegrator("pmlt", kPMLTStateMagic, {kBootstrapTag, kChainTag, mutationTag}),
+      set_(set),
+      loc_(desc.loc) {
     if (!(set_.bidirectional > 0))
         throw Error(loc_, "pmlt: \"bidirectional\" must be positive (the perturbations alone are not ergodic)");
+    for (int k = 0; k < pmlt::kMutationTypes; ++k) weights_[k] = set_.weight(MutationType(k));
 }
 
 void PMLTIntegrator::preprocess(const Scene &scene, Film &film) {
@@ -112,6 +118,7 @@ void PMLTIntegrator::preprocess(const Scene &scene, Film &film) {
         mscene_ = std::make_unique<EmbreeManifoldScene>(scene);
         mset_.mscene = mscene_.get();
     }
+    mut_ = std::make_unique<pmlt::Mutator>(ctx_, film_, mset_);
 }
 
 bool PMLTIntegrator::makeSample(uint64_t key, int64_t k, Arena &arena, Sample *s) const {
@@ -183,91 +190,95 @@ bool PMLTIntegrator::strategyState(const Sample &smp, int s, int t, const Connec
     return pmlt::Evaluate(ctx_, film_, st->x, st->bsdf.data(), &st->e);
 }
 
-void PMLTIntegrator::bootstrap(PassContext &ctx) {
+// ---------------------------------------------------------------- bootstrap and chain starts
+MetropolisIntegrator::BootstrapWeights PMLTIntegrator::weighBootstrap(PassContext &ctx, uint64_t key) {
     const int64_t N = bootstrapSampleCount();
-    const uint64_t key = ctx.seed() ^ kBootstrapTag, ckey = ctx.seed() ^ kConnectTag;
     prepareBootstrap(ctx, key);
+    // Every strategy with a positive weight is a candidate, in sample order.
+    struct Weighted {
+        Candidate c;
+        double w;
+    };
     constexpr int64_t kGrain = 256;
-    std::vector<std::vector<Candidate>> chunks(size_t((N + kGrain - 1) / kGrain));
+    std::vector<std::vector<Weighted>> chunks(size_t((N + kGrain - 1) / kGrain));
     std::atomic<uint64_t> bad{0};
     ctx.parallelFor(N, kGrain, [&](int64_t i0, int64_t i1, Worker &wk) {
-        std::vector<Candidate> &out = chunks[size_t(i0 / kGrain)];
+        std::vector<Weighted> &out = chunks[size_t(i0 / kGrain)];
         uint64_t nonFinite = 0;
         for (int64_t k = i0; k < i1; ++k) {
             nonFinite += forEachStrategy(key, k, wk.arena,
                                          [&](const Sample &smp, int s, int t, const ConnectSamples &cu, double lum) {
                                              const double y = candidateWeight(smp, k, s, t, cu, lum, key, wk.arena);
-                                             if (y > 0) out.push_back(Candidate{k, int8_t(s), int8_t(t), y});
+                                             if (y > 0) out.push_back(Weighted{Candidate{k, int8_t(s), int8_t(t)}, y});
                                          });
             wk.arena.reset();
         }
         bad += nonFinite;
     });
     ctx.addNonFinite(bad);
+    BootstrapWeights w;
     candidates_.clear();
-    double sum = 0;
-    for (auto &c : chunks)
-        for (Candidate &cd : c) {
-            sum += cd.cdf;
-            cd.cdf = sum;
-            candidates_.push_back(cd);
+    for (const auto &c : chunks)
+        for (const Weighted &cd : c) {
+            candidates_.push_back(cd.c);
+            w.weights.push_back(cd.w);
         }
     nBootstrapSamples_ = N;
-    b_ = sum / double(N);
-    if (!(b_ > 0)) {
-        b_ = 0;
-        warning_ = "pmlt: none of the " + std::to_string(N) +
-                   " bootstrap samples carries light (b = 0); no chains run and the image is black" +
-                   std::string(direct_ ? " but for the direct light" : "") +
-                   " (raise \"bootstrapsamples\" if the light is hard to reach)";
-        std::fprintf(stderr, "warning: %s\n", warning_.c_str());
-        candidates_.clear();
-        return;
-    }
-    // Chain starts in proportion to the candidates' luminance (pmlt.h).
-    chains_.assign(size_t(set_.chains), Chain());
-    const uint64_t chainKey = ctx.seed() ^ kChainTag;
-    std::atomic<int64_t> mismatch{0};
-    ctx.parallelFor(set_.chains, 8, [&](int64_t c0, int64_t c1, Worker &wk) {
-        for (int64_t c = c0; c < c1; ++c) {
-            RNG pick(Hash(chainKey, uint64_t(c)));
-            Chain &ch = chains_[size_t(c)];
-            ch.I = 0;
-            // A start whose path does not evaluate (a strategy the bdpt estimator
-            // evaluated but Evaluate rejects: float hit points on very short
-            // edges) is counted and replaced by another draw; its share of b is
-            // below the counted fraction.
-            for (int attempt = 0; attempt < 16 && !(ch.I > 0); ++attempt) {
-                const double xr = pick.uniform() * sum;
-                size_t i = size_t(std::upper_bound(candidates_.begin(), candidates_.end(), xr,
-                                                   [](double v, const Candidate &cd) { return v < cd.cdf; }) -
-                                  candidates_.begin());
-                i = std::min(i, candidates_.size() - 1);
-                const Candidate &cd = candidates_[i];
-                Sample smp;
-                pmlt::State st;
-                if (makeSample(key, cd.sample, wk.arena, &smp) &&
-                    strategyState(smp, cd.s, cd.t, ConnectNumbers(ckey, cd.sample, cd.s, cd.t), wk.arena, &st)) {
-                    ch.x = st.x;
-                    ch.F = st.e.F;
-                    ch.I = st.e.I;
-                    ch.pRaster = st.e.pRaster;
-                    ch.dir = int8_t(CandidateDirection(key, cd.sample, cd.s, cd.t));
-                } else {
-                    ++mismatch;
-                }
-                wk.arena.reset();
-            }
+    w.divisor = double(N);  // b = (sum of the luminances) / samples (pmlt.h)
+    return w;
+}
+
+std::string PMLTIntegrator::emptyBootstrapWarning() const {
+    return "pmlt: none of the " + std::to_string(nBootstrapSamples_) +
+           " bootstrap samples carries light (b = 0); no chains run and the image is black" +
+           std::string(direct_ ? " but for the direct light" : "") +
+           " (raise \"bootstrapsamples\" if the light is hard to reach)";
+}
+
+bool PMLTIntegrator::allocateChains(uint64_t n) {
+    if (n > uint64_t(set_.chains)) return false;
+    chains_.assign(size_t(n), Chain());
+    return true;
+}
+
+int64_t PMLTIntegrator::startChain(int64_t c, RNG &pick, uint64_t key, Worker &wk) {
+    // Chain starts in proportion to the candidates' weights (pmlt.h).
+    const uint64_t ckey = key ^ kBootstrapTag ^ kConnectTag;  // the seed's connection key
+    Chain &ch = chains_[size_t(c)];
+    ch.I = 0;
+    int64_t mismatch = 0;
+    // A start whose path does not evaluate (a strategy the bdpt estimator
+    // evaluated but Evaluate rejects: float hit points on very short
+    // edges) is counted and replaced by another draw; its share of b is
+    // below the counted fraction.
+    for (int attempt = 0; attempt < 16 && !(ch.I > 0); ++attempt) {
+        const Candidate &cd = candidates_[size_t(drawCandidate(pick))];
+        Sample smp;
+        pmlt::State st;
+        if (makeSample(key, cd.sample, wk.arena, &smp) &&
+            strategyState(smp, cd.s, cd.t, ConnectNumbers(ckey, cd.sample, cd.s, cd.t), wk.arena, &st)) {
+            ch.x = st.x;
+            ch.F = st.e.F;
+            ch.I = st.e.I;
+            ch.pRaster = st.e.pRaster;
+            ch.dir = int8_t(CandidateDirection(key, cd.sample, cd.s, cd.t));
+        } else {
+            ++mismatch;
         }
-    });
-    nStartMismatch_ += mismatch.load();
+        wk.arena.reset();
+    }
+    return mismatch;
+}
+
+void PMLTIntegrator::releaseBootstrap() {
     // The candidates serve the chain starts only (up to millions of entries).
-    nCandidates_ = int64_t(candidates_.size());
+    if (!chains_.empty()) nCandidates_ = int64_t(candidates_.size());
     std::vector<Candidate>().swap(candidates_);
 }
 
-void PMLTIntegrator::beginPass(PassContext &ctx) {
-    if (ctx.pass() == 0) bootstrap(ctx);
+// ---------------------------------------------------------------- a pass
+void PMLTIntegrator::beginChains(PassContext &ctx) {
+    if (direct_ && ctx.pass() == 0) renderDirect(ctx);
 }
 
 void PMLTIntegrator::renderDirect(PassContext &ctx) {
@@ -297,72 +308,68 @@ void PMLTIntegrator::renderDirect(PassContext &ctx) {
     });
 }
 
-void PMLTIntegrator::runChains(PassContext &ctx, uint64_t tag, const ChainFn &fn) {
-    if (direct_ && ctx.pass() == 0) renderDirect(ctx);
-    if (chains_.empty()) return;
-    const int64_t nChains = int64_t(chains_.size());
-    const int64_t M = int64_t(ctx.sampleCount()) * film_.pixels.area();
-    const int64_t first = mutationsIssued_;
-    mutationsIssued_ += M;
-    ctx.forEachItem(nChains, tag, [&](int64_t i, RNG &rng, SampleRecorder &rec, Worker &wk) {
-        const int64_t count = ChainShare(first + M, i, nChains) - ChainShare(first, i, nChains);
-        Chain &ch = chains_[size_t(i)];
-        if (count == 0 || !(ch.I > 0)) return;
-        thread_local Arena cur;
-        cur.reset();
-        pmlt::State xs;
-        xs.x = ch.x;
-        pmlt::BuildBSDFs(ctx_, xs.x, cur, &xs.bsdf);
-        if (!pmlt::Evaluate(ctx_, film_, xs.x, xs.bsdf.data(), &xs.e)) return;
-        fn(ch, count, xs, cur, rng, rec, wk);
-        ch.x = xs.x;
-        ch.F = xs.e.F;
-        ch.I = xs.e.I;
-        ch.pRaster = xs.e.pRaster;
-    });
+int64_t PMLTIntegrator::mutateChain(PassContext &, int64_t i, int64_t count, RNG &rng, SampleRecorder &rec,
+                                    Worker &wk) {
+    // The chain's state x rebuilt (BSDFs in `cur`), mutated, stored back.
+    Chain &ch = chains_[size_t(i)];
+    if (!(ch.I > 0)) return 0;
+    thread_local Arena cur;
+    cur.reset();
+    pmlt::State xs;
+    xs.x = ch.x;
+    pmlt::BuildBSDFs(ctx_, xs.x, cur, &xs.bsdf);
+    if (!pmlt::Evaluate(ctx_, film_, xs.x, xs.bsdf.data(), &xs.e)) return 0;
+    const int64_t ran = runMutations(ch, count, xs, cur, rng, rec, wk);
+    ch.x = xs.x;
+    ch.F = xs.e.F;
+    ch.I = xs.e.I;
+    ch.pRaster = xs.e.pRaster;
+    return ran;
 }
 
-void PMLTIntegrator::selectionWeights(Float *weights) const {
-    for (int k = 0; k < pmlt::kMutationTypes; ++k) weights[k] = set_.weight(MutationType(k));
+PMLTIntegrator::Proposal PMLTIntegrator::proposeMutation(const pmlt::State &xs, RNG &rng, Sampler &u, Arena &arena,
+                                                         pmlt::State *ys, pmlt::MutationStats *mst) const {
+    Proposal p;
+    p.type = SelectMutation(*mut_, xs.x, weights_, rng.uniform(), &p.wsum);
+    p.res = mut_->propose(MutationType(p.type), xs, u, arena, ys, &p.ratio, mst);
+    return p;
 }
 
-void PMLTIntegrator::runPass(PassContext &ctx) {
-    Float weights[pmlt::kMutationTypes];
-    selectionWeights(weights);
-    const double b = b_;
-    const pmlt::Mutator mut(ctx_, film_, mset_);
-    runChains(ctx, kMutationTag, [&](Chain &, int64_t count, pmlt::State &xs, Arena &cur, RNG &rng,
+bool PMLTIntegrator::acceptStep(Float a, RNG &rng, pmlt::State &xs, pmlt::State &ys, Arena &cur) const {
+    if (!(a > 0 && rng.uniform() < a)) return false;
+    std::swap(xs, ys);
+    cur.reset();
+    pmlt::BuildBSDFs(ctx_, xs.x, cur, &xs.bsdf);
+    return true;
+}
+
+int64_t PMLTIntegrator::runMutations(Chain &, int64_t count, pmlt::State &xs, Arena &cur, RNG &rng,
                                      SampleRecorder &rec, Worker &wk) {
-        pmlt::State ys;
-        RNGSampler u(rng);
-        pmlt::MutationStats mst;
-        ItemCounts cnt;
-        for (int64_t k = 0; k < count; ++k) {
-            double wsum = 0;
-            const int type = SelectMutation(mut, xs.x, weights, rng.uniform(), &wsum);
-            double ratio = 0;
-            const pmlt::ProposalResult res = mut.propose(MutationType(type), xs, u, wk.arena, &ys, &ratio, &mst);
-            Float a = 0;
-            if (res == pmlt::ProposalResult::Proposed && direct_ && ys.x.size() <= 3) {
-                ++cnt.zero[type];  // outside the chains' target (directsamples)
-            } else if (res == pmlt::ProposalResult::Proposed) {
-                a = Float(std::min(1.0, ratio * SelectionRatio(mut, type, ys.x, weights, wsum)));
-            }
-            cnt.record(type, res, a);
-            // Expected values (Veach and Guibas 1997, "expected values"): the proposal with weight a,
-            // the current state with 1 - a, each as b F / I.
-            if (a > 0) rec.splat(ys.e.pRaster, ys.e.F * Float(b * a / ys.e.I));
-            if (a < 1) rec.splat(xs.e.pRaster, xs.e.F * Float(b * (1 - a) / xs.e.I));
-            if (a > 0 && rng.uniform() < a) {
-                ++cnt.acc[type];
-                std::swap(xs, ys);
-                cur.reset();
-                pmlt::BuildBSDFs(ctx_, xs.x, cur, &xs.bsdf);
-            }
-            wk.arena.reset();
+    pmlt::State ys;
+    RNGSampler u(rng);
+    pmlt::MutationStats mst;
+    ItemCounts cnt;
+    for (int64_t k = 0; k < count; ++k) {
+        // 1. A mutation and its proposal y.
+        const Proposal p = proposeMutation(xs, rng, u, wk.arena, &ys, &mst);
+        // 2. Acceptance (Metropolis-Hastings with the selection ratio).
+        Float a = 0;
+        if (p.res == pmlt::ProposalResult::Proposed && outsideTarget(ys)) {
+            ++cnt.zero[p.type];  // outside the chains' target (directsamples)
+        } else if (p.res == pmlt::ProposalResult::Proposed) {
+            a = Float(std::min(1.0, p.ratio * SelectionRatio(*mut_, p.type, ys.x, weights_, p.wsum)));
         }
-        flushCounts(cnt, mst, count);
-    });
+        cnt.record(p.type, p.res, a);
+        // 3. Expected values (Veach and Guibas 1997, "expected values"): the proposal with weight a,
+        // the current state with 1 - a, each as b F / I.
+        if (a > 0) rec.splat(ys.e.pRaster, ys.e.F * Float(expectedValueScale(a, ys.e.I)));
+        if (a < 1) rec.splat(xs.e.pRaster, xs.e.F * Float(expectedValueScale(1 - a, xs.e.I)));
+        // 4. The step.
+        if (acceptStep(a, rng, xs, ys, cur)) ++cnt.acc[p.type];
+        wk.arena.reset();
+    }
+    flushCounts(cnt, mst);
+    return count;
 }
 
 int PMLTIntegrator::SelectMutation(const pmlt::Mutator &mut, const pmlt::Path &x, const Float *weights, double u,
@@ -377,8 +384,7 @@ int PMLTIntegrator::SelectMutation(const pmlt::Mutator &mut, const pmlt::Path &x
     return type;
 }
 
-void PMLTIntegrator::flushCounts(const ItemCounts &cnt, const pmlt::MutationStats &mst, int64_t mutations) {
-    nMutations_ += mutations;
+void PMLTIntegrator::flushCounts(const ItemCounts &cnt, const pmlt::MutationStats &mst) {
     nWalks_ += mst.walks;
     nWalkFailures_ += mst.walkFailures;
     for (int k = 0; k < pmlt::kMutationTypes; ++k) {
@@ -400,11 +406,6 @@ PMLTIntegrator::TypeCounts PMLTIntegrator::counts(MutationType t) const {
     r.zero = c.zero;
     r.acceptSum = double(c.acceptMicro.load()) * 1e-6;
     return r;
-}
-
-void PMLTIntegrator::finish(const Film &, const RenderStats &, Image *out) {
-    rescale_ = FinishMetropolisImage(out, "pmlt", b_, mutationsIssued_, nMutations_.load(), int64_t(chains_.size()),
-                                     warning_);
 }
 
 std::string PMLTIntegrator::statistics() const {
@@ -429,74 +430,51 @@ std::string PMLTIntegrator::statistics() const {
     o << FormatManifoldStats(GetManifoldStats(), "  ");
     if (nStartMismatch_ > 0)
         o << "  chain starts that could not be rebuilt (drawn again): " << nStartMismatch_ << "\n";
-    if (rescale_ != 1) o << "  interrupted pass: image scaled by " << rescale_ << " (mutations issued / run)\n";
-    if (!warning_.empty()) o << "  " << warning_ << "\n";
-    return o.str();
+    return o.str() + driverStatistics();
 }
 
 // ---------------------------------------------------------------- checkpoints
-namespace {
-constexpr uint32_t kPMLTStateMagic = 0x324c4d50;  // "PML2" (chains with their direction)
-}  // namespace
-
-std::string PMLTIntegrator::saveState() const {
-    std::string s;
-    PutBytes(&s, kPMLTStateMagic);
-    PutBytes(&s, b_);
-    PutBytes(&s, mutationsIssued_);
-    PutBytes(&s, int64_t(nMutations_.load()));
-    PutBytes(&s, uint64_t(chains_.size()));
-    for (const Chain &c : chains_) {
-        PutBytes(&s, c.F);
-        PutBytes(&s, c.I);
-        PutBytes(&s, c.pRaster);
-        PutBytes(&s, c.dir);
-        PutBytes(&s, uint32_t(c.x.v.size()));
-        for (PathVertex v : c.x.v) {
-            // Pointers are stored as the light's index (light vertices) and
-            // rebuilt from the geometry record (surface vertices).
-            int32_t light = -1;
-            if (v.type == VertexType::Light && v.light)
-                light = int32_t(std::find(lights_.begin(), lights_.end(), v.light) - lights_.begin());
-            v.material = nullptr;
-            PutBytes(&s, v);
-            PutBytes(&s, light);
-        }
+// After the driver's framing, per chain: F, I, the raster position, the
+// direction and the path's vertices.
+void PMLTIntegrator::saveChain(int64_t i, std::string *s) const {
+    const Chain &c = chains_[size_t(i)];
+    PutBytes(s, c.F);
+    PutBytes(s, c.I);
+    PutBytes(s, c.pRaster);
+    PutBytes(s, c.dir);
+    PutBytes(s, uint32_t(c.x.v.size()));
+    for (PathVertex v : c.x.v) {
+        // Pointers are stored as the light's index (light vertices) and
+        // rebuilt from the geometry record (surface vertices).
+        int32_t light = -1;
+        if (v.type == VertexType::Light && v.light)
+            light = int32_t(std::find(lights_.begin(), lights_.end(), v.light) - lights_.begin());
+        v.material = nullptr;
+        PutBytes(s, v);
+        PutBytes(s, light);
     }
-    return s;
 }
 
-void PMLTIntegrator::loadState(const std::string &s) {
-    size_t at = 0;
-    uint32_t magic = 0;
-    auto bad = [] { throw Error("checkpoint: pmlt state is inconsistent"); };
-    int64_t done = 0;
-    uint64_t n = 0;
-    if (!GetBytes(s, &at, &magic) || magic != kPMLTStateMagic || !GetBytes(s, &at, &b_) || !GetBytes(s, &at, &mutationsIssued_) ||
-        !GetBytes(s, &at, &done) || !GetBytes(s, &at, &n) || n > uint64_t(set_.chains))
-        bad();
-    nMutations_ = done;
-    chains_.assign(size_t(n), Chain());
-    for (Chain &c : chains_) {
-        uint32_t nv = 0;
-        if (!GetBytes(s, &at, &c.F) || !GetBytes(s, &at, &c.I) || !GetBytes(s, &at, &c.pRaster) || !GetBytes(s, &at, &c.dir) || c.dir < 0 || c.dir > 3 ||
-            !GetBytes(s, &at, &nv) ||
-            nv > uint32_t(set_.maxDepth) + 2)
-            bad();
-        c.x.v.resize(nv);
-        for (PathVertex &v : c.x.v) {
-            int32_t light = -1;
-            if (!GetBytes(s, &at, &v) || !GetBytes(s, &at, &light)) bad();
-            if (v.type == VertexType::Surface) {
-                if (v.geomId < 0 || size_t(v.geomId) >= ctx_.scene->geometry.size()) bad();
-                v.material = ctx_.scene->geometry[size_t(v.geomId)].material;
-            } else {
-                if (light >= int32_t(lights_.size())) bad();
-                v.light = light >= 0 ? lights_[size_t(light)] : nullptr;
-            }
+bool PMLTIntegrator::loadChain(int64_t i, const std::string &s, size_t *at) {
+    Chain &c = chains_[size_t(i)];
+    uint32_t nv = 0;
+    if (!GetBytes(s, at, &c.F) || !GetBytes(s, at, &c.I) || !GetBytes(s, at, &c.pRaster) ||
+        !GetBytes(s, at, &c.dir) || c.dir < 0 || c.dir > 3 || !GetBytes(s, at, &nv) ||
+        nv > uint32_t(set_.maxDepth) + 2)
+        return false;
+    c.x.v.resize(nv);
+    for (PathVertex &v : c.x.v) {
+        int32_t light = -1;
+        if (!GetBytes(s, at, &v) || !GetBytes(s, at, &light)) return false;
+        if (v.type == VertexType::Surface) {
+            if (v.geomId < 0 || size_t(v.geomId) >= ctx_.scene->geometry.size()) return false;
+            v.material = ctx_.scene->geometry[size_t(v.geomId)].material;
+        } else {
+            if (light >= int32_t(lights_.size())) return false;
+            v.light = light >= 0 ? lights_[size_t(light)] : nullptr;
         }
     }
-    if (at != s.size()) bad();
+    return true;
 }
 
 }  // namespace gradus

@@ -17,7 +17,8 @@
 //      path's pattern of specular vertices leaves the state (a rejected
 //      proposal). Each mutation splats the proposal with a and the current
 //      state with 1 - a (expected values), b F / I each; the film divides by
-//      the mutations per pixel (pass work and normalisation as mlt.h).
+//      the mutations per pixel (pass work and normalisation: the Metropolis
+//      driver, metropolis/metropolis.h, shared with mlt).
 // Parameters:
 //   integer maxdepth 5                 maximum path depth (edges - 1)
 //   integer bootstrapsamples 100000    bidirectional samples of the bootstrap
@@ -51,7 +52,7 @@
 #include <string>
 #include <vector>
 
-#include "render/integrator.h"
+#include "integrators/metropolis/metropolis.h"
 #include "integrators/pmlt/mutations.h"
 #include "lights/light_sampler.h"
 
@@ -82,22 +83,15 @@ struct PMLTSettings {
 // pmlt's parameter table (gmlt appends it to its own).
 ParamTable<PMLTSettings> PMLTParamTable();
 
-class PMLTIntegrator : public Integrator {
+class PMLTIntegrator : public MetropolisIntegrator {
   public:
     explicit PMLTIntegrator(const EntityDesc &desc);
     std::string name() const override { return "pmlt"; }
     void preprocess(const Scene &scene, Film &film) override;
     int defaultSamplesPerPixel() const override { return set_.mutationsPerPixel; }
-    void beginPass(PassContext &ctx) override;
-    void runPass(PassContext &ctx) override;
-    void finish(const Film &film, const RenderStats &stats, Image *out) override;
     std::string statistics() const override;
-    std::string saveState() const override;
-    void loadState(const std::string &state) override;
-    bool independentPasses() const override { return false; }
 
     const PMLTSettings &settings() const { return set_; }
-    double b() const { return b_; }
     int64_t bootstrapSampleCount() const;  // N after the bootstrapconnections cap
     struct TypeCounts {
         int64_t proposed = 0, accepted = 0, notApplicable = 0, zero = 0;
@@ -106,15 +100,13 @@ class PMLTIntegrator : public Integrator {
     TypeCounts counts(pmlt::MutationType t) const;
     int64_t startMismatches() const { return nStartMismatch_; }
     int64_t manifoldWalks() const { return nWalks_; }
-    const std::string &warning() const { return warning_; }
 
   protected:
-    // gmlt: its own settings (a PMLTSettings part) and hooks below.
-    PMLTIntegrator(const EntityDesc &desc, const PMLTSettings &set);
+    // gmlt: its own settings (a PMLTSettings part), mutation stream and hooks below.
+    PMLTIntegrator(const EntityDesc &desc, const PMLTSettings &set, uint64_t mutationTag);
     struct Candidate {
         int64_t sample;
         int8_t s, t;
-        double cdf;
     };
     struct Chain {
         pmlt::Path x;
@@ -143,15 +135,24 @@ class PMLTIntegrator : public Integrator {
             }
         }
     };
-    void flushCounts(const ItemCounts &c, const pmlt::MutationStats &mst, int64_t mutations);
-    // One pass of the chains: direct light in the first pass (directsamples),
-    // each chain's share of the pass's mutations (items keyed by `tag`), its
-    // state x rebuilt (BSDFs in `cur`); fn runs the chain's `count` mutations,
-    // leaving its state in x, which is stored back.
-    using ChainFn = std::function<void(Chain &ch, int64_t count, pmlt::State &x, Arena &cur, RNG &rng,
-                                       SampleRecorder &rec, Worker &wk)>;
-    void runChains(PassContext &ctx, uint64_t tag, const ChainFn &fn);
-    void selectionWeights(Float *weights) const;
+    void flushCounts(const ItemCounts &c, const pmlt::MutationStats &mst);
+    // One chain's `count` mutations from its rebuilt state x (BSDFs in `cur`),
+    // leaving the new state in x; returns the mutations run (gmlt overrides).
+    virtual int64_t runMutations(Chain &ch, int64_t count, pmlt::State &x, Arena &cur, RNG &rng,
+                                 SampleRecorder &rec, Worker &wk);
+    // A mutation's proposal: the type chosen among those that apply to x's
+    // pattern (weights renormalised, wsum their sum) and its result.
+    struct Proposal {
+        int type = 0;
+        pmlt::ProposalResult res = pmlt::ProposalResult::NotApplicable;
+        double ratio = 0, wsum = 0;
+    };
+    Proposal proposeMutation(const pmlt::State &x, RNG &rng, Sampler &u, Arena &arena, pmlt::State *y,
+                             pmlt::MutationStats *mst) const;
+    // directsamples: paths of at most one scattering vertex are outside the chains' target.
+    bool outsideTarget(const pmlt::State &y) const { return direct_ && y.x.size() <= 3; }
+    // Moves the chain to y with probability a (y's BSDFs rebuilt in cur); true when it moved.
+    bool acceptStep(Float a, RNG &rng, pmlt::State &x, pmlt::State &y, Arena &cur) const;
     // The mutation type of one step: chosen among those that apply to x's
     // pattern, weights renormalised (*wsum: their sum).
     static int SelectMutation(const pmlt::Mutator &mut, const pmlt::Path &x, const Float *weights, double u,
@@ -180,22 +181,20 @@ class PMLTIntegrator : public Integrator {
     // in arena); returns the number of non-finite contributions left out.
     uint64_t forEachStrategy(uint64_t key, int64_t k, Arena &arena,
                              const std::function<void(const Sample &, int, int, const ConnectSamples &, double)> &fn) const;
-    void bootstrap(PassContext &ctx);
     // Bidirectional sample k of the bootstrap (camera and light subpaths, in arena).
     bool makeSample(uint64_t key, int64_t k, Arena &arena, Sample *s) const;
 
     PMLTSettings set_;
+    Float weights_[pmlt::kMutationTypes];  // selection weights by MutationType
     FileLoc loc_;
     LightSampler lightSampler_;
     BidirContext ctx_;
     pmlt::FilmDomain film_;
     pmlt::MutationSettings mset_;
+    std::unique_ptr<pmlt::Mutator> mut_;  // the chains' mutations (gmlt: with its shift's settings)
     std::vector<Candidate> candidates_;  // bootstrap strategies (freed once the chains start)
     int64_t nCandidates_ = 0;
-    double b_ = 0;
-    std::string warning_;
     std::vector<Chain> chains_;
-    int64_t mutationsIssued_ = 0;
     std::vector<const Light *> lights_;  // checkpoint indices of light vertices
 
     struct AtomicCounts {
@@ -203,12 +202,27 @@ class PMLTIntegrator : public Integrator {
         std::atomic<int64_t> acceptMicro{0};  // sum of acceptance probabilities x 1e6
     };
     AtomicCounts typeCounts_[pmlt::kMutationTypes];
-    std::atomic<int64_t> nMutations_{0}, nStartMismatch_{0}, nWalks_{0}, nWalkFailures_{0};
+    std::atomic<int64_t> nWalks_{0}, nWalkFailures_{0};
     std::unique_ptr<EmbreeManifoldScene> mscene_;
     std::unique_ptr<Integrator> direct_;  // directsamples: the path tracer at maxdepth 1
-    void renderDirect(PassContext &ctx);
     int64_t nBootstrapSamples_ = 0;
-    double rescale_ = 1;
+
+  private:
+    // The driver's hooks (metropolis/metropolis.h).
+    BootstrapWeights weighBootstrap(PassContext &ctx, uint64_t key) override;
+    std::string emptyBootstrapWarning() const override;
+    int chainsParameter() const override { return set_.chains; }
+    bool allocateChains(uint64_t n) override;
+    int64_t chainCount() const override { return int64_t(chains_.size()); }
+    int64_t startChain(int64_t c, RNG &pick, uint64_t key, Worker &wk) override;
+    void releaseBootstrap() override;
+    void beginChains(PassContext &ctx) override;
+    int64_t mutateChain(PassContext &ctx, int64_t c, int64_t count, RNG &rng, SampleRecorder &rec,
+                        Worker &wk) override;
+    void saveChain(int64_t c, std::string *s) const override;
+    bool loadChain(int64_t c, const std::string &s, size_t *at) override;
+
+    void renderDirect(PassContext &ctx);
 };
 
 }  // namespace gradus

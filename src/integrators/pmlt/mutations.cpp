@@ -216,152 +216,192 @@ Float Mutator::bidirDensity(const State &s, int a, int nd, int na, int n) const 
     return Float(double(pd) / positions * pa * sum / double(na + 1 - tmin));
 }
 
-ProposalResult Mutator::bidirectional(const State &xs, Sampler &u, Arena &arena, State *ys, double *ratioOut) const {
-    const Path &x = xs.x;
-    const int n = x.size();
-    // Deleted count, position, added count, split (Veach 1997, Ch. 11, bidirectional mutation).
-    int nd = 0;
-    {
-        Float r = u.get1D();
-        for (nd = 0; nd < n; ++nd) {
-            r -= deletionProbability(n, nd);
-            if (r < 0) break;
-        }
-        while (nd > 0 && positionCount(n, nd) == 0) --nd;
-    }
-    const int positions = positionCount(n, nd);
-    if (positions == 0) return ProposalResult::NotApplicable;
-    int a = -1;
-    for (int k = Pick(u.get1D(), positions), c = 0; a < n; ) {
-        ++a;
-        if (allowedPosition(n, nd, a) && c++ == k) break;
-    }
-    int na = -1;
-    {
-        Float r = u.get1D();
-        int last = -1;
-        for (int k = 0; k <= set_.maxDepth + 2; ++k) {
-            const Float p = additionProbability(n, nd, a, k);
-            if (p == 0) continue;
-            last = k;
-            r -= p;
-            if (r < 0) {
-                na = k;
-                break;
-            }
-        }
-        if (na < 0) na = last;
-    }
-    if (na < 0) return ProposalResult::NotApplicable;
-    const int tmin = a == 0 ? 1 : 0;
-    const int tp = tmin + Pick(u.get1D(), na + 1 - tmin), sp = na - tp;
-    const int suffixStart = a + nd, suffixLen = n - suffixStart;
+// The choices of one bidirectional mutation of a path of n vertices: nd
+// deleted at [a, a + nd), na inserted, tp of them from the camera side and
+// sp = na - tp from the light side.
+struct Mutator::BidirMove {
+    int n = 0, nd = 0, a = -1, na = -1, tp = 0, sp = 0;
+    int suffixStart() const { return a + nd; }
+    int suffixLen() const { return n - a - nd; }
+};
 
+// The light side's new vertices (light order) and the kept suffix (its first
+// vertex re-scattered when the light side starts there).
+struct Mutator::LightSide {
+    std::vector<PathVertex> v, suffix;
+    std::vector<BSDF> b;
+};
+
+ProposalResult Mutator::bidirectional(const State &xs, Sampler &u, Arena &arena, State *ys, double *ratioOut) const {
+    // 1. Deleted count, position, added count, split (Veach 1997, Ch. 11, bidirectional mutation).
+    BidirMove m;
+    if (!chooseBidirMove(xs.x.size(), u, &m)) return ProposalResult::NotApplicable;
+    // 2. Camera side: the kept prefix and tp new vertices.
+    if (!buildCameraSide(xs, m, u, arena, ys)) return ProposalResult::Zero;
+    // 3. Light side: sp new vertices from the kept suffix (or from a light).
+    LightSide l;
+    if (!buildLightSide(xs, m, u, arena, &l)) return ProposalResult::Zero;
+    // 4. The join of the two sides, y evaluated.
+    if (!joinSides(xs, m, l, ys)) return ProposalResult::Zero;
+    // 5. The Metropolis-Hastings ratio.
+    return bidirRatio(xs, *ys, m, ratioOut);
+}
+
+int Mutator::pickDeletion(int n, Float r) const {
+    int nd = 0;
+    for (nd = 0; nd < n; ++nd) {
+        r -= deletionProbability(n, nd);
+        if (r < 0) break;
+    }
+    while (nd > 0 && positionCount(n, nd) == 0) --nd;
+    return nd;
+}
+
+int Mutator::pickAddition(int n, int nd, int a, Float r) const {
+    int last = -1;
+    for (int k = 0; k <= set_.maxDepth + 2; ++k) {
+        const Float p = additionProbability(n, nd, a, k);
+        if (p == 0) continue;
+        last = k;
+        r -= p;
+        if (r < 0) return k;
+    }
+    return last;
+}
+
+bool Mutator::chooseBidirMove(int n, Sampler &u, BidirMove *m) const {
+    m->n = n;
+    m->nd = pickDeletion(n, u.get1D());
+    const int positions = positionCount(n, m->nd);
+    if (positions == 0) return false;
+    m->a = -1;
+    for (int k = Pick(u.get1D(), positions), c = 0; m->a < n;) {
+        ++m->a;
+        if (allowedPosition(n, m->nd, m->a) && c++ == k) break;
+    }
+    m->na = pickAddition(n, m->nd, m->a, u.get1D());
+    if (m->na < 0) return false;
+    const int tmin = m->a == 0 ? 1 : 0;
+    m->tp = tmin + Pick(u.get1D(), m->na + 1 - tmin);
+    m->sp = m->na - m->tp;
+    return true;
+}
+
+bool Mutator::traceVertices(PathVertex from, Vec3 dir, int until, bool lastMayEscape, TransportMode mode,
+                            Sampler &u, Arena &arena, std::vector<PathVertex> *vs, std::vector<BSDF> *bs) const {
+    // New vertices until vs holds `until`, scattering at each but the last.
+    while (int(vs->size()) < until) {
+        PathVertex v;
+        BSDF b;
+        const bool last = int(vs->size()) + 1 == until;
+        if (!Trace(ctx_, from, dir, arena, last && lastMayEscape, &v, &b)) return false;
+        vs->push_back(v);
+        bs->push_back(b);
+        if (!last && !Scatter(&vs->back(), b, -dir, mode, u, &dir)) return false;
+        from = vs->back();
+    }
+    return true;
+}
+
+bool Mutator::buildCameraSide(const State &xs, const BidirMove &m, Sampler &u, Arena &arena, State *ys) const {
+    const Path &x = xs.x;
     Path &y = ys->x;
     std::vector<BSDF> &yb = ys->bsdf;
-    y.v.assign(x.v.begin(), x.v.begin() + a);
-    yb.assign(xs.bsdf.begin(), xs.bsdf.begin() + a);
-    const bool endsHere = suffixLen == 0 && sp == 0;  // the camera side must end on an emitter
-    // Camera side: tp new vertices.
-    if (tp > 0) {
-        Vec3 dir;
-        if (a == 0) {
-            CameraSample cs;
-            cs.pFilm = film_.sample(u.get2D());
-            cs.pLens = u.get2D();
-            Ray ray;
-            if (ctx_.camera->generateRay(cs, &ray) == 0) return ProposalResult::Zero;
-            y.v.push_back(LensVertex(ctx_, ray));
-            yb.push_back(BSDF());
-            dir = Normalize(ray.d);
-        } else {
-            PathVertex &end = y.v.back();
-            if (!Scatter(&end, yb.back(), Dir(end, y.v[y.v.size() - 2]), TransportMode::Radiance, u, &dir))
-                return ProposalResult::Zero;
-        }
-        while (int(y.v.size()) < a + tp) {
-            PathVertex v;
-            BSDF b;
-            const bool last = int(y.v.size()) + 1 == a + tp;
-            if (!Trace(ctx_, y.v.back(), dir, arena, last && endsHere, &v, &b)) return ProposalResult::Zero;
-            y.v.push_back(v);
-            yb.push_back(b);
-            if (!last && !Scatter(&y.v.back(), b, -dir, TransportMode::Radiance, u, &dir))
-                return ProposalResult::Zero;
-        }
+    y.v.assign(x.v.begin(), x.v.begin() + m.a);
+    yb.assign(xs.bsdf.begin(), xs.bsdf.begin() + m.a);
+    if (m.tp == 0) return true;
+    const bool endsHere = m.suffixLen() == 0 && m.sp == 0;  // the camera side must end on an emitter
+    Vec3 dir;
+    if (m.a == 0) {
+        CameraSample cs;
+        cs.pFilm = film_.sample(u.get2D());
+        cs.pLens = u.get2D();
+        Ray ray;
+        if (ctx_.camera->generateRay(cs, &ray) == 0) return false;
+        y.v.push_back(LensVertex(ctx_, ray));
+        yb.push_back(BSDF());
+        dir = Normalize(ray.d);
+    } else {
+        PathVertex &end = y.v.back();
+        if (!Scatter(&end, yb.back(), Dir(end, y.v[y.v.size() - 2]), TransportMode::Radiance, u, &dir)) return false;
     }
-    // Light side: sp new vertices from the suffix (or from a light), in light order.
-    std::vector<PathVertex> lv;
-    std::vector<BSDF> lb;
-    std::vector<PathVertex> suffix(x.v.begin() + suffixStart, x.v.end());
-    if (sp > 0) {
-        Vec3 dir;
-        if (suffixLen == 0) {
-            Float pmf;
-            const Light *light = ctx_.lightSampler->sample(u.get1D(), &pmf);
-            const Point2 u1 = u.get2D(), u2 = u.get2D();
-            if (!light || pmf == 0) return ProposalResult::Zero;
-            // An emitter at infinity alone would be joined along a direction its
-            // sampling did not choose (ValidSplit excludes that technique).
-            if (sp == 1 && (light->flags & (LIGHT_INFINITE | LIGHT_DELTA_DIRECTION))) return ProposalResult::Zero;
-            LightLeSample les;
-            if (!light->sampleLe(u1, u2, &les) || les.pdfPos == 0 || les.pdfDir == 0 || les.L.isBlack())
-                return ProposalResult::Zero;
-            PathVertex e;
-            e.type = VertexType::Light;
-            e.light = light;
-            if (IsDeltaLight(light->flags)) e.flags |= VERTEX_DELTA_LIGHT;
-            // Infinite and distant lights: a vertex on the scene's bounding disk (bidir.cpp).
-            if (light->flags & (LIGHT_INFINITE | LIGHT_DELTA_DIRECTION)) e.flags |= VERTEX_INFINITE;
-            e.p = les.p;
-            e.ng = e.ns = les.nLight;
-            lv.push_back(e);
-            lb.push_back(BSDF());
-            dir = Normalize(les.ray.d);
-        } else {
-            if (!Scatter(&suffix[0], xs.bsdf[size_t(suffixStart)], Dir(suffix[0], suffix[1]), TransportMode::Importance,
-                         u, &dir))
-                return ProposalResult::Zero;
-        }
-        while (int(lv.size()) < sp) {
-            const PathVertex &src = lv.empty() ? suffix[0] : lv.back();
-            PathVertex v;
-            BSDF b;
-            if (!Trace(ctx_, src, dir, arena, false, &v, &b)) return ProposalResult::Zero;
-            lv.push_back(v);
-            lb.push_back(b);
-            if (int(lv.size()) < sp && !Scatter(&lv.back(), b, -dir, TransportMode::Importance, u, &dir))
-                return ProposalResult::Zero;
-        }
+    return traceVertices(y.v.back(), dir, m.a + m.tp, endsHere, TransportMode::Radiance, u, arena, &y.v, &yb);
+}
+
+bool Mutator::emitLightVertex(const BidirMove &m, Sampler &u, PathVertex *e, Vec3 *dir) const {
+    Float pmf;
+    const Light *light = ctx_.lightSampler->sample(u.get1D(), &pmf);
+    const Point2 u1 = u.get2D(), u2 = u.get2D();
+    if (!light || pmf == 0) return false;
+    // An emitter at infinity alone would be joined along a direction its
+    // sampling did not choose (ValidSplit excludes that technique).
+    if (m.sp == 1 && (light->flags & (LIGHT_INFINITE | LIGHT_DELTA_DIRECTION))) return false;
+    LightLeSample les;
+    if (!light->sampleLe(u1, u2, &les) || les.pdfPos == 0 || les.pdfDir == 0 || les.L.isBlack()) return false;
+    e->type = VertexType::Light;
+    e->light = light;
+    if (IsDeltaLight(light->flags)) e->flags |= VERTEX_DELTA_LIGHT;
+    // Infinite and distant lights: a vertex on the scene's bounding disk (bidir.cpp).
+    if (light->flags & (LIGHT_INFINITE | LIGHT_DELTA_DIRECTION)) e->flags |= VERTEX_INFINITE;
+    e->p = les.p;
+    e->ng = e->ns = les.nLight;
+    *dir = Normalize(les.ray.d);
+    return true;
+}
+
+bool Mutator::buildLightSide(const State &xs, const BidirMove &m, Sampler &u, Arena &arena, LightSide *l) const {
+    const int suffixStart = m.suffixStart();
+    l->suffix.assign(xs.x.v.begin() + suffixStart, xs.x.v.end());
+    if (m.sp == 0) return true;
+    Vec3 dir;
+    if (m.suffixLen() == 0) {
+        PathVertex e;
+        if (!emitLightVertex(m, u, &e, &dir)) return false;
+        l->v.push_back(e);
+        l->b.push_back(BSDF());
+    } else {
+        std::vector<PathVertex> &suffix = l->suffix;
+        if (!Scatter(&suffix[0], xs.bsdf[size_t(suffixStart)], Dir(suffix[0], suffix[1]), TransportMode::Importance,
+                     u, &dir))
+            return false;
     }
-    for (int k = sp - 1; k >= 0; --k) {
-        y.v.push_back(lv[size_t(k)]);
-        yb.push_back(lb[size_t(k)]);
+    const PathVertex &from = l->v.empty() ? l->suffix[0] : l->v.back();
+    return traceVertices(from, dir, m.sp, false, TransportMode::Importance, u, arena, &l->v, &l->b);
+}
+
+bool Mutator::joinSides(const State &xs, const BidirMove &m, const LightSide &l, State *ys) const {
+    Path &y = ys->x;
+    std::vector<BSDF> &yb = ys->bsdf;
+    for (int k = m.sp - 1; k >= 0; --k) {
+        y.v.push_back(l.v[size_t(k)]);
+        yb.push_back(l.b[size_t(k)]);
     }
-    y.v.insert(y.v.end(), suffix.begin(), suffix.end());
-    yb.insert(yb.end(), xs.bsdf.begin() + suffixStart, xs.bsdf.end());
-    const int np = y.size(), t = a + tp;
-    if (np < 2 || np > set_.maxDepth + 2) return ProposalResult::Zero;
+    y.v.insert(y.v.end(), l.suffix.begin(), l.suffix.end());
+    yb.insert(yb.end(), xs.bsdf.begin() + m.suffixStart(), xs.bsdf.end());
+    const int np = y.size(), t = m.a + m.tp;
+    if (np < 2 || np > set_.maxDepth + 2) return false;
     // The join: a shadow-tested edge between non-specular ends (or the camera
     // side's hit on an emitter).
     y.v.back().flags &= uint8_t(~VERTEX_DELTA);
     if (t < np) {
         y.v[size_t(t - 1)].flags &= uint8_t(~VERTEX_DELTA);
         y.v[size_t(t)].flags &= uint8_t(~VERTEX_DELTA);
-        if (y.v[size_t(t - 1)].isInfiniteLight() || !Visible(ctx_, y.v[size_t(t - 1)], y.v[size_t(t)]))
-            return ProposalResult::Zero;
+        if (y.v[size_t(t - 1)].isInfiniteLight() || !Visible(ctx_, y.v[size_t(t - 1)], y.v[size_t(t)])) return false;
     }
     for (int i = 1; i < np; ++i) y.v[size_t(i)].wo = PackedVec3(Dir(y.v[size_t(i)], y.v[size_t(i - 1)]));
-    if (!Evaluate(ctx_, film_, y, yb.data(), &ys->e)) return ProposalResult::Zero;
+    if (!Evaluate(ctx_, film_, y, yb.data(), &ys->e)) return false;
     // Only techniques T counts may make y: a path from a split that is not one
     // (the emitter joined straight to the lens, bdpt's (1, 1)) would be
     // proposed with a density T leaves out, over-weighting such paths.
-    if (!ValidSplit(ctx_, y, ys->e, t)) return ProposalResult::Zero;
+    return ValidSplit(ctx_, y, ys->e, t);
+}
+
+ProposalResult Mutator::bidirRatio(const State &xs, const State &ys, const BidirMove &m, double *ratioOut) const {
     // a = min(1, I(y) T(y -> x) / (I(x) T(x -> y))) (Metropolis-Hastings; Veach 1997, Ch. 11).
-    const Float tFwd = bidirDensity(*ys, a, nd, na, n);
-    const Float tRev = bidirDensity(xs, a, na, nd, np);
+    const Float tFwd = bidirDensity(ys, m.a, m.nd, m.na, m.n);
+    const Float tRev = bidirDensity(xs, m.a, m.na, m.nd, ys.x.size());
     if (!(tFwd > 0) || !(tRev > 0)) return ProposalResult::Zero;
-    const double ratio = double(ys->e.I) * tRev / (double(xs.e.I) * tFwd);
+    const double ratio = double(ys.e.I) * tRev / (double(xs.e.I) * tFwd);
     if (!std::isfinite(ratio) || !(ratio > 0)) return ProposalResult::Zero;
     *ratioOut = ratio;
     return ProposalResult::Proposed;

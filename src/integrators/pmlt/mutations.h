@@ -122,6 +122,21 @@ class Mutator {
 
   private:
     ProposalResult bidirectional(const State &x, Sampler &u, Arena &arena, State *y, double *ratioOut) const;
+    // The bidirectional mutation's stages (mutations.cpp): the move's choices,
+    // the camera side (kept prefix and new vertices), the light side (new
+    // vertices in light order and the kept suffix), the join, the ratio.
+    struct BidirMove;
+    struct LightSide;
+    bool chooseBidirMove(int n, Sampler &u, BidirMove *m) const;
+    int pickDeletion(int n, Float r) const;
+    int pickAddition(int n, int nd, int a, Float r) const;
+    bool buildCameraSide(const State &x, const BidirMove &m, Sampler &u, Arena &arena, State *y) const;
+    bool buildLightSide(const State &x, const BidirMove &m, Sampler &u, Arena &arena, LightSide *l) const;
+    bool emitLightVertex(const BidirMove &m, Sampler &u, PathVertex *e, Vec3 *dir) const;
+    bool traceVertices(PathVertex from, Vec3 dir, int until, bool lastMayEscape, TransportMode mode, Sampler &u,
+                       Arena &arena, std::vector<PathVertex> *vs, std::vector<BSDF> *bs) const;
+    bool joinSides(const State &x, const BidirMove &m, const LightSide &l, State *y) const;
+    ProposalResult bidirRatio(const State &x, const State &y, const BidirMove &m, double *ratioOut) const;
     ProposalResult lens(const State &x, bool multiChain, Sampler &u, Arena &arena, State *y, double *ratioOut) const;
     ProposalResult caustic(const State &x, Sampler &u, Arena &arena, State *y, double *ratioOut) const;
     ProposalResult manifold(const State &x, Sampler &u, Arena &arena, State *y, double *ratioOut,

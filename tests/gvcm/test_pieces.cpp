@@ -399,7 +399,8 @@ void CheckCase1(KernelKind kind) {
                 sens += 1 / DCos(z.v[b].p, Vec3(z.v[b].ns), zr, nr) + 1 / DCos(zr, nr, next, Vec3(0, 0, 0));
             }
             const Spectrum ratio = SafeDiv(o.f, fx), ref = SafeDiv(Fy, Fx);
-            const double rhoRef = Py / Px;
+            // rho = |T'| p_VM(y) / p_VM(x), each merge's density with its own kernel (Eq. 22).
+            const double rhoRef = (Py / Px) * (etaY / etaX);
             const double eF = RelErr(ratio, ref), eR = std::abs(o.rho / rhoRef - 1);
             const double tol = Tolerance(sens);
             EXPECT_LT(eF, tol) << "u " << u << " r " << r << " b " << b << " trial " << trial << ": o.f / f_x "
@@ -675,6 +676,7 @@ void CheckCase2Empty(KernelKind kind) {
         const Spectrum fx = x.v[b].throughput() * x.b[b].f(Vec3(x.v[b].wo), lv.wo, TransportMode::Radiance) *
                             lv.throughput() / etaX;
         const Spectrum ratio = SafeDiv(o.f, fx);
+        ref.rho *= etaY / etaX;  // each merge's density with its own kernel (Eq. 22)
         const double eF = RelErr(ratio, ref.ratio), eR = std::abs(o.rho / ref.rho - 1);
         EXPECT_LT(eF, ref.tol) << "b " << b << " m " << m << " trial " << trial << ": o.f / f_x " << ratio.r << " "
                                << ratio.g << " " << ratio.b << ", reference " << ref.ratio.r << " " << ref.ratio.g
@@ -1024,4 +1026,4 @@ TEST(GVCMPieces, Case2EmptyChainMatchesReevaluatedPath) { CheckCase2Empty(Kernel
 TEST(GVCMPieces, Case2EmptyChainKeepsTheBaseKernel) { CheckCase2Empty(KernelKind::Footprint); }
 TEST(GVCMPieces, Case2SpecularChainMatchesReevaluatedPath) { CheckCase2Chains(); }
 TEST(GVCMPieces, MergeWeightsMatchEnumeratedStrategies) { CheckMergeWeights(KernelKind::Fixed); }
-
+TEST(GVCMPieces, MergeWeightsMatchEnumeratedStrategiesFootprintKernel) { CheckMergeWeights(KernelKind::Footprint); }

@@ -289,8 +289,10 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, const Case2Base &cb, const Cam
         count(FallbackBlocked);
         return false;
     }
-    // rho: the camera shift's, times the photon's area density ratio p_omega G~ prod prob.
+    // rho: the camera shift's, times the photon's area density ratio p_omega G~ prod prob
+    // (and, with connections, the kernels' ratio: each merge's density with its own eta, Eqs. 22-23).
     o->rho = sh.rho[u] * (pY * gY * probY) / (cb.pX * cb.gX * cb.probX);
+    if (terms) o->rho *= terms->etaU / etaX;
     if (oPhotonY < 0) oPhotonY = pY * gY;  // empty chain: z'_b sampled from y_d
     o->w = 1;
     if (terms) {
@@ -501,10 +503,14 @@ bool GVCMIntegrator::case1(const CameraShift &sh, int u, const BSDF &bu, const L
     count(Case1);
     const PathVertex &yu = sh.y.v[u], &yp = sh.y.v[u - 1];
     const Spectrum fo = u == sh.r ? bu.f(Vec3(yu.wo), Vec3(lv.wo), TransportMode::Radiance) : f;
-    // The estimate keeps the base's kernel; the weight takes the offset's own eta (Eq. 23).
+    // The estimate keeps the base's kernel; the weight takes the offset's own
+    // eta (Eq. 22), and so does rho = |T'| p_VM(y) / p_VM(x) (Eq. 23).
     o->f = yu.throughput() * fo * lv.throughput() * (w / etaX);
     o->rho = sh.rho[u];
-    if (terms) o->w = mergeWeight(*terms, yu, yp, bu, lv, W);
+    if (terms) {
+        o->w = mergeWeight(*terms, yu, yp, bu, lv, W);
+        o->rho *= terms->etaU / etaX;
+    }
     const bool ok = !o->f.isBlack() && o->w > 0;
     count(ok ? Case1Shifted : FallbackBlocked);
     return ok;

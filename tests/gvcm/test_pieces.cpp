@@ -794,6 +794,54 @@ double PairSum(const Densities &X, const Densities &Y, int j, double rhoVC, Floa
     return others + CombinedWeight(wx, wy, rho) * (1 + rho);
 }
 
+// The first photon y_m after ideal specular vertices (k >= 1; not from a
+// delta light) on the light subpath of `trial`, and a camera subpath aimed at
+// it (z_1 = y_m, b = 1) with its shift; lv the photon's record.
+struct ChainPhoton {
+    ShiftSubpath L;
+    int m = 0, d = 0;
+    CameraPath c;
+    LightVertex lv;
+};
+bool FindChainPhoton(Fixture &f, int trial, Arena &arena, ChainPhoton *p) {
+    const Camera &cam = f.camera();
+    f.sampler->startPixelSample({trial % kW, (trial / kW) % kH}, trial / (kW * kH));
+    p->L = TraceLight(f, 6, arena);
+    const ShiftSubpath &L = p->L;
+    for (int m = 2; m < L.n; ++m) {
+        const PathVertex &ym = L.v[m];
+        if (ym.delta() || !L.v[m - 1].delta() || !f.W.mergeable(ym, &L.b[m])) continue;
+        int d = m - 1;
+        bool ideal = true;
+        while (d > 0 && L.v[d].delta()) ideal = ideal && L.deltaSample[d--];
+        CameraWiSample cws;
+        if (!ideal || L.v[d].isDeltaLight() || !cam.sampleWi(AsInteraction(ym), Point2(0.5, 0.5), &cws)) continue;
+        CameraPath &c = p->c;
+        c.cs = {cws.pRaster, Point2(0.5, 0.5)};
+        c.off = trial % 2 ? Point2i{1, 0} : Point2i{0, 1};
+        Ray ray;
+        if (c.cs.pFilm.x < 1 || c.cs.pFilm.x > kW - 2 || c.cs.pFilm.y < 1 || c.cs.pFilm.y > kH - 2 ||
+            cam.generateRay(c.cs, &ray) == 0)
+            continue;
+        c.x = ArenaSubpath(arena, 4);
+        c.x.n = GenerateCameraSubpath(*f.bc, ray, *f.sampler, arena, 4, c.x.v, c.x.b);
+        PrepareSubpath(*f.sc, &c.x);
+        if (c.x.n < 2 || Distance(c.x.v[1].p, ym.p) > 1e-4 || FirstConnectable(f, c.x) != 1) continue;
+        SubpathShiftStats st;
+        ShiftCameraSubpath(*f.sc, c.x, c.cs, c.off, arena, &c.sh, &st);
+        std::vector<LightVertex> recs;
+        VCMLightVertices(*f.bc, L.v, L.b, L.n, f.W, &recs);
+        for (const LightVertex &r : recs)
+            if (r.depth == m) {
+                p->m = m;
+                p->d = d;
+                p->lv = r;
+                return true;
+            }
+    }
+    return false;
+}
+
 // The merges' weights on random paths: case-1 merges at z_u >= r (photons at
 // z_u from random light prefixes), case-2 merges at z_b with empty chains
 // (photons at z_b; y_{m-1} matte, where gvcm's offset weight reuses the base's
@@ -866,40 +914,20 @@ void CheckMergeWeights(KernelKind kind) {
         }
     }
     // Specular-chain photons: the base's weight (the offset's is approximate: gvcm.h).
-    const Camera &cam = f.camera();
     for (int trial = 0; trial < 200000 && chains < 100; ++trial) {
         arena.reset();
-        f.sampler->startPixelSample({trial % kW, (trial / kW) % kH}, trial / (kW * kH));
-        ShiftSubpath L = TraceLight(f, 6, arena);
-        for (int m = 2; m < L.n; ++m) {
-            const PathVertex &ym = L.v[m];
-            CameraWiSample cws;
-            if (ym.delta() || !L.v[m - 1].delta() || !f.W.mergeable(ym, &L.b[m]) ||
-                !cam.sampleWi(AsInteraction(ym), Point2(0.5, 0.5), &cws))
-                continue;
-            Ray ray;
-            if (cam.generateRay({cws.pRaster, Point2(0.5, 0.5)}, &ray) == 0) continue;
-            ShiftSubpath z = ArenaSubpath(arena, 2);
-            z.n = GenerateCameraSubpath(*f.bc, ray, *f.sampler, arena, 2, z.v, z.b);
-            PrepareSubpath(*f.sc, &z);
-            if (z.n < 2 || Distance(z.v[1].p, ym.p) > 1e-4 || FirstConnectable(f, z) != 1) continue;
-            std::vector<LightVertex> recs;
-            VCMLightVertices(*f.bc, L.v, L.b, L.n, f.W, &recs);
-            const LightVertex *lv = nullptr;
-            for (const LightVertex &r : recs)
-                if (r.depth == m) lv = &r;
-            ASSERT_NE(lv, nullptr);
-            Float etaX;
-            const VCMCameraTerms tx = Terms(f, z, z.n, 1, arena, &etaX);
-            const Float wx = GVCMTestAccess::mergeWeight(tx, z.v[1], z.v[0], z.b[1], *lv, f.W);
-            double sens = 0;
-            const Densities X = Enumerate(f, Join(L, m, z, 2), &sens);
-            const double eX = std::abs(wx / X.weightVM(m) - 1);
-            EXPECT_LT(eX, Tolerance(sens)) << "chain photon: w_x " << wx << ", enumerated " << X.weightVM(m);
-            ex.add(eX);
-            ++chains;
-            break;
-        }
+        ChainPhoton p;
+        if (!FindChainPhoton(f, trial, arena, &p)) continue;
+        const ShiftSubpath &z = p.c.x;
+        Float etaX;
+        const VCMCameraTerms tx = Terms(f, z, z.n, 1, arena, &etaX);
+        const Float wx = GVCMTestAccess::mergeWeight(tx, z.v[1], z.v[0], z.b[1], p.lv, f.W);
+        double sens = 0;
+        const Densities X = Enumerate(f, Join(p.L, p.m, z, 2), &sens);
+        const double eX = std::abs(wx / X.weightVM(p.m) - 1);
+        EXPECT_LT(eX, Tolerance(sens)) << "chain photon: w_x " << wx << ", enumerated " << X.weightVM(p.m);
+        ex.add(eX);
+        ++chains;
     }
     EXPECT_GE(case1, 200);
     EXPECT_GE(case2, 200);
@@ -922,80 +950,52 @@ void CheckCase2Chains() {
     ErrStats ef, er;
     int byK[4] = {}, fromLight = 0, failed = 0, missed = 0;
     std::vector<double> errs, chainW;
-    const Camera &cam = f.camera();
     for (int trial = 0; trial < 200000 && ef.n < 200; ++trial) {
         arena.reset();
-        f.sampler->startPixelSample({trial % kW, (trial / kW) % kH}, trial / (kW * kH));
-        ShiftSubpath L = TraceLight(f, 6, arena);
-        for (int m = 2; m < L.n; ++m) {
-            const PathVertex &ym = L.v[m];
-            if (ym.delta() || !L.v[m - 1].delta() || !f.W.mergeable(ym, &L.b[m])) continue;
-            int d = m - 1;
-            bool ideal = true;
-            while (d > 0 && L.v[d].delta()) ideal = ideal && L.deltaSample[d--];
-            if (!ideal || L.v[d].isDeltaLight()) continue;
-            // The camera aimed at the photon: z_1 = y_m.
-            CameraWiSample cws;
-            if (!cam.sampleWi(AsInteraction(ym), Point2(0.5, 0.5), &cws)) continue;
-            CameraPath c;
-            c.cs = {cws.pRaster, Point2(0.5, 0.5)};
-            c.off = trial % 2 ? Point2i{1, 0} : Point2i{0, 1};
-            if (c.cs.pFilm.x < 1 || c.cs.pFilm.x > kW - 2 || c.cs.pFilm.y < 1 || c.cs.pFilm.y > kH - 2) continue;
-            Ray ray;
-            if (cam.generateRay(c.cs, &ray) == 0) continue;
-            c.x = ArenaSubpath(arena, 4);
-            c.x.n = GenerateCameraSubpath(*f.bc, ray, *f.sampler, arena, 4, c.x.v, c.x.b);
-            PrepareSubpath(*f.sc, &c.x);
-            if (c.x.n < 2 || Distance(c.x.v[1].p, ym.p) > 1e-4 || FirstConnectable(f, c.x) != 1) continue;
-            SubpathShiftStats st;
-            ShiftCameraSubpath(*f.sc, c.x, c.cs, c.off, arena, &c.sh, &st);
-            const ShiftSubpath &x = c.x, &y = c.sh.y;
-            if (c.sh.validUpTo < 1 || HasCorner(y, 2)) continue;
-            std::vector<LightVertex> recs;
-            VCMLightVertices(*f.bc, L.v, L.b, L.n, f.W, &recs);
-            const LightVertex *lv = nullptr;
-            for (const LightVertex &r : recs)
-                if (r.depth == m) lv = &r;
-            ASSERT_NE(lv, nullptr);
-            Float etaX, etaY;
-            Terms(f, x, x.n, 1, arena, &etaX);
-            const VCMCameraTerms ty = Terms(f, y, std::min(y.n, c.sh.validUpTo + 1), 1, arena, &etaY);
-            Offset o;
-            if (!GVCMTestAccess::case2(*f.g, L, m, c.sh, 1, *lv, &ty, etaX, arena, &o)) {
-                ++failed;  // the walk failed or was not reversible, occluded
-                continue;
-            }
-            Case2Ref ref;
-            if (!Case2Reference(f, arena, L, m, c, 1, &ref)) {
-                ++missed;
-                continue;
-            }
-            const Spectrum fx = x.v[1].throughput() * x.b[1].f(Vec3(x.v[1].wo), lv->wo, TransportMode::Radiance) *
-                                lv->throughput() / etaX;
-            const Spectrum ratio = SafeDiv(o.f, fx);
-            const double eF = RelErr(ratio, ref.ratio), eR = std::abs(o.rho / ref.rho - 1);
-            EXPECT_LT(eF, ref.tol) << "k " << m - 1 - d << " trial " << trial << ": o.f / f_x " << ratio.r << " "
-                                   << ratio.g << " " << ratio.b << ", reference " << ref.ratio.r << " "
-                                   << ref.ratio.g << " " << ref.ratio.b;
-            EXPECT_LT(eR, ref.tol) << "k " << m - 1 - d << " trial " << trial << ": rho " << o.rho << ", reference "
-                                   << ref.rho;
-            ef.add(eF);
-            er.add(eR);
-            errs.push_back(std::max(eF, eR));
-            // The offset's weight against the enumerated strategies of y_0 .. y_d,
-            // y'_{d+1} .. y'_{m-1}, z'_1, z'_0 (not asserted: gvcm's offset sums
-            // keep the base's own density of the chain's first vertex, gvcm.h).
-            FullPath yp;
-            for (int i = 0; i <= d; ++i) yp.v.push_back(L.v[i]), yp.b.push_back(&L.b[i]);
-            for (size_t i = 0; i < ref.offsetChain.v.size(); ++i)
-                yp.v.push_back(ref.offsetChain.v[i]), yp.b.push_back(&ref.offsetChain.b[i]);
-            for (int i = 1; i >= 0; --i) yp.v.push_back(y.v[i]), yp.b.push_back(&y.b[i]);
-            double sens = 0;
-            chainW.push_back(std::abs(o.w / Enumerate(f, yp, &sens).weightVM(m) - 1));
-            ++byK[std::min(m - 1 - d, 3)];
-            fromLight += d == 0;
-            break;  // one photon per light subpath
+        ChainPhoton p;
+        if (!FindChainPhoton(f, trial, arena, &p)) continue;
+        const CameraPath &c = p.c;
+        const ShiftSubpath &L = p.L, &x = c.x, &y = c.sh.y;
+        const int m = p.m, d = p.d;
+        const LightVertex *lv = &p.lv;
+        if (c.sh.validUpTo < 1 || HasCorner(y, 2)) continue;
+        Float etaX, etaY;
+        Terms(f, x, x.n, 1, arena, &etaX);
+        const VCMCameraTerms ty = Terms(f, y, std::min(y.n, c.sh.validUpTo + 1), 1, arena, &etaY);
+        Offset o;
+        if (!GVCMTestAccess::case2(*f.g, L, m, c.sh, 1, *lv, &ty, etaX, arena, &o)) {
+            ++failed;  // the walk failed or was not reversible, occluded
+            continue;
         }
+        Case2Ref ref;
+        if (!Case2Reference(f, arena, L, m, c, 1, &ref)) {
+            ++missed;
+            continue;
+        }
+        const Spectrum fx = x.v[1].throughput() * x.b[1].f(Vec3(x.v[1].wo), lv->wo, TransportMode::Radiance) *
+                            lv->throughput() / etaX;
+        const Spectrum ratio = SafeDiv(o.f, fx);
+        const double eF = RelErr(ratio, ref.ratio), eR = std::abs(o.rho / ref.rho - 1);
+        EXPECT_LT(eF, ref.tol) << "k " << m - 1 - d << " trial " << trial << ": o.f / f_x " << ratio.r << " "
+                               << ratio.g << " " << ratio.b << ", reference " << ref.ratio.r << " "
+                               << ref.ratio.g << " " << ref.ratio.b;
+        EXPECT_LT(eR, ref.tol) << "k " << m - 1 - d << " trial " << trial << ": rho " << o.rho << ", reference "
+                               << ref.rho;
+        ef.add(eF);
+        er.add(eR);
+        errs.push_back(std::max(eF, eR));
+        // The offset's weight against the enumerated strategies of y_0 .. y_d,
+        // y'_{d+1} .. y'_{m-1}, z'_1, z'_0 (not asserted: gvcm's offset sums
+        // keep the base's own density of the chain's first vertex, gvcm.h).
+        FullPath yp;
+        for (int i = 0; i <= d; ++i) yp.v.push_back(L.v[i]), yp.b.push_back(&L.b[i]);
+        for (size_t i = 0; i < ref.offsetChain.v.size(); ++i)
+            yp.v.push_back(ref.offsetChain.v[i]), yp.b.push_back(&ref.offsetChain.b[i]);
+        for (int i = 1; i >= 0; --i) yp.v.push_back(y.v[i]), yp.b.push_back(&y.b[i]);
+        double sens = 0;
+        chainW.push_back(std::abs(o.w / Enumerate(f, yp, &sens).weightVM(m) - 1));
+        ++byK[std::min(m - 1 - d, 3)];
+        fromLight += d == 0;
     }
     EXPECT_GE(ef.n, 200);
     EXPECT_GE(byK[1], 20) << "one-vertex chains (the mirror)";

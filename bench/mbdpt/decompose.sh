@@ -9,11 +9,15 @@
 #
 # usage: bench/mbdpt/decompose.sh SCENE.pbrt [SPP] [INTEGRATOR[:PARAM=VALUE,...] ...]
 #   default integrators: bdpt mbdpt mbdpt:matrixsampler=pixel
+# environment: GRADUS_BIN (directory of gradus and imgtool), GRADUS_ARGS (more gradus
+#   options for every render, e.g. "--resolution 640x360 --nthreads 2"), TMPDIR (images go
+#   to $TMPDIR/mbdpt-decompose)
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 BIN=${GRADUS_BIN:-$ROOT/build/bin}
 SCENE=$1
 SPP=${2:-16}
+read -ra EXTRA <<< "${GRADUS_ARGS:-}"
 shift $(( $# >= 2 ? 2 : $# ))
 INTS=("$@")
 [[ ${#INTS[@]} -gt 0 ]] || INTS=(bdpt mbdpt mbdpt:matrixsampler=pixel)
@@ -31,7 +35,7 @@ for spec in "${INTS[@]}"; do
   tag=$(echo "$spec" | tr ':=,' '___')
   for seed in 1 2; do
     "$BIN/gradus" "$SCENE" --integrator "$name" "${params[@]}" --param visualizeweights=true \
-      --spp "$SPP" --seed $seed --quiet --outfile "$OUT/$tag-$seed.exr"
+      --spp "$SPP" --seed $seed "${EXTRA[@]}" --quiet --outfile "$OUT/$tag-$seed.exr"
   done
   # Layers: <integrator>_s<S>_t<T>
   mapfile -t ls < <("$BIN/imgtool" info "$OUT/$tag-1.exr" | grep -oE "${name}_s[0-9]+_t[0-9]+" | sort -u)

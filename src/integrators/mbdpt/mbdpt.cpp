@@ -121,6 +121,19 @@ void MBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     }
 }
 
+// Connection records of every light vertex (common/connection_record.h).
+void MBDPTIntegrator::buildRecords(PassContext &ctx) {
+    const SubpathStore &light = paths_.light;
+    records_.resize(light.v.size());
+    ctx.parallelFor(int64_t(paths_.size()), 256, [&](int64_t i0, int64_t i1, Worker &) {
+        for (int64_t i = i0; i < i1; ++i) {
+            const uint32_t o = light.offset[size_t(i)];
+            BuildLightRecords(ctx_, SubpathView{light.path(size_t(i)), light.bsdfs(size_t(i)), light.count(size_t(i))},
+                              o, records_.data() + o);
+        }
+    });
+}
+
 // ---------------------------------------------------------------- stage 2: reordering
 void MBDPTIntegrator::reorder(PassContext &ctx) {
     const size_t N = paths_.size();
@@ -224,6 +237,7 @@ struct MBDPTIntegrator::TileConnector {
         }
         r.camView = SubpathView{c.cv, camB.data(), c.nC};
         r.ownLight = SubpathView{lv, lb, nL};
+        camSums.build(in.ctx_, r.camView);
         chooseConnections(r);
         runDiagonal(r);
         runMatrix(r);
@@ -328,9 +342,9 @@ struct MBDPTIntegrator::TileConnector {
 
     void choose(int s, int t, uint32_t q, Float scale) {
         pending.push_back({s, t, q, scale});
-        const char *zv = reinterpret_cast<const char *>(light.path(q));
-        for (size_t k = 0; k < size_t(s) * sizeof(PathVertex); k += 64) __builtin_prefetch(zv + k);
-        if (const BSDF *zb = light.bsdfs(q)) __builtin_prefetch(zb + s - 1);
+        const char *rec = reinterpret_cast<const char *>(&in.records_[light.offset[q] + uint32_t(s - 1)]);
+        __builtin_prefetch(rec);
+        __builtin_prefetch(rec + 64);
     }
 
     // The columns of row p in M_{s,t} (rank: the row's place in rows_[t]).
@@ -383,24 +397,30 @@ struct MBDPTIntegrator::TileConnector {
         for (int s = 2; s <= r.ownLight.n && s - 1 <= maxDepth; ++s) run(r, r.ownLight, s, 1, 1);
     }
 
-    // The chosen matrix connections.
+    // The chosen matrix connections, from the light endpoints' records
+    // (Stored records: the store's vertex and BSDF, rebuilt when not kept).
     void runMatrix(Row &r) {
-        // Second prefetch stage: the lobes behind the (now loaded) BSDFs.
-        for (const Pending &c : pending)
-            if (const BSDF *zb = light.bsdfs(c.q)) __builtin_prefetch(zb[c.s - 1].bxdf());
         for (const Pending &c : pending) {
-            const PathVertex *zv = light.path(c.q);
-            SubpathView lview = r.ownLight;
-            if (c.q != r.p) {
-                const BSDF *zb = light.bsdfs(c.q);
-                if (!zb) {
-                    colB[c.s - 1] = RebuildBSDF(in.ctx_, zv[c.s - 1], TransportMode::Importance, wk.arena);
-                    zb = colB.data();
+            const uint32_t k = light.offset[c.q] + uint32_t(c.s - 1);
+            const LightRecord &rec = in.records_[k];
+            const PathVertex *zv = nullptr;
+            const BSDF *zb = nullptr;
+            if (rec.kind == RecordKind::Stored) {
+                zv = &light.v[k];
+                if (!light.b.empty()) {
+                    zb = &light.b[k];
+                } else {
+                    colB[0] = RebuildBSDF(in.ctx_, *zv, TransportMode::Importance, wk.arena);
+                    zb = &colB[0];
                 }
-                lview = SubpathView{zv, zb, light.count(c.q)};
             }
-            run(r, lview, c.s, c.t, c.scale);
-            colB[c.s - 1] = BSDF();
+            ConnectSamples u;
+            u.rng = &r.mediaRng;
+            ConnectResult res;
+            ++conn;
+            const bool ok = ConnectRecord(in.ctx_, rec, zv, zb, camSums, r.camView, c.s, c.t, u, &res);
+            if (res.shadowRayTraced) ++shadow;
+            if (ok) record(r, c.s, c.t, res, c.scale);
         }
     }
 
@@ -414,6 +434,7 @@ struct MBDPTIntegrator::TileConnector {
     std::vector<BSDF> camB, lightB, colB;
     std::vector<PathVertex> camV;
     std::vector<Pending> pending;
+    CameraSums camSums;  // the row's camera side of the MIS sums
     Sampler &smp;
     const int tileW;
     uint64_t conn = 0, shadow = 0, bad = 0;
@@ -517,6 +538,7 @@ void MBDPTIntegrator::runPass(PassContext &ctx) {
     paths_.generate(ctx, ctx_, set_.maxDepth, !pixelMode, pixelMode ? kLightDim : -1, /*keepLightBSDFs=*/true);
     nCamVerts_ += paths_.camera.v.size();
     nLightVerts_ += paths_.light.v.size();
+    buildRecords(ctx);
     double a = Seconds();
     reorder(ctx);
     double b = Seconds();
@@ -532,7 +554,7 @@ void MBDPTIntegrator::runPass(PassContext &ctx) {
 void MBDPTIntegrator::endPass(PassContext &ctx) {
     ++iterations_;
     // Stored subpaths and reordering tables of this iteration, per sampled pixel.
-    size_t bytes = paths_.bytes();
+    size_t bytes = paths_.bytes() + records_.capacity() * sizeof(LightRecord);
     for (size_t k = 0; k < rows_.size(); ++k)
         bytes += rows_[k].capacity() * 4 + rank_[k].capacity() * 4 + cols_[k].capacity() * 4;
     bytesPerPixel_ = std::max(bytesPerPixel_, double(bytes) / std::max<size_t>(1, paths_.size()));

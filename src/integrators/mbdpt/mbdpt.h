@@ -18,7 +18,12 @@
 //      tracing) use the diagonal (Sec. 5.1, Fig. 5): plain BDPT. A row's
 //      connections are chosen first and their light subpaths prefetched (a
 //      random place in the image-wide store), then the diagonal strategies
-//      run while the loads complete.
+//      run while the loads complete. A matrix connection reads the light
+//      endpoint's compact record (common/connection_record.h: vertex,
+//      Lambertian parameters, the light side of the MIS sum; two cache
+//      lines) and the row's camera-side MIS sums, so it walks neither
+//      subpath; other materials and medium vertices fall back to the
+//      store's vertex and BSDF for f and the pdfs only.
 // matrixsampler "pixel" replaces the row order by the pixel sampler: a row's
 // participation and column coordinates are dimensions of the pixel's own
 // sample (fixed dimensions, so over the iterations a pixel's connections are
@@ -58,6 +63,7 @@
 
 #include "image/image.h"
 #include "integrators/common/bidir_family.h"
+#include "integrators/common/connection_record.h"
 #include "integrators/common/subpath_store.h"
 #include "render/integrator.h"
 #include "integrators/mbdpt/matrix.h"
@@ -96,6 +102,7 @@ class MBDPTIntegrator : public Integrator, public BidirFamily {
     double bytesPerPixel() const { return bytesPerPixel_; }
 
   private:
+    void buildRecords(PassContext &ctx);
     void reorder(PassContext &ctx);
     void connect(PassContext &ctx);
     struct TileConnector;  // stage 3 for one tile's camera subpaths (connect())
@@ -106,6 +113,7 @@ class MBDPTIntegrator : public Integrator, public BidirFamily {
 
     // Per-iteration data (reused across iterations).
     ImageSubpaths paths_;                      // one camera and one light subpath per sampled pixel
+    std::vector<LightRecord> records_;         // per light vertex (paths_.light.v): connection records
     bool pathsReady_ = false;
     std::vector<std::vector<uint32_t>> rows_;  // [t]: eligible camera subpaths in reordered order
     std::vector<std::vector<int32_t>> rank_;   // [t][p]: rank of camera subpath p in rows_[t], or -1

@@ -1,0 +1,126 @@
+// Connection records (common/connection_record.h): a matrix connection from a
+// light record and the row's camera sums gives ConnectBDPT's result (value
+// and O(n) MIS weight of MISWeight) on random pairs of independent subpaths:
+// Lambertian (compact), glossy and medium (stored) light endpoints, shading
+// normals, a delta light, both heuristics.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "bdpt/bdpt_test_util.h"
+#include "integrators/common/bidir.h"
+#include "integrators/common/connection_record.h"
+#include "job/job.h"
+#include "lights/light_sampler.h"
+#include "parser/scene_desc.h"
+
+namespace gradus {
+namespace {
+
+enum class Variant { Area, PointLight, Media };
+
+std::string RecordsScene(Variant v) {
+    using namespace bdpt_test;
+    std::string objects =
+        Sphere("Material \"mirror\"", 0.5, 0.35, 0.3, 0.3) +
+        Sphere("Material \"plastic\" \"rgb Kd\" [0.3 0.3 0.3] \"rgb Ks\" [0.5 0.5 0.5] \"float roughness\" [0.1]",
+               -0.4, 0.5, -0.2, 0.45) +
+        Sphere("Material \"matte\" \"rgb Kd\" [0.5 0.6 0.3]", 0.1, 0.3, -0.5, 0.25);
+    std::string camera = "Camera \"perspective\" \"float fov\" [40]", lights = CeilingLight(0.3, 10);
+    if (v == Variant::PointLight) lights += "LightSource \"point\" \"point from\" [0.3 1.2 0.2] \"rgb I\" [2 2 2]\n";
+    if (v == Variant::Media) {
+        camera = "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [0.1 0.1 0.1] "
+                 "\"rgb sigma_s\" [0.8 0.7 0.6] \"float g\" [0.4]\nMediumInterface \"\" \"fog\"\n" + camera;
+        lights = "MediumInterface \"fog\" \"fog\"\n" + lights;
+    }
+    return BoxScene("bdpt", lights, objects, 16, camera, /*floorNormals=*/true);
+}
+
+struct Counts {
+    int compared = 0, lambertian = 0, stored = 0, medium = 0, pointLight = 0, maxT = 0, maxS = 0;
+};
+
+void CheckRecords(Variant variant, MISHeuristic h) {
+    BuildOptions bo;
+    bo.quiet = true;
+    RenderJob job = BuildRenderJob(ParseString(RecordsScene(variant)), bo);
+    LightSampler ls(job.scene->lights, "power", FileLoc());
+    BidirContext ctx;
+    ctx.init(*job.scene, ls, h);
+    auto sampler = job.sampler->clone();
+    const bool media = variant == Variant::Media;
+    const int maxDepth = 7;
+    std::vector<PathVertex> cv(maxDepth + 2), lv(maxDepth + 1);
+    std::vector<BSDF> cb(maxDepth + 2), lb(maxDepth + 1);
+    std::vector<LightRecord> recs(maxDepth + 1);
+    CameraSums sums;
+    Arena arena;
+    Counts n;
+    for (int i = 0; i < 1200; ++i) {
+        arena.reset();
+        sampler->startPixelSample({i % 16, (i / 16) % 16}, i / 256);
+        CameraSample cs;
+        Point2 u = sampler->get2D();
+        cs.pFilm = Point2(i % 16 + u.x, (i / 16) % 16 + u.y);
+        cs.pLens = sampler->get2D();
+        Ray ray;
+        job.scene->camera->generateRay(cs, &ray);
+        RNG rng{uint64_t(i)};
+        RNG *mrng = media ? &rng : nullptr;
+        const int nC = GenerateCameraSubpath(ctx, ray, *sampler, arena, maxDepth + 2, cv.data(), cb.data(), mrng);
+        // The light subpath of another sample: a matrix connection pairs independent subpaths.
+        sampler->startPixelSample({(i * 7 + 3) % 16, (i * 5 + 1) % 16}, 100 + i);
+        const int nL = GenerateLightSubpath(ctx, *sampler, arena, maxDepth + 1, lv.data(), lb.data(), mrng);
+        const SubpathView cam{cv.data(), cb.data(), nC}, light{lv.data(), lb.data(), nL};
+        BuildLightRecords(ctx, light, 1000, recs.data());
+        sums.build(ctx, cam);
+        for (int t = 2; t <= nC; ++t)
+            for (int s = 2; s <= nL && s + t - 2 <= maxDepth; ++s) {
+                ConnectSamples cu;
+                cu.knownVisible = true;  // the same edge for both: no shadow ray
+                ConnectResult ref, got;
+                const bool okRef = ConnectBDPT(ctx, light, cam, s, t, cu, &ref);
+                const LightRecord &r = recs[s - 1];
+                if (r.kind == RecordKind::Stored) {
+                    EXPECT_EQ(r.vertex, 1000u + uint32_t(s - 1));
+                }
+                const bool okGot = ConnectRecord(ctx, r, &lv[s - 1], &lb[s - 1], sums, cam, s, t, cu, &got);
+                ASSERT_EQ(okRef, okGot) << "s=" << s << " t=" << t << " sample " << i;
+                if (!okRef) continue;
+                ++n.compared;
+                n.lambertian += r.kind == RecordKind::Lambertian;
+                n.stored += r.kind == RecordKind::Stored;
+                n.medium += lv[s - 1].inMedium() || cv[t - 1].inMedium();
+                n.pointLight += lv[0].isDeltaLight();
+                n.maxT = std::max(n.maxT, t);
+                n.maxS = std::max(n.maxS, s);
+                EXPECT_NEAR(got.weight, ref.weight, 1e-6 * ref.weight) << "s=" << s << " t=" << t << " sample " << i;
+                for (int c = 0; c < 3; ++c) {
+                    const double a = ref.unweighted[c], b = got.unweighted[c];
+                    EXPECT_NEAR(b, a, 1e-5 * std::abs(a) + 1e-30) << "channel " << c << " s=" << s << " t=" << t;
+                }
+            }
+    }
+    EXPECT_GE(n.compared, 3000);
+    EXPECT_GE(n.lambertian, 1000);
+    EXPECT_GE(n.stored, 100);  // the plastic sphere (and medium vertices)
+    EXPECT_GE(n.maxT, 6);
+    EXPECT_GE(n.maxS, 6);
+    if (media) {
+        EXPECT_GE(n.medium, 300);
+    }
+    if (variant == Variant::PointLight) {
+        EXPECT_GE(n.pointLight, 100);
+    }
+}
+
+TEST(MBDPTRecords, EqualConnectBDPTBalance) { CheckRecords(Variant::Area, MISHeuristic::Balance); }
+TEST(MBDPTRecords, EqualConnectBDPTPower) { CheckRecords(Variant::Area, MISHeuristic::Power); }
+TEST(MBDPTRecords, EqualConnectBDPTPointLight) { CheckRecords(Variant::PointLight, MISHeuristic::Balance); }
+TEST(MBDPTRecords, EqualConnectBDPTMedia) { CheckRecords(Variant::Media, MISHeuristic::Balance); }
+TEST(MBDPTRecords, EqualConnectBDPTMediaPower) { CheckRecords(Variant::Media, MISHeuristic::Power); }
+
+}  // namespace
+}  // namespace gradus

@@ -11,7 +11,9 @@
 #   default integrators: bdpt mbdpt mbdpt:matrixsampler=pixel
 # environment: GRADUS_BIN (directory of gradus and imgtool), GRADUS_ARGS (more gradus
 #   options for every render, e.g. "--resolution 640x360 --nthreads 2"), TMPDIR (images go
-#   to $TMPDIR/mbdpt-decompose)
+#   to $TMPDIR/mbdpt-decompose), STRATEGIES (only these strategies, e.g. "s1_t2 s2_t2": each
+#   layer's diff reads both images again, ~120 layers at maxdepth 13), REUSE=1 (keep renders
+#   already in the output directory)
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 BIN=${GRADUS_BIN:-$ROOT/build/bin}
@@ -24,6 +26,9 @@ INTS=("$@")
 OUT=${TMPDIR:-/tmp}/mbdpt-decompose
 mkdir -p "$OUT"
 declare -A VAR
+# The MSE from diff's JSON (its text output ends with RMSE as the last line ending in a
+# number: reading that line gave RMSE / 2 instead of the variance before 2026-12-05).
+mse_of() { python3 -c 'import json, sys; print(json.load(sys.stdin)["mse"])'; }
 LAYERS=()
 for spec in "${INTS[@]}"; do
   name=${spec%%:*}
@@ -34,6 +39,7 @@ for spec in "${INTS[@]}"; do
   fi
   tag=$(echo "$spec" | tr ':=,' '___')
   for seed in 1 2; do
+    [[ ${REUSE:-0} == 1 && -s $OUT/$tag-$seed.exr ]] && continue
     "$BIN/gradus" "$SCENE" --integrator "$name" "${params[@]}" --param visualizeweights=true \
       --spp "$SPP" --seed $seed "${EXTRA[@]}" --quiet --outfile "$OUT/$tag-$seed.exr"
   done
@@ -41,11 +47,12 @@ for spec in "${INTS[@]}"; do
   mapfile -t ls < <("$BIN/imgtool" info "$OUT/$tag-1.exr" | grep -oE "${name}_s[0-9]+_t[0-9]+" | sort -u)
   for l in "${ls[@]}"; do
     st=${l#${name}_}
-    mse=$("$BIN/imgtool" diff "$OUT/$tag-1.exr" "$OUT/$tag-2.exr" --layer "$l" --metric mse | grep -oE "[0-9.eE+-]+$" | tail -1)
+    [[ -z ${STRATEGIES:-} || " $STRATEGIES " == *" $st "* ]] || continue
+    mse=$("$BIN/imgtool" diff "$OUT/$tag-1.exr" "$OUT/$tag-2.exr" --layer "$l" --metric mse --json | mse_of)
     VAR[$tag,$st]=$(python3 -c "print('%.3e' % ($mse / 2))")
     [[ " ${LAYERS[*]} " == *" $st "* ]] || LAYERS+=("$st")
   done
-  mse=$("$BIN/imgtool" diff "$OUT/$tag-1.exr" "$OUT/$tag-2.exr" --metric mse | grep -oE "[0-9.eE+-]+$" | tail -1)
+  mse=$("$BIN/imgtool" diff "$OUT/$tag-1.exr" "$OUT/$tag-2.exr" --metric mse --json | mse_of)
   VAR[$tag,image]=$(python3 -c "print('%.3e' % ($mse / 2))")
 done
 printf "mean per-pixel variance at %s spp, %s\n\n| strategy |" "$SPP" "$(basename "$SCENE")"

@@ -31,13 +31,10 @@ void ImageSubpaths::generate(PassContext &ctx, const BidirContext &bidir, int ma
         tileArenas_.clear();
         for (int t = 0; t < ntiles; ++t) tileArenas_.push_back(std::make_unique<Arena>());
     }
-    struct TileOut {
-        std::vector<BSDF> lb;
-        std::vector<PathVertex> cv, lv;
-        std::vector<uint8_t> cc, lc;
-        std::vector<uint32_t> nc, nl;
-    };
-    std::vector<TileOut> out(ntiles);
+    // Per-tile output, kept across passes (its capacity: no page faults per pass).
+    std::vector<TileOut> &out = tileOut_;
+    out.resize(size_t(ntiles));
+    for (TileOut &o : out) o.clear();
     pFilm.resize(withCamera ? N : 0);
     camWeight.resize(withCamera ? N : 0);
     ctx.parallelFor(ntiles, 1, [&](int64_t begin, int64_t end, Worker &wk) {
@@ -53,9 +50,9 @@ void ImageSubpaths::generate(PassContext &ctx, const BidirContext &bidir, int ma
                 for (int x = tb.pMin.x; x < tb.pMax.x; ++x, ++p) {
                     Sampler &smp = *wk.sampler;
                     smp.startPixelSample({x, y}, sampleIndex);
+                    // camB and lightB are not reset: the walks assign the BSDF of every vertex they
+                    // create and only those are read (maxdepth + 2 BSDFs per subpath otherwise).
                     int nC = 0, nL = 0;
-                    for (auto &b : camB) b = BSDF();
-                    for (auto &b : lightB) b = BSDF();
                     // Media: the camera subpath's distances from the camera sample's RNG, the
                     // light subpath's from one keyed by (seed, pixel, sample).
                     RNG camRng, lightRng;

@@ -59,7 +59,17 @@ class ImageSubpaths {
     std::vector<float> camWeight;  // per camera subpath: camera ray weight (0: no subpath)
 
   private:
+    struct TileOut {
+        std::vector<BSDF> lb;
+        std::vector<PathVertex> cv, lv;
+        std::vector<uint8_t> cc, lc;
+        std::vector<uint32_t> nc, nl;
+        void clear() {
+            lb.clear(), cv.clear(), lv.clear(), cc.clear(), lc.clear(), nc.clear(), nl.clear();
+        }
+    };
     TileGrid tiles_;
+    std::vector<TileOut> tileOut_;  // generate()'s per-tile output
     std::vector<std::unique_ptr<Arena>> tileArenas_;  // kept light BSDFs' lobes, one arena per tile
     std::vector<uint32_t> tileStart_;  // first subpath of each tile
 };

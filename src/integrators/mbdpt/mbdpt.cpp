@@ -143,17 +143,42 @@ void MBDPTIntegrator::reorder(PassContext &ctx) {
     rank_.resize(maxLen + 1);
     cols_.resize(maxLen + 1);
     const Bounds3 &b = ctx.scene().bounds;
-    auto build = [&](const SubpathStore &store, int len, std::vector<uint32_t> &sorted) {
-        sorted.clear();
-        for (size_t i = 0; i < N; ++i)
-            if (store.eligible(i, len)) sorted.push_back(uint32_t(i));
+    // Sec. 4.2's d(y) of every prefix: running sums along each subpath, in
+    // DistanceMetric's order (the same doubles), so a key costs one load.
+    auto prefixDistances = [&](const SubpathStore &store, std::vector<double> &cum) {
+        cum.resize(store.v.size());
+        if (set_.reorder != Reorder::Distance) return;
+        ctx.parallelFor(int64_t(N), 1024, [&](int64_t i0, int64_t i1, Worker &) {
+            for (int64_t i = i0; i < i1; ++i) {
+                const PathVertex *v = store.path(size_t(i));
+                double *c = cum.data() + store.offset[size_t(i)];
+                double d = 0;
+                for (int k = 0; k < store.count(size_t(i)); ++k) {
+                    if (k > 0) d += DistanceSquared(v[k - 1].p, v[k].p);
+                    c[k] = d;
+                }
+            }
+        });
+    };
+    // The eligible subpaths of every length in index order (one pass over the vertices).
+    auto eligible = [&](const SubpathStore &store, std::vector<std::vector<uint32_t>> &lists) {
+        for (auto &l : lists) l.clear();
+        for (size_t i = 0; i < N; ++i) {
+            const int n = std::min(store.count(i), maxLen);
+            const uint8_t *c = store.connectible.data() + store.offset[i];
+            for (int len = 2; len <= n; ++len)
+                if (c[len - 1]) lists[size_t(len)].push_back(uint32_t(i));
+        }
+    };
+    auto build = [&](const SubpathStore &store, const std::vector<double> &cum, int len,
+                     std::vector<uint32_t> &sorted) {
         if (set_.reorder == Reorder::None || sorted.size() < 2) return;
-        std::vector<std::pair<uint64_t, uint32_t>> keys(sorted.size());
+        std::vector<std::pair<uint64_t, uint32_t>> &keys = sortKeys_;  // kept: no page faults per pass
+        keys.resize(sorted.size());
         ctx.parallelFor(int64_t(sorted.size()), 1024, [&](int64_t k0, int64_t k1, Worker &) {
             for (int64_t k = k0; k < k1; ++k) {
-                const PathVertex *v = store.path(sorted[k]);
-                uint64_t key = set_.reorder == Reorder::Distance ? DistanceKey(DistanceMetric(v, len))
-                                                                  : MortonKey(v[len - 1].p, b);
+                const size_t at = store.offset[sorted[k]] + size_t(len - 1);
+                uint64_t key = set_.reorder == Reorder::Distance ? DistanceKey(cum[at]) : MortonKey(store.v[at].p, b);
                 keys[k] = {key, sorted[k]};
             }
         });
@@ -162,10 +187,31 @@ void MBDPTIntegrator::reorder(PassContext &ctx) {
         for (size_t k = 0; k < keys.size(); ++k) sorted[k] = keys[k].second;
     };
     const bool rows = set_.sampling != MatrixSampling::Pixel;  // pixel: no stored camera subpaths
+    prefixDistances(paths_.light, lightDist_);
+    eligible(paths_.light, cols_);
+    if (rows) {
+        prefixDistances(paths_.camera, camDist_);
+        eligible(paths_.camera, rows_);
+    }
+    colRecords_.resize(maxLen + 1);
+    maxColumnS_ = 0;
+    const SubpathStore &light = paths_.light;
     for (int len = 2; len <= maxLen; ++len) {
-        build(paths_.light, len, cols_[len]);
+        build(light, lightDist_, len, cols_[len]);
+        if (!cols_[len].empty()) maxColumnS_ = len;
+        // The endpoints' records in column order: a chosen column is one load.
+        const std::vector<uint32_t> &cols = cols_[len];
+        std::vector<LightRecord> &recs = colRecords_[len];
+        recs.resize(cols.size());
+        ctx.parallelFor(int64_t(cols.size()), 4096, [&](int64_t k0, int64_t k1, Worker &) {
+            for (int64_t k = k0; k < k1; ++k) recs[k] = records_[light.offset[cols[k]] + uint32_t(len - 1)];
+        });
         if (!rows) continue;
-        build(paths_.camera, len, rows_[len]);
+        if (rows_[len].empty()) {  // no camera subpath this long: rank_[len] is not read
+            rank_[len].clear();
+            continue;
+        }
+        build(paths_.camera, camDist_, len, rows_[len]);
         rank_[len].assign(N, -1);
         const auto &r = rows_[len];
         for (size_t k = 0; k < r.size(); ++k) rank_[len][r[k]] = int32_t(k);
@@ -195,7 +241,7 @@ struct MBDPTIntegrator::TileConnector {
     // A chosen matrix connection: light subpath q for strategy (s, t).
     struct Pending {
         int s, t;
-        uint32_t q;
+        const LightRecord *rec;  // the light endpoint q_{s-1}
         Float scale;
     };
     // Row p's camera subpath: its film sample and vertices (BSDFs in camB).
@@ -260,8 +306,7 @@ struct MBDPTIntegrator::TileConnector {
         cs.pLens = smp.get2D();
         Ray ray;
         c.w = pass.scene.camera->generateRay(cs, &ray);
-        for (auto &b : camB) b = BSDF();
-        RNG camRng;
+        RNG camRng;  // camB not reset: the walk assigns the BSDF of every vertex it creates
         RNG *crng = pass.scene.features.media ? &(camRng = CameraSampleMediaRNG(smp, cs)) : nullptr;
         c.nC = c.w > 0 ? GenerateCameraSubpath(in.ctx_, ray, smp, wk.arena, pass.maxCam, camV.data(), camB.data(), crng)
                        : 0;
@@ -336,30 +381,32 @@ struct MBDPTIntegrator::TileConnector {
                 } else if ((rank = in.rank_[t][r.p]) < 0) {
                     continue;
                 }
-                for (int s = 2; s + t - 2 <= pass.maxDepth; ++s) chooseColumns(r, s, t, rank, uRow);
+                // Matrices without columns take no row (chooseColumns returns at once).
+                for (int s = 2; s + t - 2 <= pass.maxDepth && s <= in.maxColumnS_; ++s)
+                    chooseColumns(r, s, t, rank, uRow);
             }
     }
 
-    void choose(int s, int t, uint32_t q, Float scale) {
-        pending.push_back({s, t, q, scale});
-        const char *rec = reinterpret_cast<const char *>(&in.records_[light.offset[q] + uint32_t(s - 1)]);
+    void choose(int s, int t, const LightRecord *rec, Float scale) {
+        pending.push_back({s, t, rec, scale});
         __builtin_prefetch(rec);
-        __builtin_prefetch(rec + 64);
+        __builtin_prefetch(reinterpret_cast<const char *>(rec) + 64);
     }
 
     // The columns of row p in M_{s,t} (rank: the row's place in rows_[t]).
     void chooseColumns(Row &r, int s, int t, int32_t rank, Float uRow) {
-        const std::vector<uint32_t> &cols = in.cols_[s];
+        const std::vector<LightRecord> &cols = in.colRecords_[s];  // cols_[s]'s records
         const uint64_t Ls = cols.size();
         const size_t N = pass.N;
         const int m = pass.m, maxDepth = pass.maxDepth;
         if (Ls == 0) return;
         if (in.set_.combinatorial) {
-            for (uint32_t q : cols) pending.push_back({s, t, q, Float(1) / Float(N)});  // Eq. 6
+            for (const LightRecord &q : cols) pending.push_back({s, t, &q, Float(1) / Float(N)});  // Eq. 6
             return;
         }
         if (pass.diagonal) {
-            if (light.eligible(r.p, s)) pending.push_back({s, t, r.p, 1});  // Eq. 7
+            if (light.eligible(r.p, s))
+                pending.push_back({s, t, &in.records_[light.offset[r.p] + uint32_t(s - 1)], 1});  // Eq. 7
             return;
         }
         // Rows take part with probability rho (BDPT's rate L_s / L by
@@ -371,7 +418,7 @@ struct MBDPTIntegrator::TileConnector {
             // every iteration (stratified over them).
             if (uRow >= rho) return;
             smp.startPixelSample(r.c.pixel, pass.iteration, kMatrixDim + 1 + (s * (maxDepth + 1) + t) * m);
-            for (int c = 0; c < m; ++c) choose(s, t, cols[ColumnSampler::Column(smp.get1D(), Ls)], scale);
+            for (int c = 0; c < m; ++c) choose(s, t, &cols[ColumnSampler::Column(smp.get1D(), Ls)], scale);
             return;
         }
         // A randomly shifted 1D lattice over the row ranks chooses the rows.
@@ -379,7 +426,7 @@ struct MBDPTIntegrator::TileConnector {
         if (rho < 1 && !cs.participates(uint64_t(rank), rho)) return;
         for (int c = 0; c < m; ++c) {
             double y = cs.coordinate(uint64_t(rank), c, r.rng.uniform());
-            choose(s, t, cols[ColumnSampler::Column(y, Ls)], scale);
+            choose(s, t, &cols[ColumnSampler::Column(y, Ls)], scale);
         }
     }
 
@@ -401,11 +448,11 @@ struct MBDPTIntegrator::TileConnector {
     // (Stored records: the store's vertex and BSDF, rebuilt when not kept).
     void runMatrix(Row &r) {
         for (const Pending &c : pending) {
-            const uint32_t k = light.offset[c.q] + uint32_t(c.s - 1);
-            const LightRecord &rec = in.records_[k];
+            const LightRecord &rec = *c.rec;
             const PathVertex *zv = nullptr;
             const BSDF *zb = nullptr;
             if (rec.kind == RecordKind::Stored) {
+                const uint32_t k = rec.vertex;
                 zv = &light.v[k];
                 if (!light.b.empty()) {
                     zb = &light.b[k];
@@ -554,9 +601,11 @@ void MBDPTIntegrator::runPass(PassContext &ctx) {
 void MBDPTIntegrator::endPass(PassContext &ctx) {
     ++iterations_;
     // Stored subpaths and reordering tables of this iteration, per sampled pixel.
-    size_t bytes = paths_.bytes() + records_.capacity() * sizeof(LightRecord);
+    size_t bytes = paths_.bytes() + records_.capacity() * sizeof(LightRecord) +
+                   (lightDist_.capacity() + camDist_.capacity()) * sizeof(double);
     for (size_t k = 0; k < rows_.size(); ++k)
-        bytes += rows_[k].capacity() * 4 + rank_[k].capacity() * 4 + cols_[k].capacity() * 4;
+        bytes += rows_[k].capacity() * 4 + rank_[k].capacity() * 4 + cols_[k].capacity() * 4 +
+                 colRecords_[k].capacity() * sizeof(LightRecord);
     bytesPerPixel_ = std::max(bytesPerPixel_, double(bytes) / std::max<size_t>(1, paths_.size()));
 }
 

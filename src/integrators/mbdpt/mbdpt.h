@@ -118,6 +118,10 @@ class MBDPTIntegrator : public Integrator, public BidirFamily {
     std::vector<std::vector<uint32_t>> rows_;  // [t]: eligible camera subpaths in reordered order
     std::vector<std::vector<int32_t>> rank_;   // [t][p]: rank of camera subpath p in rows_[t], or -1
     std::vector<std::vector<uint32_t>> cols_;  // [s]: eligible light subpaths in reordered order
+    int maxColumnS_ = 0;                       // largest s with a column (0: none)
+    std::vector<std::vector<LightRecord>> colRecords_;  // [s]: records of cols_[s]'s endpoints, same order
+    std::vector<std::pair<uint64_t, uint32_t>> sortKeys_;  // reorder()'s sort keys
+    std::vector<double> lightDist_, camDist_;  // per stored vertex: d(y) of the prefix ending there (Sec. 4.2)
 
     Image matrixImage_;
     double bytesPerPixel_ = 0;

@@ -21,16 +21,20 @@ size_t ImageSubpaths::bytes() const {
 }
 
 void ImageSubpaths::generate(PassContext &ctx, const BidirContext &bidir, int maxDepth, bool withCamera,
-                             int lightDimension, bool keepLightBSDFs) {
+                             int lightDimension, bool keepLightBSDFs, bool keepCameraBSDFs) {
     const Scene &scene = ctx.scene();
     const int ntiles = tiles_.count();
     const size_t N = size();
     const int maxCam = maxDepth + 2, maxLight = maxDepth + 1;
     const int sampleIndex = ctx.firstSample();
-    if (keepLightBSDFs && tileArenas_.size() != size_t(ntiles)) {
-        tileArenas_.clear();
-        for (int t = 0; t < ntiles; ++t) tileArenas_.push_back(std::make_unique<Arena>());
-    }
+    auto makeArenas = [&](bool keep, std::vector<std::unique_ptr<Arena>> &arenas) {
+        if (!keep || arenas.size() == size_t(ntiles)) return;
+        arenas.clear();
+        for (int t = 0; t < ntiles; ++t) arenas.push_back(std::make_unique<Arena>());
+    };
+    keepCameraBSDFs = keepCameraBSDFs && withCamera;
+    makeArenas(keepLightBSDFs, tileArenas_);
+    makeArenas(keepCameraBSDFs, camTileArenas_);
     // Per-tile output, kept across passes (its capacity: no page faults per pass).
     std::vector<TileOut> &out = tileOut_;
     out.resize(size_t(ntiles));
@@ -45,6 +49,8 @@ void ImageSubpaths::generate(PassContext &ctx, const BidirContext &bidir, int ma
             const Bounds2i tb = tiles_.tile(int(ti));
             Arena *lightArena = keepLightBSDFs ? tileArenas_[ti].get() : &wk.arena;
             if (keepLightBSDFs) lightArena->reset();
+            Arena *camArena = keepCameraBSDFs ? camTileArenas_[ti].get() : &wk.arena;
+            if (keepCameraBSDFs) camArena->reset();
             uint32_t p = tileStart_[ti];
             for (int y = tb.pMin.y; y < tb.pMax.y; ++y)
                 for (int x = tb.pMin.x; x < tb.pMax.x; ++x, ++p) {
@@ -68,7 +74,7 @@ void ImageSubpaths::generate(PassContext &ctx, const BidirContext &bidir, int ma
                         Ray ray;
                         Float w = scene.camera->generateRay(cs, &ray);
                         if (w > 0)
-                            nC = GenerateCameraSubpath(bidir, ray, smp, wk.arena, maxCam, camV.data(), camB.data(),
+                            nC = GenerateCameraSubpath(bidir, ray, smp, *camArena, maxCam, camV.data(), camB.data(),
                                                        media ? &(camRng = CameraSampleMediaRNG(smp, cs)) : nullptr);
                         pFilm[p] = cs.pFilm;
                         camWeight[p] = float(w);
@@ -78,6 +84,7 @@ void ImageSubpaths::generate(PassContext &ctx, const BidirContext &bidir, int ma
                         nL = GenerateLightSubpath(bidir, smp, *lightArena, maxLight, lightV.data(), lightB.data(),
                                                   media ? &lightRng : nullptr);
                     for (int i = 0; i < nC; ++i) {
+                        if (keepCameraBSDFs) o.cb.push_back(camB[i]);
                         o.cv.push_back(camV[i]);
                         o.cc.push_back(camV[i].scatters() && IsConnectible(camV[i], &camB[i]));
                     }
@@ -97,7 +104,7 @@ void ImageSubpaths::generate(PassContext &ctx, const BidirContext &bidir, int ma
         std::vector<size_t> vstart(ntiles + 1, 0);
         for (int ti = 0; ti < ntiles; ++ti) vstart[ti + 1] = vstart[ti] + (cam ? out[ti].cv.size() : out[ti].lv.size());
         store.v.resize(vstart[ntiles]);
-        store.b.resize(!cam && keepLightBSDFs ? vstart[ntiles] : 0);
+        store.b.resize((cam ? keepCameraBSDFs : keepLightBSDFs) ? vstart[ntiles] : 0);
         store.connectible.resize(vstart[ntiles]);
         store.offset.resize(N + 1);
         store.offset[N] = uint32_t(vstart[ntiles]);
@@ -108,7 +115,8 @@ void ImageSubpaths::generate(PassContext &ctx, const BidirContext &bidir, int ma
                 const auto &cs = cam ? o.cc : o.lc;
                 const auto &ns = cam ? o.nc : o.nl;
                 std::copy(vs.begin(), vs.end(), store.v.begin() + vstart[ti]);
-                if (!store.b.empty()) std::copy(o.lb.begin(), o.lb.end(), store.b.begin() + vstart[ti]);
+                const auto &bs = cam ? o.cb : o.lb;
+                if (!store.b.empty()) std::copy(bs.begin(), bs.end(), store.b.begin() + vstart[ti]);
                 std::copy(cs.begin(), cs.end(), store.connectible.begin() + vstart[ti]);
                 uint32_t off = uint32_t(vstart[ti]);
                 for (size_t j = 0; j < ns.size(); ++j) {

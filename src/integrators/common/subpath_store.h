@@ -21,7 +21,7 @@ namespace gradus {
 // Subpaths of one pass, indexed in generation order.
 struct SubpathStore {
     std::vector<PathVertex> v;
-    std::vector<BSDF> b;               // per vertex, when kept (ImageSubpaths::generate keepLightBSDFs)
+    std::vector<BSDF> b;               // per vertex, when kept (ImageSubpaths::generate keep*BSDFs)
     std::vector<uint8_t> connectible;  // per vertex: a connection may end here (surface, non-specular)
     std::vector<uint32_t> offset;      // subpath i: v[offset[i], offset[i+1])
     int count(size_t i) const { return int(offset[i + 1] - offset[i]); }
@@ -45,9 +45,10 @@ class ImageSubpaths {
     // dimension of the pixel sample on (else it follows the camera subpath's).
     // keepLightBSDFs: the light vertices' BSDFs from generation are kept in
     // light.b (their lobes in per-tile arenas that live until the next call),
-    // so no connection rebuilds them.
+    // so no connection rebuilds them; keepCameraBSDFs: the same for the
+    // camera vertices (camera.b).
     void generate(PassContext &ctx, const BidirContext &bidir, int maxDepth, bool withCamera = true,
-                  int lightDimension = -1, bool keepLightBSDFs = false);
+                  int lightDimension = -1, bool keepLightBSDFs = false, bool keepCameraBSDFs = false);
 
     size_t size() const { return tileStart_.empty() ? 0 : tileStart_.back(); }
     uint32_t tileBegin(int tile) const { return tileStart_[tile]; }
@@ -60,17 +61,18 @@ class ImageSubpaths {
 
   private:
     struct TileOut {
-        std::vector<BSDF> lb;
+        std::vector<BSDF> lb, cb;
         std::vector<PathVertex> cv, lv;
         std::vector<uint8_t> cc, lc;
         std::vector<uint32_t> nc, nl;
         void clear() {
-            lb.clear(), cv.clear(), lv.clear(), cc.clear(), lc.clear(), nc.clear(), nl.clear();
+            lb.clear(), cb.clear(), cv.clear(), lv.clear(), cc.clear(), lc.clear(), nc.clear(), nl.clear();
         }
     };
     TileGrid tiles_;
     std::vector<TileOut> tileOut_;  // generate()'s per-tile output
-    std::vector<std::unique_ptr<Arena>> tileArenas_;  // kept light BSDFs' lobes, one arena per tile
+    std::vector<std::unique_ptr<Arena>> tileArenas_;     // kept light BSDFs' lobes, one arena per tile
+    std::vector<std::unique_ptr<Arena>> camTileArenas_;  // kept camera BSDFs' lobes
     std::vector<uint32_t> tileStart_;  // first subpath of each tile
 };
 

@@ -27,6 +27,10 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
+#include <new>
+
+#include <sys/mman.h>
 #include <sstream>
 
 #include "core/error.h"
@@ -121,15 +125,48 @@ void MBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     }
 }
 
-// Connection records of every light vertex (common/connection_record.h).
+void MBDPTIntegrator::RecordBuffer::reserve(size_t n) {
+    if (n <= cap_) return;
+    std::free(data_);
+    // 2 MB aligned, huge pages asked for before the first touch: a connection
+    // reads a random record of tens of MB, and with 4 KB pages each read was a
+    // TLB miss (perf: the prefetches stalled on the page walks).
+    constexpr size_t kHuge = size_t(2) << 20;
+    const size_t bytes = (std::max<size_t>(n, 1) * sizeof(LightRecord) + kHuge - 1) / kHuge * kHuge;
+    data_ = static_cast<LightRecord *>(std::aligned_alloc(kHuge, bytes));
+    if (!data_) throw std::bad_alloc();
+#ifdef MADV_HUGEPAGE
+    madvise(data_, bytes, MADV_HUGEPAGE);  // a hint: without transparent huge pages, 4 KB pages
+#endif
+    cap_ = bytes / sizeof(LightRecord);
+}
+
+// Connection records of the matrix columns (common/connection_record.h), in
+// column order: record k of strategy s is the endpoint of cols_[s][k].
 void MBDPTIntegrator::buildRecords(PassContext &ctx) {
     const SubpathStore &light = paths_.light;
-    records_.resize(light.v.size());
+    const int maxLen = set_.maxDepth;
+    colStart_.assign(size_t(maxLen) + 2, 0);
+    for (int s = 2; s <= maxLen; ++s) colStart_[size_t(s) + 1] = colStart_[size_t(s)] + cols_[size_t(s)].size();
+    for (int s = maxLen + 1; s < int(colStart_.size()); ++s) colStart_[size_t(s)] = colStart_[size_t(maxLen) + 1];
+    colRecords_.reserve(colStart_.back());
+    // Each eligible light vertex's place among its matrix's columns.
+    colPos_.assign(light.v.size(), UINT32_MAX);
+    for (int s = 2; s <= maxLen; ++s) {
+        const std::vector<uint32_t> &cols = cols_[size_t(s)];
+        for (size_t k = 0; k < cols.size(); ++k) colPos_[light.offset[cols[k]] + uint32_t(s - 1)] = uint32_t(k);
+    }
+    const int maxLight = maxLen + 1;
     ctx.parallelFor(int64_t(paths_.size()), 256, [&](int64_t i0, int64_t i1, Worker &) {
+        std::vector<LightRecord> recs(static_cast<size_t>(maxLight), LightRecord());
         for (int64_t i = i0; i < i1; ++i) {
             const uint32_t o = light.offset[size_t(i)];
-            BuildLightRecords(ctx_, SubpathView{light.path(size_t(i)), light.bsdfs(size_t(i)), light.count(size_t(i))},
-                              o, records_.data() + o);
+            const int n = light.count(size_t(i));
+            BuildLightRecords(ctx_, SubpathView{light.path(size_t(i)), light.bsdfs(size_t(i)), n}, o, recs.data());
+            for (int k = 1; k < n && k < maxLen; ++k)
+                if (colPos_[o + uint32_t(k)] != UINT32_MAX)
+                    new (colRecords_.data() + colStart_[size_t(k) + 1] + colPos_[o + uint32_t(k)])
+                        LightRecord(recs[size_t(k)]);
         }
     });
 }
@@ -193,19 +230,11 @@ void MBDPTIntegrator::reorder(PassContext &ctx) {
         prefixDistances(paths_.camera, camDist_);
         eligible(paths_.camera, rows_);
     }
-    colRecords_.resize(maxLen + 1);
     maxColumnS_ = 0;
     const SubpathStore &light = paths_.light;
     for (int len = 2; len <= maxLen; ++len) {
         build(light, lightDist_, len, cols_[len]);
         if (!cols_[len].empty()) maxColumnS_ = len;
-        // The endpoints' records in column order: a chosen column is one load.
-        const std::vector<uint32_t> &cols = cols_[len];
-        std::vector<LightRecord> &recs = colRecords_[len];
-        recs.resize(cols.size());
-        ctx.parallelFor(int64_t(cols.size()), 4096, [&](int64_t k0, int64_t k1, Worker &) {
-            for (int64_t k = k0; k < k1; ++k) recs[k] = records_[light.offset[cols[k]] + uint32_t(len - 1)];
-        });
         if (!rows) continue;
         if (rows_[len].empty()) {  // no camera subpath this long: rank_[len] is not read
             rank_[len].clear();
@@ -244,13 +273,14 @@ struct MBDPTIntegrator::TileConnector {
         const LightRecord *rec;  // the light endpoint q_{s-1}
         Float scale;
     };
-    // Row p's camera subpath: its film sample and vertices (BSDFs in camB).
+    // Row p's camera subpath: its film sample, vertices and BSDFs.
     struct CameraRow {
         Point2i pixel;
         Point2 pFilm;
         Float w;
         int nC;
         const PathVertex *cv;
+        const BSDF *cb;
     };
     // One row's connections in progress.
     struct Row {
@@ -281,10 +311,11 @@ struct MBDPTIntegrator::TileConnector {
             for (int i = 0; i < nL; ++i) lightB[i] = RebuildBSDF(in.ctx_, lv[i], TransportMode::Importance, wk.arena);
             lb = lightB.data();
         }
-        r.camView = SubpathView{c.cv, camB.data(), c.nC};
+        r.camView = SubpathView{c.cv, c.cb, c.nC};
         r.ownLight = SubpathView{lv, lb, nL};
         camSums.build(in.ctx_, r.camView);
         chooseConnections(r);
+        for (size_t i = 0; i < kPrefetchAhead; ++i) prefetch(i);  // loaded while the diagonal runs
         runDiagonal(r);
         runMatrix(r);
         r.rec.addRadiance(r.L * c.w);
@@ -312,6 +343,7 @@ struct MBDPTIntegrator::TileConnector {
                        : 0;
         c.pFilm = cs.pFilm;
         c.cv = camV.data();
+        c.cb = camB.data();
         return c;
     }
 
@@ -323,7 +355,11 @@ struct MBDPTIntegrator::TileConnector {
         c.w = in.paths_.camWeight[p];
         c.nC = cam.count(p);
         c.cv = cam.path(p);
-        for (int i = 0; i < c.nC; ++i) camB[i] = RebuildBSDF(in.ctx_, c.cv[i], TransportMode::Radiance, wk.arena);
+        c.cb = cam.bsdfs(p);  // kept from generation
+        if (!c.cb) {
+            for (int i = 0; i < c.nC; ++i) camB[i] = RebuildBSDF(in.ctx_, c.cv[i], TransportMode::Radiance, wk.arena);
+            c.cb = camB.data();
+        }
         return c;
     }
 
@@ -357,10 +393,10 @@ struct MBDPTIntegrator::TileConnector {
     }
 
     // Matrix strategies s >= 2, t >= 2: first choose every connection of
-    // this row and prefetch its light subpath (a random place in the
+    // this row (its light endpoint's record is a random place in the
     // image-wide store: each connection otherwise stalls on cache misses,
     // measured 1.45 s of 6.2 s at 4 spp on the Cornell box), then run the
-    // diagonal strategies while the loads complete, then the connections.
+    // diagonal strategies while the first records load, then the connections.
     // Pixel mode: one participation number per pixel sample,
     // B_p^{s,t} = [u < rho_s] (each B_p^{s,t} has probability rho_s, as
     // Eq. 4 needs; they are nested over s, as BDPT's own-subpath lengths
@@ -377,7 +413,7 @@ struct MBDPTIntegrator::TileConnector {
             for (int t = 2; t <= std::min(c.nC, pass.maxDepth); ++t) {
                 int32_t rank = -1;
                 if (pass.pixelMode) {
-                    if (!c.cv[t - 1].scatters() || !IsConnectible(c.cv[t - 1], &camB[t - 1])) continue;
+                    if (!c.cv[t - 1].scatters() || !IsConnectible(c.cv[t - 1], &c.cb[t - 1])) continue;
                 } else if ((rank = in.rank_[t][r.p]) < 0) {
                     continue;
                 }
@@ -387,26 +423,33 @@ struct MBDPTIntegrator::TileConnector {
             }
     }
 
-    void choose(int s, int t, const LightRecord *rec, Float scale) {
-        pending.push_back({s, t, rec, scale});
+    void choose(int s, int t, const LightRecord *rec, Float scale) { pending.push_back({s, t, rec, scale}); }
+
+    // Records are loaded kPrefetchAhead connections ahead: issuing all of a
+    // row's prefetches at once stalled on the full fill buffers (perf: the
+    // prefetch instructions took 5% of veach-ajar's time).
+    static constexpr size_t kPrefetchAhead = 6;
+    void prefetch(size_t i) const {
+        if (i >= pending.size()) return;
+        const char *rec = reinterpret_cast<const char *>(pending[i].rec);
         __builtin_prefetch(rec);
-        __builtin_prefetch(reinterpret_cast<const char *>(rec) + 64);
+        __builtin_prefetch(rec + 64);
     }
 
     // The columns of row p in M_{s,t} (rank: the row's place in rows_[t]).
     void chooseColumns(Row &r, int s, int t, int32_t rank, Float uRow) {
-        const std::vector<LightRecord> &cols = in.colRecords_[s];  // cols_[s]'s records
-        const uint64_t Ls = cols.size();
+        const LightRecord *cols = in.columns(s);  // the records of cols_[s]
+        const uint64_t Ls = in.cols_[s].size();
         const size_t N = pass.N;
         const int m = pass.m, maxDepth = pass.maxDepth;
         if (Ls == 0) return;
         if (in.set_.combinatorial) {
-            for (const LightRecord &q : cols) pending.push_back({s, t, &q, Float(1) / Float(N)});  // Eq. 6
+            for (uint64_t k = 0; k < Ls; ++k) pending.push_back({s, t, &cols[k], Float(1) / Float(N)});  // Eq. 6
             return;
         }
         if (pass.diagonal) {
             if (light.eligible(r.p, s))
-                pending.push_back({s, t, &in.records_[light.offset[r.p] + uint32_t(s - 1)], 1});  // Eq. 7
+                pending.push_back({s, t, &cols[in.colPos_[light.offset[r.p] + uint32_t(s - 1)]], 1});  // Eq. 7
             return;
         }
         // Rows take part with probability rho (BDPT's rate L_s / L by
@@ -447,7 +490,9 @@ struct MBDPTIntegrator::TileConnector {
     // The chosen matrix connections, from the light endpoints' records
     // (Stored records: the store's vertex and BSDF, rebuilt when not kept).
     void runMatrix(Row &r) {
-        for (const Pending &c : pending) {
+        for (size_t i = 0; i < pending.size(); ++i) {
+            prefetch(i + kPrefetchAhead);
+            const Pending &c = pending[i];
             const LightRecord &rec = *c.rec;
             const PathVertex *zv = nullptr;
             const BSDF *zb = nullptr;
@@ -582,12 +627,13 @@ void MBDPTIntegrator::runPass(PassContext &ctx) {
     if (!pathsReady_) paths_.init(ctx.tiles()), pathsReady_ = true;
     double start = Seconds();
     const bool pixelMode = set_.sampling == MatrixSampling::Pixel;
-    paths_.generate(ctx, ctx_, set_.maxDepth, !pixelMode, pixelMode ? kLightDim : -1, /*keepLightBSDFs=*/true);
+    paths_.generate(ctx, ctx_, set_.maxDepth, !pixelMode, pixelMode ? kLightDim : -1, /*keepLightBSDFs=*/true,
+                    /*keepCameraBSDFs=*/!pixelMode);
     nCamVerts_ += paths_.camera.v.size();
     nLightVerts_ += paths_.light.v.size();
-    buildRecords(ctx);
     double a = Seconds();
     reorder(ctx);
+    buildRecords(ctx);
     double b = Seconds();
     if (ctx.pass() == 0 && set_.visS >= 0) visualizeMatrix(ctx);
     double c = Seconds();
@@ -601,11 +647,10 @@ void MBDPTIntegrator::runPass(PassContext &ctx) {
 void MBDPTIntegrator::endPass(PassContext &ctx) {
     ++iterations_;
     // Stored subpaths and reordering tables of this iteration, per sampled pixel.
-    size_t bytes = paths_.bytes() + records_.capacity() * sizeof(LightRecord) +
+    size_t bytes = paths_.bytes() + colRecords_.capacity() * sizeof(LightRecord) + colPos_.capacity() * 4 +
                    (lightDist_.capacity() + camDist_.capacity()) * sizeof(double);
     for (size_t k = 0; k < rows_.size(); ++k)
-        bytes += rows_[k].capacity() * 4 + rank_[k].capacity() * 4 + cols_[k].capacity() * 4 +
-                 colRecords_[k].capacity() * sizeof(LightRecord);
+        bytes += rows_[k].capacity() * 4 + rank_[k].capacity() * 4 + cols_[k].capacity() * 4;
     bytesPerPixel_ = std::max(bytesPerPixel_, double(bytes) / std::max<size_t>(1, paths_.size()));
 }
 

@@ -16,9 +16,9 @@
 //      matrix M_{s,t} (Sec. 4.3). s = 0 (emitter hits), s = 1 (next-event
 //      estimation with a fresh light sample, as in pbrt-v3) and t = 1 (light
 //      tracing) use the diagonal (Sec. 5.1, Fig. 5): plain BDPT. A row's
-//      connections are chosen first and their light subpaths prefetched (a
-//      random place in the image-wide store), then the diagonal strategies
-//      run while the loads complete. A matrix connection reads the light
+//      connections are chosen first, the first few of their records
+//      prefetched (a random place in the image-wide store) while the diagonal
+//      strategies run, the others a few connections ahead. A matrix connection reads the light
 //      endpoint's compact record (common/connection_record.h: vertex,
 //      Lambertian parameters, the light side of the MIS sum; two cache
 //      lines) and the row's camera-side MIS sums, so it walks neither
@@ -58,6 +58,7 @@
 //                                   main RGB = reordered matrix, layer "unordered" = random order
 #pragma once
 #include <atomic>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -113,13 +114,31 @@ class MBDPTIntegrator : public Integrator, public BidirFamily {
 
     // Per-iteration data (reused across iterations).
     ImageSubpaths paths_;                      // one camera and one light subpath per sampled pixel
-    std::vector<LightRecord> records_;         // per light vertex (paths_.light.v): connection records
     bool pathsReady_ = false;
     std::vector<std::vector<uint32_t>> rows_;  // [t]: eligible camera subpaths in reordered order
     std::vector<std::vector<int32_t>> rank_;   // [t][p]: rank of camera subpath p in rows_[t], or -1
     std::vector<std::vector<uint32_t>> cols_;  // [s]: eligible light subpaths in reordered order
     int maxColumnS_ = 0;                       // largest s with a column (0: none)
-    std::vector<std::vector<LightRecord>> colRecords_;  // [s]: records of cols_[s]'s endpoints, same order
+    // Records of the columns' light endpoints (buildRecords), matrix after
+    // matrix: cols_[s][k]'s at colStart_[s] + k; colPos_: per light vertex its k (or UINT32_MAX).
+    class RecordBuffer {
+      public:
+        RecordBuffer() = default;
+        RecordBuffer(const RecordBuffer &) = delete;
+        RecordBuffer &operator=(const RecordBuffer &) = delete;
+        ~RecordBuffer() { std::free(data_); }
+        void reserve(size_t n);  // uninitialised (records are trivially copyable)
+        LightRecord *data() const { return data_; }
+        size_t capacity() const { return cap_; }
+
+      private:
+        LightRecord *data_ = nullptr;
+        size_t cap_ = 0;
+    };
+    RecordBuffer colRecords_;
+    std::vector<size_t> colStart_;
+    std::vector<uint32_t> colPos_;
+    const LightRecord *columns(int s) const { return colRecords_.data() + colStart_[size_t(s)]; }
     std::vector<std::pair<uint64_t, uint32_t>> sortKeys_;  // reorder()'s sort keys
     std::vector<double> lightDist_, camDist_;  // per stored vertex: d(y) of the prefix ending there (Sec. 4.2)
 

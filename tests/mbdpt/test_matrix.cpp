@@ -150,5 +150,29 @@ TEST(MBDPTMatrix, RowParticipation) {
     }
 }
 
+// The reordering's radix sort gives std::sort's total order on (key, index)
+// pairs in index order: many ties, keys sharing high bytes, doubles' bit patterns.
+TEST(MBDPTMatrix, RadixSortEqualsStdSort) {
+    RNG rng(7);
+    for (int trial = 0; trial < 40; ++trial) {
+        const size_t n = 1 + size_t(rng.uniform() * 5000);
+        std::vector<std::pair<uint64_t, uint32_t>> a(n), tmp;
+        for (size_t i = 0; i < n; ++i) {
+            uint64_t key;
+            switch (trial % 4) {
+            case 0: key = uint64_t(rng.uniform() * 16); break;                      // few distinct keys
+            case 1: key = DistanceKey(rng.uniform() * 100); break;                  // sort keys of d(y)
+            case 2: key = 0x3ff0000000000000ULL | uint64_t(rng.uniform() * 300); break;  // shared high bytes
+            default: key = uint64_t(rng.uniform() * 18446744073709549568.0); break;
+            }
+            a[i] = {key, uint32_t(i)};
+        }
+        std::vector<std::pair<uint64_t, uint32_t>> ref = a;
+        std::sort(ref.begin(), ref.end());
+        RadixSortKeys(a, tmp);
+        ASSERT_EQ(a, ref) << "trial " << trial;
+    }
+}
+
 }  // namespace
 }  // namespace gradus::mbdpt

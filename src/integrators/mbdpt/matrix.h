@@ -8,6 +8,8 @@
 #include <cstdint>
 #include <cstring>
 #include <numeric>
+#include <utility>
+#include <vector>
 
 #include "core/geometry.h"
 #include "integrators/common/path_vertex.h"
@@ -60,6 +62,32 @@ inline uint64_t MortonKey(const Point3 &p, const Bounds3 &b) {
         c[a] = uint64_t(f * double((1 << 21) - 1));
     }
     return (SpreadBits3(c[0]) << 2) | (SpreadBits3(c[1]) << 1) | SpreadBits3(c[2]);
+}
+
+// Sorts (key, index) pairs by key, ties in input order: with the input in
+// increasing index order this is the total order of std::sort on the pairs
+// (the reordering's), as an LSD radix sort on the key's bytes (a stable
+// counting sort per byte; bytes equal in every key are skipped). tmp: scratch.
+inline void RadixSortKeys(std::vector<std::pair<uint64_t, uint32_t>> &a,
+                          std::vector<std::pair<uint64_t, uint32_t>> &tmp) {
+    const size_t n = a.size();
+    if (n < 2) return;
+    uint32_t count[8][256] = {};
+    for (const auto &e : a)
+        for (int d = 0; d < 8; ++d) ++count[d][(e.first >> (8 * d)) & 0xff];
+    tmp.resize(n);
+    for (int d = 0; d < 8; ++d) {
+        uint32_t *c = count[d];
+        if (c[(a[0].first >> (8 * d)) & 0xff] == n) continue;  // every key has this byte
+        uint32_t sum = 0;
+        for (int b = 0; b < 256; ++b) {
+            const uint32_t k = c[b];
+            c[b] = sum;
+            sum += k;
+        }
+        for (const auto &e : a) tmp[c[(e.first >> (8 * d)) & 0xff]++] = e;
+        a.swap(tmp);
+    }
 }
 
 // Generator g of the rank-1 lattice {(k/K, k g / K mod 1)}: coprime with K and

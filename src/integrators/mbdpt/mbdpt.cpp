@@ -207,22 +207,6 @@ void MBDPTIntegrator::reorder(PassContext &ctx) {
                 if (c[len - 1]) lists[size_t(len)].push_back(uint32_t(i));
         }
     };
-    auto build = [&](const SubpathStore &store, const std::vector<double> &cum, int len,
-                     std::vector<uint32_t> &sorted) {
-        if (set_.reorder == Reorder::None || sorted.size() < 2) return;
-        std::vector<std::pair<uint64_t, uint32_t>> &keys = sortKeys_;  // kept: no page faults per pass
-        keys.resize(sorted.size());
-        ctx.parallelFor(int64_t(sorted.size()), 1024, [&](int64_t k0, int64_t k1, Worker &) {
-            for (int64_t k = k0; k < k1; ++k) {
-                const size_t at = store.offset[sorted[k]] + size_t(len - 1);
-                uint64_t key = set_.reorder == Reorder::Distance ? DistanceKey(cum[at]) : MortonKey(store.v[at].p, b);
-                keys[k] = {key, sorted[k]};
-            }
-        });
-        // Ties broken by index: a total order, so the result is thread-count independent.
-        ParallelSort(keys.begin(), keys.end());
-        for (size_t k = 0; k < keys.size(); ++k) sorted[k] = keys[k].second;
-    };
     const bool rows = set_.sampling != MatrixSampling::Pixel;  // pixel: no stored camera subpaths
     prefixDistances(paths_.light, lightDist_);
     eligible(paths_.light, cols_);
@@ -230,17 +214,46 @@ void MBDPTIntegrator::reorder(PassContext &ctx) {
         prefixDistances(paths_.camera, camDist_);
         eligible(paths_.camera, rows_);
     }
+    // One sort per matrix side and length, the sorts in parallel; ties broken
+    // by index (the lists are in index order, the sort is stable): a total
+    // order, so the result is thread-count independent.
+    struct SortJob {
+        const SubpathStore *store;
+        const std::vector<double> *cum;
+        int len;
+        std::vector<uint32_t> *sorted;
+    };
+    std::vector<SortJob> jobs;
+    for (int len = 2; len <= maxLen && set_.reorder != Reorder::None; ++len) {
+        if (cols_[len].size() >= 2) jobs.push_back({&paths_.light, &lightDist_, len, &cols_[len]});
+        if (rows && rows_[len].size() >= 2) jobs.push_back({&paths_.camera, &camDist_, len, &rows_[len]});
+    }
+    if (sortBufs_.size() < jobs.size()) sortBufs_.resize(jobs.size());  // kept: no page faults per pass
+    ctx.parallelFor(int64_t(jobs.size()), 1, [&](int64_t j0, int64_t j1, Worker &) {
+        for (int64_t j = j0; j < j1; ++j) {
+            const SortJob &job = jobs[size_t(j)];
+            const SubpathStore &store = *job.store;
+            std::vector<uint32_t> &sorted = *job.sorted;
+            auto &keys = sortBufs_[size_t(j)].first;
+            keys.resize(sorted.size());
+            for (size_t k = 0; k < sorted.size(); ++k) {
+                const size_t at = store.offset[sorted[k]] + size_t(job.len - 1);
+                const uint64_t key = set_.reorder == Reorder::Distance ? DistanceKey((*job.cum)[at])
+                                                                       : MortonKey(store.v[at].p, b);
+                keys[k] = {key, sorted[k]};
+            }
+            RadixSortKeys(keys, sortBufs_[size_t(j)].second);
+            for (size_t k = 0; k < keys.size(); ++k) sorted[k] = keys[k].second;
+        }
+    });
     maxColumnS_ = 0;
-    const SubpathStore &light = paths_.light;
     for (int len = 2; len <= maxLen; ++len) {
-        build(light, lightDist_, len, cols_[len]);
         if (!cols_[len].empty()) maxColumnS_ = len;
         if (!rows) continue;
         if (rows_[len].empty()) {  // no camera subpath this long: rank_[len] is not read
             rank_[len].clear();
             continue;
         }
-        build(paths_.camera, camDist_, len, rows_[len]);
         rank_[len].assign(N, -1);
         const auto &r = rows_[len];
         for (size_t k = 0; k < r.size(); ++k) rank_[len][r[k]] = int32_t(k);

@@ -139,7 +139,9 @@ class MBDPTIntegrator : public Integrator, public BidirFamily {
     std::vector<size_t> colStart_;
     std::vector<uint32_t> colPos_;
     const LightRecord *columns(int s) const { return colRecords_.data() + colStart_[size_t(s)]; }
-    std::vector<std::pair<uint64_t, uint32_t>> sortKeys_;  // reorder()'s sort keys
+    // reorder()'s sort keys and scratch, one pair per sort
+    std::vector<std::pair<std::vector<std::pair<uint64_t, uint32_t>>, std::vector<std::pair<uint64_t, uint32_t>>>>
+        sortBufs_;
     std::vector<double> lightDist_, camDist_;  // per stored vertex: d(y) of the prefix ending there (Sec. 4.2)
 
     Image matrixImage_;

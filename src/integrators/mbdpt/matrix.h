@@ -148,7 +148,8 @@ struct ColumnSampler {
             // Rotation by shift = (a + b) / K, a integer, b in [0, 1): stratum (k g + a) mod K, offset b.
             uint64_t k = rank * uint64_t(m) + uint64_t(c);
             double sk = shift * double(K), a = std::floor(sk);
-            y = (double(((k % K) * g + uint64_t(a)) % K) + (sk - a)) / double(K);
+            const uint64_t kk = k < K ? k : k % K;  // k < K for every row rank: one division saved
+            y = (double((kk * g + uint64_t(a)) % K) + (sk - a)) / double(K);
             break;
         }
         case MatrixSampling::LHS: {

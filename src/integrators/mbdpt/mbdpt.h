@@ -4,9 +4,9 @@
 //
 // One iteration (Algorithm 1) = one sample per pixel:
 //   1. generation: one camera subpath per sampled pixel and as many light
-//      subpaths (N = L), stored compactly (camera vertices only, their BSDFs
-//      rebuilt once per row with RebuildBSDF; light vertices with the BSDFs
-//      of their generation, kept in per-tile arenas for the iteration);
+//      subpaths (N = L), stored with the BSDFs of their generation (lobes
+//      kept in per-tile arenas for the iteration), and a connection record
+//      per eligible light vertex (after stage 2, in column order);
 //   2. reordering: for every camera prefix length t and light prefix length
 //      s the eligible subpaths (enough vertices, connectible end vertex) are
 //      sorted by the Sec. 4.2 metric (a parallel sort with a total order);

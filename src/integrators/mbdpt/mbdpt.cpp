@@ -250,7 +250,7 @@ void MBDPTIntegrator::reorder(PassContext &ctx) {
     for (int len = 2; len <= maxLen; ++len) {
         if (!cols_[len].empty()) maxColumnS_ = len;
         if (!rows) continue;
-        if (rows_[len].empty()) {  // no camera subpath this long: rank_[len] is not read
+        if (rows_[len].empty()) {  // no eligible camera subpath this long: rows skip it
             rank_[len].clear();
             continue;
         }
@@ -427,7 +427,9 @@ struct MBDPTIntegrator::TileConnector {
                 int32_t rank = -1;
                 if (pass.pixelMode) {
                     if (!c.cv[t - 1].scatters() || !IsConnectible(c.cv[t - 1], &c.cb[t - 1])) continue;
-                } else if ((rank = in.rank_[t][r.p]) < 0) {
+                } else if (in.rank_[t].empty() || (rank = in.rank_[t][r.p]) < 0) {
+                    // (empty: no eligible camera subpath of this length; this one's
+                    // vertex t - 1 cannot connect)
                     continue;
                 }
                 // Matrices without columns take no row (chooseColumns returns at once).

@@ -29,18 +29,24 @@ Float AdjointCorrection(const Vec3 &ng, const Vec3 &ns, const Vec3 &wo, const Ve
 
 // The record's vertex as a PathVertex (what the camera-side functions read:
 // position, normals, wo, throughput, type, flags, medium).
+// The fields a record shares with its vertex, copied either way.
+template <class From, class To>
+void CopySharedFields(const From &f, To &t) {
+    t.p = f.p;
+    t.ng = f.ng;
+    t.ns = f.ns;
+    t.wo = f.wo;
+    t.beta[0] = f.beta[0], t.beta[1] = f.beta[1], t.beta[2] = f.beta[2];
+    t.betaExp = f.betaExp;
+    t.type = f.type;
+    t.flags = f.flags;
+    t.geomId = f.geomId;
+    t.mediumIndex = f.mediumIndex;
+}
+
 PathVertex AsVertex(const LightRecord &r) {
     PathVertex v;
-    v.p = r.p;
-    v.ng = r.ng;
-    v.ns = r.ns;
-    v.wo = r.wo;
-    v.beta[0] = r.beta[0], v.beta[1] = r.beta[1], v.beta[2] = r.beta[2];
-    v.betaExp = r.betaExp;
-    v.type = r.type;
-    v.flags = r.flags;
-    v.geomId = r.geomId;
-    v.mediumIndex = r.mediumIndex;
+    CopySharedFields(r, v);
     return v;
 }
 
@@ -58,16 +64,7 @@ void BuildLightRecords(const BidirContext &ctx, SubpathView light, uint32_t firs
         const bool in = end && !v.delta();
         LightRecord &r = rec[i];
         r = LightRecord();
-        r.p = v.p;
-        r.ng = v.ng;
-        r.ns = v.ns;
-        r.wo = v.wo;
-        r.beta[0] = v.beta[0], r.beta[1] = v.beta[1], r.beta[2] = v.beta[2];
-        r.betaExp = v.betaExp;
-        r.type = v.type;
-        r.flags = v.flags;
-        r.geomId = v.geomId;
-        r.mediumIndex = v.mediumIndex;
+        CopySharedFields(v, r);
         r.fwd = Remap(v.pdfFwd);
         r.endAllowed = end;
         r.kind = RecordKind::None;

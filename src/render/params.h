@@ -124,12 +124,16 @@ class ParamTable {
     // Runs after the last added entry is read, with that parameter's location
     // (the directive's if absent): derived fields, checks against earlier entries.
     ParamTable &then(std::function<void(S &, const FileLoc &)> fn) {
+        return thenWithParams([fn = std::move(fn)](S &s, const ParamSet &, const FileLoc &loc) { fn(s, loc); });
+    }
+    // As then(), with the parameter set (to tell given parameters from defaults).
+    ParamTable &thenWithParams(std::function<void(S &, const ParamSet &, const FileLoc &)> fn) {
         GRADUS_CHECK(!entries_.empty());
         Entry &e = entries_.back();
         e.read = [prev = e.read, fn = std::move(fn), name = e.info.name](const ParamSet &ps, const FileLoc &loc,
                                                                          S &s) {
             prev(ps, loc, s);
-            fn(s, ps.locOf(name, loc));
+            fn(s, ps, ps.locOf(name, loc));
         };
         return *this;
     }

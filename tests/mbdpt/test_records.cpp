@@ -2,7 +2,8 @@
 // light record and the row's camera sums gives ConnectBDPT's result (value
 // and O(n) MIS weight of MISWeight) on random pairs of independent subpaths:
 // Lambertian (compact), glossy and medium (stored) light endpoints, shading
-// normals, a delta light, both heuristics.
+// normals, a delta light, both heuristics; and the next-event connections
+// through the matrix (ConnectLightOrigin).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -115,6 +116,100 @@ void CheckRecords(Variant variant, MISHeuristic h) {
         EXPECT_GE(n.pointLight, 100);
     }
 }
+
+// Next-event estimation through the matrix (ConnectLightOrigin): camera
+// vertex t - 1 connected to the emitter vertex of another sample's light
+// subpath. Value against the estimator written out here (Veach 1997 Eq. 10.8:
+// beta_t f_t Le G / (pmf p_pos), Le and the densities from the light itself,
+// not from the stored vertex), weight against MISWeight's O(n) sums with the
+// light subpath cut to its origin.
+void CheckOrigins(Variant variant, MISHeuristic h) {
+    BuildOptions bo;
+    bo.quiet = true;
+    RenderJob job = BuildRenderJob(ParseString(RecordsScene(variant)), bo);
+    LightSampler ls(job.scene->lights, "power", FileLoc());
+    BidirContext ctx;
+    ctx.init(*job.scene, ls, h);
+    auto sampler = job.sampler->clone();
+    const bool media = variant == Variant::Media;
+    const int maxDepth = 7;
+    std::vector<PathVertex> cv(maxDepth + 2), lv(maxDepth + 1);
+    std::vector<BSDF> cb(maxDepth + 2), lb(maxDepth + 1);
+    CameraSums sums;
+    Arena arena;
+    int compared = 0, point = 0, area = 0, medium = 0, maxT = 0;
+    for (int i = 0; i < 1200; ++i) {
+        arena.reset();
+        sampler->startPixelSample({i % 16, (i / 16) % 16}, i / 256);
+        CameraSample cs;
+        Point2 u = sampler->get2D();
+        cs.pFilm = Point2(i % 16 + u.x, (i / 16) % 16 + u.y);
+        cs.pLens = sampler->get2D();
+        Ray ray;
+        job.scene->camera->generateRay(cs, &ray);
+        RNG rng{uint64_t(i)};
+        RNG *mrng = media ? &rng : nullptr;
+        const int nC = GenerateCameraSubpath(ctx, ray, *sampler, arena, maxDepth + 2, cv.data(), cb.data(), mrng);
+        sampler->startPixelSample({(i * 7 + 3) % 16, (i * 5 + 1) % 16}, 100 + i);
+        const int nL = GenerateLightSubpath(ctx, *sampler, arena, maxDepth + 1, lv.data(), lb.data(), mrng);
+        if (nL < 1) continue;
+        const PathVertex &y0 = lv[0];
+        ASSERT_TRUE(IsMatrixLightOrigin(y0));
+        const SubpathView cam{cv.data(), cb.data(), nC}, origin{lv.data(), lb.data(), 1};
+        sums.build(ctx, cam);
+        for (int t = 2; t <= nC && t - 1 <= maxDepth; ++t) {
+            ConnectSamples cu;
+            cu.knownVisible = true;
+            ConnectResult got;
+            const bool ok = ConnectLightOrigin(ctx, y0, sums, cam, t, cu, &got);
+            // The reference value.
+            const PathVertex &pt = cv[t - 1];
+            Spectrum ref(0);
+            if (pt.type != VertexType::Light && pt.scatters() && IsConnectible(pt, &cb[t - 1]) &&
+                EdgeConnectible(ctx, y0, pt)) {
+                Vec3 d = y0.p - pt.p;  // towards the light
+                const Float d2 = d.lengthSquared();
+                d = d / std::sqrt(d2);
+                const Float pmf = ls.pmf(y0.light);
+                Spectrum Le;
+                if (y0.isDeltaLight()) {
+                    Le = Spectrum(2) / (d2 * pmf);  // the scene's point light: I = 2
+                } else {
+                    Float pdfPos, pdfDir;
+                    y0.light->pdfLe(Ray(y0.p, -d), y0.ng, &pdfPos, &pdfDir);
+                    Le = static_cast<const AreaLight *>(y0.light)->L(Interaction(y0.p, y0.ng, Vec3(0, 0, 0)), -d) *
+                         (AbsDot(Vec3(y0.ng), d) / (d2 * pmf * pdfPos));
+                }
+                ref = pt.throughput() * EvalBSDF(pt, cb[t - 1], y0, TransportMode::Radiance) * Le * ScatterCos(pt, d);
+            }
+            const Float wRef = MISWeight(ctx, origin, cam, 1, t, nullptr);
+            ASSERT_EQ(ok, !ref.isBlack() && wRef > 0) << "t=" << t << " sample " << i;
+            if (!ok) continue;
+            ++compared;
+            point += y0.isDeltaLight();
+            area += !y0.isDeltaLight();
+            medium += pt.inMedium();
+            maxT = std::max(maxT, t);
+            EXPECT_NEAR(got.weight, wRef, 1e-6 * wRef) << "t=" << t << " sample " << i;
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(got.unweighted[c], ref[c], 1e-5 * std::abs(ref[c]) + 1e-30) << "channel " << c << " t=" << t;
+        }
+    }
+    EXPECT_GE(compared, 1500);
+    EXPECT_GE(area, 500);
+    EXPECT_GE(maxT, 6);
+    if (variant == Variant::PointLight) {
+        EXPECT_GE(point, 300);
+    }
+    if (media) {
+        EXPECT_GE(medium, 300);
+    }
+}
+
+TEST(MBDPTRecords, LightOriginBalance) { CheckOrigins(Variant::Area, MISHeuristic::Balance); }
+TEST(MBDPTRecords, LightOriginPower) { CheckOrigins(Variant::Area, MISHeuristic::Power); }
+TEST(MBDPTRecords, LightOriginPointLight) { CheckOrigins(Variant::PointLight, MISHeuristic::Balance); }
+TEST(MBDPTRecords, LightOriginMedia) { CheckOrigins(Variant::Media, MISHeuristic::Balance); }
 
 TEST(MBDPTRecords, EqualConnectBDPTBalance) { CheckRecords(Variant::Area, MISHeuristic::Balance); }
 TEST(MBDPTRecords, EqualConnectBDPTPower) { CheckRecords(Variant::Area, MISHeuristic::Power); }

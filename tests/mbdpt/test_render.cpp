@@ -115,7 +115,10 @@ TEST(MBDPTRender, ParameterErrors) {
     for (std::string p : {"\"string reorder\" \"hilbert\"", "\"integer connections\" 0",
                           "\"string matrixsampler\" \"sobol2\"", "\"string visualizematrix\" \"1,3\"",
                           "\"string visualizematrix\" \"2,x\"", "\"string matrixrows\" \"some\"",
-                          "\"string visualizematrix\" \"2,2\" \"string matrixsampler\" \"pixel\""}) {
+                          "\"string visualizematrix\" \"2,2\" \"string matrixsampler\" \"pixel\"",
+                          "\"string configuration\" \"papers\"",
+                          "\"string configuration\" \"paper\" \"integer rrdepth\" [3]",
+                          "\"string configuration\" \"paper\" \"bool nexteventmatrix\" [false]"}) {
         std::string name = p.substr(p.find(' ') + 2);
         name = name.substr(0, name.find('"'));
         try {

@@ -18,5 +18,12 @@ TEST(MBDPTUnbiased, PixelSampler) {
     ExpectAgreement("\"string matrixsampler\" \"pixel\" \"string matrixrows\" \"all\"", 1900);
 }
 
+// Next-event estimation through the matrix (M_{1,t}), with the strategy
+// images; and the paper's configuration (all rows, no roulette, M_{1,t}).
+TEST(MBDPTUnbiased, NextEventThroughTheMatrix) {
+    ExpectAgreement("\"bool nexteventmatrix\" [true]", 2100, true);
+    ExpectAgreement("\"string configuration\" \"paper\"", 2200);
+}
+
 }  // namespace
 }  // namespace gradus::mbdpt_test

@@ -31,5 +31,12 @@ TEST(MBDPTUnbiased, StrategyImages) {
     ExpectAgreement("\"string matrixsampler\" \"pixel\" \"integer connections\" 2", 2000, true);
 }
 
+TEST(MBDPTUnbiased, NextEventThroughTheMatrixModes) {
+    ExpectAgreement("\"bool nexteventmatrix\" [true] \"string matrixsampler\" \"pixel\"", 2300, true);
+    ExpectAgreement("\"bool nexteventmatrix\" [true] \"string reorder\" \"morton\" \"integer connections\" 2", 2400);
+    ExpectAgreement("\"bool nexteventmatrix\" [true] \"bool combinatorial\" [true]", 2500);
+    ExpectAgreement("\"bool nexteventmatrix\" [true] \"string matrixsampler\" \"diagonal\"", 2600);
+}
+
 }  // namespace
 }  // namespace gradus::mbdpt_test

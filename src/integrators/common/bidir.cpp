@@ -837,6 +837,7 @@ bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera,
         LightLiSample ls;
         Spectrum Lw;
         if (!SampleLightVertex(ctx, pt, u.uLightSelect, u.uLight, &sampled, &ls, &Lw)) return false;
+        if (u.infiniteLightsOnly && !sampled.isInfiniteLight()) return false;
         haveSampled = true;
         if (!EdgeConnectible(ctx, sampled, pt)) return false;
         L = pt.throughput() * EvalBSDF(pt, *pb, sampled, TransportMode::Radiance) * Lw * ScatterCos(pt, ls.wi);

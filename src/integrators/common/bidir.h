@@ -228,6 +228,9 @@ struct ConnectSamples {
     bool knownVisible = false;
     // Transmittance estimates (scenes with media; the sample's media RNG).
     RNG *rng = nullptr;
+    // s = 1: only a sampled infinite or distant light contributes (M-BDPT's
+    // next-event estimation through the matrix covers the other lights).
+    bool infiniteLightsOnly = false;
     // Optional: the weight's parts for camera subpaths that share this one's
     // vertices from misSplit + 1 on (MISSplit; used when misSplit + 2 <= t - 1).
     int misSplit = -1;

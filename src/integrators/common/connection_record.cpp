@@ -50,6 +50,30 @@ PathVertex AsVertex(const LightRecord &r) {
     return v;
 }
 
+// The camera side of Veach 1997 Eq. 10.9 for a connection of camera vertex
+// t - 1 with light endpoint q (header): mis(b1) (end_{t-1} + mis(b2) (in_{t-2} +
+// T_{t-3})), b1 from ptRev = p(x_{t-1} from q); *qsRev = p(q from x_{t-1}).
+Float CameraTerms(const BidirContext &ctx, const Mis &mis, const CameraSums &cam, SubpathView camera, int t,
+                  Float ptRev, const PathVertex &q, Float *qsRev) {
+    const PathVertex &pt = camera.v[t - 1], &ptPrev = camera.v[t - 2];
+    const BSDF *pb = &camera.bsdf[t - 1];
+    // Camera-side reverse densities (exact, from the camera subpath).
+    *qsRev = PdfArea(ctx, pt, pb, &ptPrev, q, TransportMode::Radiance);
+    const Float ptMinusRev = PdfArea(ctx, pt, pb, &q, ptPrev, TransportMode::Importance);
+    const Float b1 = Remap(ptRev) / Remap(pt.pdfFwd), b2 = Remap(ptMinusRev) / Remap(ptPrev.pdfFwd);
+    Float terms = cam.end[size_t(t - 1)];
+    if (t >= 3) terms += mis(b2) * (cam.in[size_t(t - 2)] + cam.T[size_t(t - 3)]);
+    return mis(b1) * terms;
+}
+
+// The camera vertex of a matrix connection: not an infinite-light vertex
+// (it ends the camera path), connectible and scattering.
+bool CameraEndConnectible(SubpathView camera, int t) {
+    const PathVertex &pt = camera.v[t - 1];
+    const BSDF *pb = camera.bsdf ? &camera.bsdf[t - 1] : nullptr;
+    return pt.type != VertexType::Light && IsConnectible(pt, pb) && pt.scatters();
+}
+
 }  // namespace
 
 void BuildLightRecords(const BidirContext &ctx, SubpathView light, uint32_t firstIndex, LightRecord *rec) {
@@ -130,10 +154,9 @@ bool ConnectRecord(const BidirContext &ctx, const LightRecord &rec, const PathVe
     *res = ConnectResult();
     GRADUS_CHECK(s >= 2 && t >= 2 && !ctx.strategies.merging && ctx.strategies.lightTracingSamples == 1);
     if (rec.kind == RecordKind::None) return false;
-    const PathVertex &pt = camera.v[t - 1], &ptPrev = camera.v[t - 2];
-    if (pt.type == VertexType::Light) return false;  // an infinite-light vertex ends the camera path
-    const BSDF *pb = camera.bsdf ? &camera.bsdf[t - 1] : nullptr;
-    if (!IsConnectible(pt, pb) || !pt.scatters()) return false;
+    if (!CameraEndConnectible(camera, t)) return false;
+    const PathVertex &pt = camera.v[t - 1];
+    const BSDF *pb = &camera.bsdf[t - 1];
     const bool compact = rec.kind == RecordKind::Lambertian;
     const PathVertex qv = compact ? AsVertex(rec) : PathVertex();
     const PathVertex &qs = compact ? qv : stored[0];
@@ -173,17 +196,56 @@ bool ConnectRecord(const BidirContext &ctx, const LightRecord &rec, const PathVe
         L *= Transmittance(ctx, qs, AsInteraction(qs), AsInteraction(pt), u.rng);
         if (L.isBlack()) return false;
     }
-    // Camera-side reverse densities (exact, from the camera subpath).
-    const Float qsRev = PdfArea(ctx, pt, pb, &ptPrev, qs, TransportMode::Radiance);
-    const Float ptMinusRev = PdfArea(ctx, pt, pb, &qs, ptPrev, TransportMode::Importance);
-    // Veach 1997 Eq. 10.9 with the recursive sums (header).
+    Float qsRev;
     const Mis mis{ctx.heuristic == MISHeuristic::Power};
-    const Float b1 = Remap(ptRev) / Remap(pt.pdfFwd), b2 = Remap(ptMinusRev) / Remap(ptPrev.pdfFwd);
-    Float camTerms = cam.end[size_t(t - 1)];
-    if (t >= 3) camTerms += mis(b2) * (cam.in[size_t(t - 2)] + cam.T[size_t(t - 3)]);
-    camTerms *= mis(b1);
+    const Float camTerms = CameraTerms(ctx, mis, cam, camera, t, ptRev, qs, &qsRev);
+    // Veach 1997 Eq. 10.9 with the recursive sums (header).
     const Float a1 = Remap(qsRev) / rec.fwd, a2 = Remap(qsMinusRev) / rec.fwdPrev;
     const Float lightTerms = mis(a1) * ((rec.endAllowed ? 1 : 0) + mis(a2) * rec.tail);
+    const Float w = 1 / (1 + camTerms + lightTerms);
+    res->weight = w;
+    res->unweighted = L;
+    res->L = L * w;
+    return w > 0;
+}
+
+bool ConnectLightOrigin(const BidirContext &ctx, const PathVertex &y0, const CameraSums &cam, SubpathView camera,
+                        int t, const ConnectSamples &u, ConnectResult *res) {
+    *res = ConnectResult();
+    GRADUS_CHECK(t >= 2 && !ctx.strategies.merging && ctx.strategies.lightTracingSamples == 1);
+    if (!IsMatrixLightOrigin(y0) || !CameraEndConnectible(camera, t)) return false;
+    const PathVertex &pt = camera.v[t - 1];
+    const BSDF &pb = camera.bsdf[t - 1];
+    if (!EdgeConnectible(ctx, y0, pt)) return false;
+    Vec3 d = pt.p - y0.p;  // from the light towards x_t
+    const Float d2 = d.lengthSquared();
+    d = d / std::sqrt(d2);
+    // Emitted radiance times the light side of the geometry term, over p(y0) (header).
+    Spectrum Le;
+    if (y0.isDeltaLight()) {
+        // A point-like emitter: its sampleLi from x_t is y0 itself, L = I / d^2 (pdf 1).
+        LightLiSample ls;
+        const Float pmf = ctx.lightSampler->pmf(y0.light);
+        if (pmf == 0 || !y0.light->sampleLi(AsInteraction(pt), Point2(0.5, 0.5), &ls) || ls.pdf == 0) return false;
+        Le = ls.L / (ls.pdf * pmf);
+    } else {
+        if (y0.pdfFwd == 0) return false;
+        Le = EmittedRadiance(ctx, y0, pt) * (AbsDot(Vec3(y0.ng), d) / (d2 * y0.pdfFwd));
+    }
+    Spectrum L = pt.throughput() * EvalBSDF(pt, pb, y0, TransportMode::Radiance) * Le * ScatterCos(pt, d);
+    if (L.isBlack()) return false;
+    res->shadowRayTraced = !u.knownVisible;
+    if (!u.knownVisible) {
+        L *= Transmittance(ctx, pt, AsInteraction(pt), AsInteraction(y0), u.rng);
+        if (L.isBlack()) return false;
+    }
+    // Veach 1997 Eq. 10.9: camera terms with b1 from p(x_t from y0) (the
+    // emission density), light terms = strategy (0, t + 1) only.
+    const Mis mis{ctx.heuristic == MISHeuristic::Power};
+    const Float ptRev = PdfArea(ctx, y0, nullptr, nullptr, pt, TransportMode::Importance);
+    Float qsRev;
+    const Float camTerms = CameraTerms(ctx, mis, cam, camera, t, ptRev, y0, &qsRev);
+    const Float lightTerms = y0.isDeltaLight() ? 0 : mis(Remap(qsRev) / Remap(y0.pdfFwd));
     const Float w = 1 / (1 + camTerms + lightTerms);
     res->weight = w;
     res->unweighted = L;

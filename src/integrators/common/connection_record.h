@@ -91,4 +91,22 @@ bool ConnectRecord(const BidirContext &ctx, const LightRecord &rec, const PathVe
                    const BSDF *storedBsdf, const CameraSums &cam, SubpathView camera, int s, int t,
                    const ConnectSamples &u, ConnectResult *res);
 
+// Next-event estimation through the matrix (strategy s = 1, t >= 2): camera
+// vertex t - 1 connected to `origin`, the emitter vertex L[0] of a light
+// subpath of another pixel, instead of a point sampled from the camera vertex.
+// With y0's density p(y0) = pmf(light) p_pos(y0) (its pdfFwd: the density the
+// MIS sums give strategy s = 1 in pbrt-v3's BDPT and here):
+//   area light:      f = beta_t f_t(y0) Le(y0 -> x_t) |cos_y0| |cos_t| / (|y0 - x_t|^2 p(y0)),
+//   delta position:  f = beta_t f_t(y0) I(y0 -> x_t) |cos_t| / (|y0 - x_t|^2 p(y0))
+// (Veach 1997 Eq. 10.8 with the stored origin as the light subpath's only
+// vertex). Weight: the camera sums and, on the light side, strategy (0, t + 1)
+// alone, mis(p(y0 from x_t) / p(y0)) [y0 not a delta light] (Eq. 10.9).
+// Infinite and distant lights are not connectible origins here (false).
+bool ConnectLightOrigin(const BidirContext &ctx, const PathVertex &origin, const CameraSums &cam,
+                        SubpathView camera, int t, const ConnectSamples &u, ConnectResult *res);
+// True when `v` (a light subpath's vertex 0) can be the origin of ConnectLightOrigin.
+inline bool IsMatrixLightOrigin(const PathVertex &v) {
+    return v.type == VertexType::Light && !v.isInfiniteLight() && IsConnectible(v, nullptr);
+}
+
 }  // namespace gradus

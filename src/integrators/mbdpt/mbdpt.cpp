@@ -87,6 +87,21 @@ ParamTable<MBDPTSettings> Table() {
                                   "columns of a row: rank-1 lattice (2D low discrepancy), Latin hypercube, "
                                   "random, q = p, or pixel (the pixel sample's own dimensions: stratified "
                                   "over the iterations; camera subpaths generated tile by tile, not stored)");
+    t.boolean("nexteventmatrix", &S::nextEventMatrix, false,
+              "next-event estimation (s = 1) through the matrix: emitter vertices of other pixels' light subpaths");
+    t.enumeration("configuration", &S::configuration, "default", {"default", "paper"},
+                  "paper: every eye subpath in every matrix, no Russian roulette, next-event estimation through "
+                  "the matrix (= matrixrows \"all\", rrdepth -1, nexteventmatrix true)")
+        .thenWithParams([](S &s, const ParamSet &ps, const FileLoc &loc) {
+            if (s.configuration != "paper") return;
+            for (const char *n : {"rrdepth", "matrixrows", "nexteventmatrix"})
+                if (ps.has(n))
+                    throw Error(ps.locOf(n, loc), std::string("mbdpt: \"configuration\" \"paper\" sets \"") + n +
+                                                      "\"; give one or the other");
+            s.allRows = true;
+            s.rrDepth = -1;
+            s.nextEventMatrix = true;
+        });
     t.string("visualizematrix", &S::visualizeMatrix, "",
              "\"s,t\": image of the matrix M_{s,t} of the first iteration (Fig. 4)")
         .then([](S &s, const FileLoc &loc) {
@@ -117,6 +132,8 @@ MBDPTIntegrator::MBDPTIntegrator(const EntityDesc &desc)
 void MBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     // One light subpath per sampled pixel: light tracing estimates the full image.
     preprocessBidir(scene, film, set_, loc_);
+    farLights_ = false;
+    for (const auto &l : scene.lights) farLights_ |= (l->flags & (LIGHT_INFINITE | LIGHT_DELTA_DIRECTION)) != 0;
     if (set_.visS >= 0 && set_.matrixFile.empty()) {
         std::string f = film.filename();
         size_t dot = f.find_last_of('.'), slash = f.find_last_of('/');
@@ -176,8 +193,10 @@ void MBDPTIntegrator::reorder(PassContext &ctx) {
     const size_t N = paths_.size();
     // Matrix strategies have s >= 2, t >= 2 and s + t - 2 <= maxDepth.
     const int maxLen = set_.maxDepth;
-    rows_.resize(maxLen + 1);
-    rank_.resize(maxLen + 1);
+    // Rows: camera prefix lengths t <= maxDepth (+ 1 for s = 1 with nexteventmatrix).
+    const int maxRow = maxLen + (set_.nextEventMatrix ? 1 : 0);
+    rows_.resize(maxLen + 2);
+    rank_.resize(maxLen + 2);
     cols_.resize(maxLen + 1);
     const Bounds3 &b = ctx.scene().bounds;
     // Sec. 4.2's d(y) of every prefix: running sums along each subpath, in
@@ -198,10 +217,10 @@ void MBDPTIntegrator::reorder(PassContext &ctx) {
         });
     };
     // The eligible subpaths of every length in index order (one pass over the vertices).
-    auto eligible = [&](const SubpathStore &store, std::vector<std::vector<uint32_t>> &lists) {
+    auto eligible = [&](const SubpathStore &store, std::vector<std::vector<uint32_t>> &lists, int maxL) {
         for (auto &l : lists) l.clear();
         for (size_t i = 0; i < N; ++i) {
-            const int n = std::min(store.count(i), maxLen);
+            const int n = std::min(store.count(i), maxL);
             const uint8_t *c = store.connectible.data() + store.offset[i];
             for (int len = 2; len <= n; ++len)
                 if (c[len - 1]) lists[size_t(len)].push_back(uint32_t(i));
@@ -209,10 +228,13 @@ void MBDPTIntegrator::reorder(PassContext &ctx) {
     };
     const bool rows = set_.sampling != MatrixSampling::Pixel;  // pixel: no stored camera subpaths
     prefixDistances(paths_.light, lightDist_);
-    eligible(paths_.light, cols_);
+    eligible(paths_.light, cols_, maxLen);
+    if (set_.nextEventMatrix)  // M_{1,t}'s columns: the emitter vertices (ConnectLightOrigin)
+        for (size_t i = 0; i < N; ++i)
+            if (paths_.light.count(i) >= 1 && IsMatrixLightOrigin(*paths_.light.path(i))) cols_[1].push_back(uint32_t(i));
     if (rows) {
         prefixDistances(paths_.camera, camDist_);
-        eligible(paths_.camera, rows_);
+        eligible(paths_.camera, rows_, maxRow);
     }
     // One sort per matrix side and length, the sorts in parallel; ties broken
     // by index (the lists are in index order, the sort is stable): a total
@@ -224,9 +246,11 @@ void MBDPTIntegrator::reorder(PassContext &ctx) {
         std::vector<uint32_t> *sorted;
     };
     std::vector<SortJob> jobs;
-    for (int len = 2; len <= maxLen && set_.reorder != Reorder::None; ++len) {
-        if (cols_[len].size() >= 2) jobs.push_back({&paths_.light, &lightDist_, len, &cols_[len]});
-        if (rows && rows_[len].size() >= 2) jobs.push_back({&paths_.camera, &camDist_, len, &rows_[len]});
+    for (int len = 1; len <= maxRow && set_.reorder != Reorder::None; ++len) {
+        // (s = 1: d(y) = 0 for every emitter vertex, the distance order is the index order)
+        const bool sortCols = len <= maxLen && (len >= 2 || set_.reorder == Reorder::Morton);
+        if (sortCols && cols_[len].size() >= 2) jobs.push_back({&paths_.light, &lightDist_, len, &cols_[len]});
+        if (rows && len >= 2 && rows_[len].size() >= 2) jobs.push_back({&paths_.camera, &camDist_, len, &rows_[len]});
     }
     if (sortBufs_.size() < jobs.size()) sortBufs_.resize(jobs.size());  // kept: no page faults per pass
     ctx.parallelFor(int64_t(jobs.size()), 1, [&](int64_t j0, int64_t j1, Worker &) {
@@ -247,9 +271,9 @@ void MBDPTIntegrator::reorder(PassContext &ctx) {
         }
     });
     maxColumnS_ = 0;
-    for (int len = 2; len <= maxLen; ++len) {
-        if (!cols_[len].empty()) maxColumnS_ = len;
-        if (!rows) continue;
+    for (int len = 1; len <= maxRow; ++len) {
+        if (len <= maxLen && !cols_[len].empty()) maxColumnS_ = std::max(maxColumnS_, len);
+        if (!rows || len < 2) continue;
         if (rows_[len].empty()) {  // no eligible camera subpath this long: rows skip it
             rank_[len].clear();
             continue;
@@ -270,8 +294,9 @@ struct ConnectPass {
     size_t N;
     int maxDepth, m, maxCam, maxLight;
     bool pixelMode, diagonal;
+    bool nextEventMatrix, diagonalNextEvent;  // M_{1,t}; s = 1 on the diagonal (all lights, or the far ones)
     // Column samplers of the matrices of this iteration (row-ordered modes),
-    // indexed s * (maxDepth + 1) + t.
+    // indexed s * (maxDepth + 2) + t.
     std::vector<ColumnSampler> samplers;
 };
 }  // namespace
@@ -283,8 +308,10 @@ struct MBDPTIntegrator::TileConnector {
     // A chosen matrix connection: light subpath q for strategy (s, t).
     struct Pending {
         int s, t;
-        const LightRecord *rec;  // the light endpoint q_{s-1}
+        const LightRecord *rec;    // s >= 2: the light endpoint q_{s-1}
+        const PathVertex *origin;  // s = 1: the emitter vertex q_0 (in the store)
         Float scale;
+        const void *address() const { return rec ? static_cast<const void *>(rec) : origin; }
     };
     // Row p's camera subpath: its film sample, vertices and BSDFs.
     struct CameraRow {
@@ -396,6 +423,7 @@ struct MBDPTIntegrator::TileConnector {
         if (s == 1) {
             u.uLightSelect = pixelMode ? smp.get1D() : r.rng.uniform();
             u.uLight = pixelMode ? smp.get2D() : Point2(r.rng.uniform(), r.rng.uniform());
+            u.infiniteLightsOnly = pass.nextEventMatrix;  // the other lights: M_{1,t}
         }
         if (t == 1) u.uLens = pixelMode ? smp.get2D() : Point2(r.rng.uniform(), r.rng.uniform());
         ConnectResult res;
@@ -422,8 +450,10 @@ struct MBDPTIntegrator::TileConnector {
             smp.startPixelSample(c.pixel, pass.iteration, kMatrixDim);
             uRow = smp.get1D();
         }
+        const int maxT = pass.maxDepth + (pass.nextEventMatrix ? 1 : 0);
+        const int minS = pass.nextEventMatrix ? 1 : 2;
         if (c.w > 0)
-            for (int t = 2; t <= std::min(c.nC, pass.maxDepth); ++t) {
+            for (int t = 2; t <= std::min(c.nC, maxT); ++t) {
                 int32_t rank = -1;
                 if (pass.pixelMode) {
                     if (!c.cv[t - 1].scatters() || !IsConnectible(c.cv[t - 1], &c.cb[t - 1])) continue;
@@ -433,12 +463,18 @@ struct MBDPTIntegrator::TileConnector {
                     continue;
                 }
                 // Matrices without columns take no row (chooseColumns returns at once).
-                for (int s = 2; s + t - 2 <= pass.maxDepth && s <= in.maxColumnS_; ++s)
+                for (int s = minS; s + t - 2 <= pass.maxDepth && s <= in.maxColumnS_; ++s)
                     chooseColumns(r, s, t, rank, uRow);
             }
     }
 
-    void choose(int s, int t, const LightRecord *rec, Float scale) { pending.push_back({s, t, rec, scale}); }
+    // Column k of M_{s,t} (s = 1: the emitter vertex of light subpath cols_[1][k]).
+    void choose(int s, int t, uint64_t k, Float scale) {
+        if (s == 1)
+            pending.push_back({s, t, nullptr, light.path(in.cols_[1][k]), scale});
+        else
+            pending.push_back({s, t, in.columns(s) + k, nullptr, scale});
+    }
 
     // Records are loaded kPrefetchAhead connections ahead: issuing all of a
     // row's prefetches at once stalled on the full fill buffers (perf: the
@@ -446,25 +482,26 @@ struct MBDPTIntegrator::TileConnector {
     static constexpr size_t kPrefetchAhead = 6;
     void prefetch(size_t i) const {
         if (i >= pending.size()) return;
-        const char *rec = reinterpret_cast<const char *>(pending[i].rec);
+        const char *rec = static_cast<const char *>(pending[i].address());
         __builtin_prefetch(rec);
         __builtin_prefetch(rec + 64);
     }
 
     // The columns of row p in M_{s,t} (rank: the row's place in rows_[t]).
     void chooseColumns(Row &r, int s, int t, int32_t rank, Float uRow) {
-        const LightRecord *cols = in.columns(s);  // the records of cols_[s]
         const uint64_t Ls = in.cols_[s].size();
         const size_t N = pass.N;
         const int m = pass.m, maxDepth = pass.maxDepth;
         if (Ls == 0) return;
         if (in.set_.combinatorial) {
-            for (uint64_t k = 0; k < Ls; ++k) pending.push_back({s, t, &cols[k], Float(1) / Float(N)});  // Eq. 6
+            for (uint64_t k = 0; k < Ls; ++k) choose(s, t, k, Float(1) / Float(N));  // Eq. 6
             return;
         }
-        if (pass.diagonal) {
-            if (light.eligible(r.p, s))
-                pending.push_back({s, t, &cols[in.colPos_[light.offset[r.p] + uint32_t(s - 1)]], 1});  // Eq. 7
+        if (pass.diagonal) {  // Eq. 7
+            if (s == 1 && light.count(r.p) >= 1 && IsMatrixLightOrigin(*light.path(r.p)))
+                pending.push_back({s, t, nullptr, light.path(r.p), 1});
+            else if (s >= 2 && light.eligible(r.p, s))
+                choose(s, t, in.colPos_[light.offset[r.p] + uint32_t(s - 1)], 1);
             return;
         }
         // Rows take part with probability rho (BDPT's rate L_s / L by
@@ -476,15 +513,15 @@ struct MBDPTIntegrator::TileConnector {
             // every iteration (stratified over them).
             if (uRow >= rho) return;
             smp.startPixelSample(r.c.pixel, pass.iteration, kMatrixDim + 1 + (s * (maxDepth + 1) + t) * m);
-            for (int c = 0; c < m; ++c) choose(s, t, &cols[ColumnSampler::Column(smp.get1D(), Ls)], scale);
+            for (int c = 0; c < m; ++c) choose(s, t, ColumnSampler::Column(smp.get1D(), Ls), scale);
             return;
         }
         // A randomly shifted 1D lattice over the row ranks chooses the rows.
-        const ColumnSampler &cs = pass.samplers[size_t(s) * (maxDepth + 1) + t];
+        const ColumnSampler &cs = pass.samplers[size_t(s) * (maxDepth + 2) + t];
         if (rho < 1 && !cs.participates(uint64_t(rank), rho)) return;
         for (int c = 0; c < m; ++c) {
             double y = cs.coordinate(uint64_t(rank), c, r.rng.uniform());
-            choose(s, t, &cols[ColumnSampler::Column(y, Ls)], scale);
+            choose(s, t, ColumnSampler::Column(y, Ls), scale);
         }
     }
 
@@ -497,7 +534,7 @@ struct MBDPTIntegrator::TileConnector {
         if (r.c.w > 0)
             for (int t = 2; t <= r.c.nC && t - 2 <= maxDepth; ++t) {
                 run(r, r.ownLight, 0, t, 1);
-                if (t - 1 <= maxDepth && !pass.scene.lights.empty()) run(r, r.ownLight, 1, t, 1);
+                if (t - 1 <= maxDepth && pass.diagonalNextEvent) run(r, r.ownLight, 1, t, 1);
             }
         for (int s = 2; s <= r.ownLight.n && s - 1 <= maxDepth; ++s) run(r, r.ownLight, s, 1, 1);
     }
@@ -508,6 +545,17 @@ struct MBDPTIntegrator::TileConnector {
         for (size_t i = 0; i < pending.size(); ++i) {
             prefetch(i + kPrefetchAhead);
             const Pending &c = pending[i];
+            ConnectSamples u;
+            u.rng = &r.mediaRng;
+            ConnectResult res;
+            ++conn;
+            if (c.s == 1) {  // next-event estimation through the matrix
+                ++origins;
+                const bool ok = ConnectLightOrigin(in.ctx_, *c.origin, camSums, r.camView, c.t, u, &res);
+                if (res.shadowRayTraced) ++shadow;
+                if (ok) record(r, c.s, c.t, res, c.scale);
+                continue;
+            }
             const LightRecord &rec = *c.rec;
             const PathVertex *zv = nullptr;
             const BSDF *zb = nullptr;
@@ -521,10 +569,6 @@ struct MBDPTIntegrator::TileConnector {
                     zb = &colB[0];
                 }
             }
-            ConnectSamples u;
-            u.rng = &r.mediaRng;
-            ConnectResult res;
-            ++conn;
             const bool ok = ConnectRecord(in.ctx_, rec, zv, zb, camSums, r.camView, c.s, c.t, u, &res);
             if (res.shadowRayTraced) ++shadow;
             if (ok) record(r, c.s, c.t, res, c.scale);
@@ -544,20 +588,22 @@ struct MBDPTIntegrator::TileConnector {
     CameraSums camSums;  // the row's camera side of the MIS sums
     Sampler &smp;
     const int tileW;
-    uint64_t conn = 0, shadow = 0, bad = 0;
+    uint64_t conn = 0, shadow = 0, bad = 0, origins = 0;
 };
 
 void MBDPTIntegrator::connect(PassContext &ctx) {
     const int maxDepth = set_.maxDepth;
     ConnectPass pass{ctx.scene(), ctx.firstSample(), ctx.seed(), paths_.size(), maxDepth, set_.connections,
                      maxDepth + 2, maxDepth + 1, set_.sampling == MatrixSampling::Pixel,
-                     set_.sampling == MatrixSampling::Diagonal && !set_.combinatorial,
-                     std::vector<ColumnSampler>(size_t(maxDepth + 1) * (maxDepth + 1))};
+                     set_.sampling == MatrixSampling::Diagonal && !set_.combinatorial, set_.nextEventMatrix,
+                     !ctx.scene().lights.empty() && (!set_.nextEventMatrix || farLights_),
+                     std::vector<ColumnSampler>(size_t(maxDepth + 2) * (maxDepth + 2))};
+    const int minS = set_.nextEventMatrix ? 1 : 2;
     if (!pass.pixelMode)
-        for (int t = 2; t <= maxDepth; ++t)
-            for (int s = 2; s + t - 2 <= maxDepth; ++s) {
+        for (int t = 2; t <= maxDepth + 1; ++t)
+            for (int s = minS; s + t - 2 <= maxDepth; ++s) {
                 uint64_t h = Hash(pass.seed ^ kMatrixTag, uint64_t(pass.iteration), uint64_t(s), uint64_t(t));
-                pass.samplers[size_t(s) * (maxDepth + 1) + t] = ColumnSampler(
+                pass.samplers[size_t(s) * (maxDepth + 2) + t] = ColumnSampler(
                     set_.sampling, rows_[t].size(), pass.m, BitsToUniform(MixBits(h)), h, BitsToUniform(MixBits(h ^ kRowTag)));
             }
     ctx.forEachTile([&](int ti, const Bounds2i &tb, FilmTile &tile, Worker &wk) {
@@ -565,6 +611,7 @@ void MBDPTIntegrator::connect(PassContext &ctx) {
         for (uint32_t p = paths_.tileBegin(ti); p < paths_.tileEnd(ti); ++p) tc.connectRow(p);
         nConnect_ += tc.conn;
         nShadow_ += tc.shadow;
+        nOrigin_ += tc.origins;
         ctx.addNonFinite(tc.bad);
     });
 }
@@ -664,8 +711,9 @@ void MBDPTIntegrator::endPass(PassContext &ctx) {
     // Stored subpaths and reordering tables of this iteration, per sampled pixel.
     size_t bytes = paths_.bytes() + colRecords_.capacity() * sizeof(LightRecord) + colPos_.capacity() * 4 +
                    (lightDist_.capacity() + camDist_.capacity()) * sizeof(double);
-    for (size_t k = 0; k < rows_.size(); ++k)
-        bytes += rows_[k].capacity() * 4 + rank_[k].capacity() * 4 + cols_[k].capacity() * 4;
+    for (const auto *lists : {&rows_, &cols_})
+        for (const auto &l : *lists) bytes += l.capacity() * 4;
+    for (const auto &l : rank_) bytes += l.capacity() * 4;
     bytesPerPixel_ = std::max(bytesPerPixel_, double(bytes) / std::max<size_t>(1, paths_.size()));
 }
 
@@ -682,7 +730,8 @@ std::string MBDPTIntegrator::statistics() const {
         o << nCamVerts_ / std::max(1.0, N * it);
     o << ", light " << nLightVerts_ / std::max(1.0, N * it) << " (" << sizeof(PathVertex) << " bytes each)\n";
     o << "  memory per pixel (stored subpaths + reordering tables): " << bytesPerPixel_ << " bytes\n";
-    o << "  connections: " << nConnect_ << " (shadow rays " << nShadow_ << ")\n";
+    o << "  connections: " << nConnect_ << " (shadow rays " << nShadow_ << "; next-event through the matrix "
+      << nOrigin_ << ")\n";
     o << "  seconds: generation " << secGen_ << ", reordering " << secSort_ << ", connection " << secConnect_ << "\n";
     return o.str();
 }

@@ -15,7 +15,10 @@
 //      light subpaths chosen by a stratified 2D point set over the reordered
 //      matrix M_{s,t} (Sec. 4.3). s = 0 (emitter hits), s = 1 (next-event
 //      estimation with a fresh light sample, as in pbrt-v3) and t = 1 (light
-//      tracing) use the diagonal (Sec. 5.1, Fig. 5): plain BDPT. A row's
+//      tracing) use the diagonal (Sec. 5.1, Fig. 5): plain BDPT. With
+//      nexteventmatrix, s = 1 has its matrices M_{1,t} too (the paper leaves
+//      only s = 0 and t = 1 on the diagonal): the columns are the light
+//      subpaths' emitter vertices (connection_record.h ConnectLightOrigin). A row's
 //      connections are chosen first, the first few of their records
 //      prefetched (a random place in the image-wide store) while the diagonal
 //      strategies run, the others a few connections ahead. A matrix connection reads the light
@@ -52,6 +55,13 @@
 //   bool combinatorial false        connect every camera subpath to all columns (Eq. 6; quadratic cost)
 //   string matrixsampler "lattice"  lattice (rank-1 lattice, 2D low discrepancy) | lhs | random | diagonal |
 //                                   pixel (per-pixel sampler dimensions; no stored camera subpaths)
+//   bool nexteventmatrix false      next-event estimation (s = 1) through the matrix: camera vertices connect
+//                                   to the emitter vertices of other pixels' light subpaths (infinite and
+//                                   distant lights stay on the diagonal)
+//   string configuration "default"  default | paper: the paper's configuration (Sec. 5: every eye subpath in
+//                                   every matrix, no Russian roulette, next-event estimation through the
+//                                   matrix) = matrixrows "all", rrdepth -1, nexteventmatrix true (giving
+//                                   any of the three beside it is an error)
 //   string visualizematrix ""       "s,t": image of the matrix M_{s,t} of the first iteration (Fig. 4)
 //   integer matrixresolution 256    its maximum width/height (rows and columns subsampled evenly)
 //   string matrixfile ""            where to write it (default: <film name>_matrix_s<S>_t<T>.exr);
@@ -78,6 +88,8 @@ struct MBDPTSettings : BidirSettings {
     int connections;
     bool combinatorial;
     bool allRows;
+    bool nextEventMatrix;       // s = 1 through the matrix
+    std::string configuration;  // default | paper
     std::string visualizeMatrix;
     int visS = -1, visT = -1;  // visualised matrix (from visualizematrix)
     int matrixResolution;
@@ -118,7 +130,9 @@ class MBDPTIntegrator : public Integrator, public BidirFamily {
     std::vector<std::vector<uint32_t>> rows_;  // [t]: eligible camera subpaths in reordered order
     std::vector<std::vector<int32_t>> rank_;   // [t][p]: rank of camera subpath p in rows_[t], or -1
     std::vector<std::vector<uint32_t>> cols_;  // [s]: eligible light subpaths in reordered order
+                                               // ([1]: emitter vertices, IsMatrixLightOrigin)
     int maxColumnS_ = 0;                       // largest s with a column (0: none)
+    bool farLights_ = false;                   // infinite or distant lights (diagonal s = 1 with nexteventmatrix)
     // Records of the columns' light endpoints (buildRecords), matrix after
     // matrix: cols_[s][k]'s at colStart_[s] + k; colPos_: per light vertex its k (or UINT32_MAX).
     class RecordBuffer {
@@ -148,7 +162,7 @@ class MBDPTIntegrator : public Integrator, public BidirFamily {
     double bytesPerPixel_ = 0;
     int iterations_ = 0;
     double secGen_ = 0, secSort_ = 0, secConnect_ = 0;
-    std::atomic<uint64_t> nConnect_{0}, nShadow_{0}, nCamVerts_{0}, nLightVerts_{0};
+    std::atomic<uint64_t> nConnect_{0}, nShadow_{0}, nCamVerts_{0}, nLightVerts_{0}, nOrigin_{0};
 };
 
 }  // namespace gradus

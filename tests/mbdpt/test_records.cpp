@@ -43,23 +43,22 @@ struct Counts {
     int compared = 0, lambertian = 0, stored = 0, medium = 0, pointLight = 0, maxT = 0, maxS = 0;
 };
 
-void CheckRecords(Variant variant, MISHeuristic h) {
-    BuildOptions bo;
-    bo.quiet = true;
-    RenderJob job = BuildRenderJob(ParseString(RecordsScene(variant)), bo);
-    LightSampler ls(job.scene->lights, "power", FileLoc());
-    BidirContext ctx;
-    ctx.init(*job.scene, ls, h);
-    auto sampler = job.sampler->clone();
-    const bool media = variant == Variant::Media;
-    const int maxDepth = 7;
-    std::vector<PathVertex> cv(maxDepth + 2), lv(maxDepth + 1);
-    std::vector<BSDF> cb(maxDepth + 2), lb(maxDepth + 1);
-    std::vector<LightRecord> recs(maxDepth + 1);
-    CameraSums sums;
-    Arena arena;
-    Counts n;
-    for (int i = 0; i < 1200; ++i) {
+// Random pairs of independent subpaths of the variant's scene: sample i's
+// camera subpath and the light subpath of another sample (a matrix
+// connection pairs independent subpaths).
+struct SubpathPairs {
+    static constexpr int kMaxDepth = 7;
+    SubpathPairs(Variant variant, MISHeuristic h)
+        : job(BuildJob(variant)), ls(job.scene->lights, "power", FileLoc()), sampler(job.sampler->clone()),
+          media(variant == Variant::Media), cv(kMaxDepth + 2), lv(kMaxDepth + 1), cb(kMaxDepth + 2), lb(kMaxDepth + 1) {
+        ctx.init(*job.scene, ls, h);
+    }
+    static RenderJob BuildJob(Variant variant) {
+        BuildOptions bo;
+        bo.quiet = true;
+        return BuildRenderJob(ParseString(RecordsScene(variant)), bo);
+    }
+    void generate(int i) {
         arena.reset();
         sampler->startPixelSample({i % 16, (i / 16) % 16}, i / 256);
         CameraSample cs;
@@ -70,11 +69,37 @@ void CheckRecords(Variant variant, MISHeuristic h) {
         job.scene->camera->generateRay(cs, &ray);
         RNG rng{uint64_t(i)};
         RNG *mrng = media ? &rng : nullptr;
-        const int nC = GenerateCameraSubpath(ctx, ray, *sampler, arena, maxDepth + 2, cv.data(), cb.data(), mrng);
-        // The light subpath of another sample: a matrix connection pairs independent subpaths.
+        const int nC = GenerateCameraSubpath(ctx, ray, *sampler, arena, kMaxDepth + 2, cv.data(), cb.data(), mrng);
         sampler->startPixelSample({(i * 7 + 3) % 16, (i * 5 + 1) % 16}, 100 + i);
-        const int nL = GenerateLightSubpath(ctx, *sampler, arena, maxDepth + 1, lv.data(), lb.data(), mrng);
-        const SubpathView cam{cv.data(), cb.data(), nC}, light{lv.data(), lb.data(), nL};
+        const int nL = GenerateLightSubpath(ctx, *sampler, arena, kMaxDepth + 1, lv.data(), lb.data(), mrng);
+        cam = SubpathView{cv.data(), cb.data(), nC};
+        light = SubpathView{lv.data(), lb.data(), nL};
+    }
+    RenderJob job;
+    LightSampler ls;
+    BidirContext ctx;
+    std::unique_ptr<Sampler> sampler;
+    const bool media;
+    std::vector<PathVertex> cv, lv;
+    std::vector<BSDF> cb, lb;
+    Arena arena;
+    SubpathView cam, light;
+};
+
+void CheckRecords(Variant variant, MISHeuristic h) {
+    SubpathPairs pairs(variant, h);
+    const BidirContext &ctx = pairs.ctx;
+    const bool media = pairs.media;
+    const int maxDepth = SubpathPairs::kMaxDepth;
+    std::vector<PathVertex> &lv = pairs.lv, &cv = pairs.cv;
+    std::vector<BSDF> &lb = pairs.lb;
+    std::vector<LightRecord> recs(maxDepth + 1);
+    CameraSums sums;
+    Counts n;
+    for (int i = 0; i < 1200; ++i) {
+        pairs.generate(i);
+        const SubpathView cam = pairs.cam, light = pairs.light;
+        const int nC = cam.n, nL = light.n;
         BuildLightRecords(ctx, light, 1000, recs.data());
         sums.build(ctx, cam);
         for (int t = 2; t <= nC; ++t)
@@ -124,35 +149,19 @@ void CheckRecords(Variant variant, MISHeuristic h) {
 // not from the stored vertex), weight against MISWeight's O(n) sums with the
 // light subpath cut to its origin.
 void CheckOrigins(Variant variant, MISHeuristic h) {
-    BuildOptions bo;
-    bo.quiet = true;
-    RenderJob job = BuildRenderJob(ParseString(RecordsScene(variant)), bo);
-    LightSampler ls(job.scene->lights, "power", FileLoc());
-    BidirContext ctx;
-    ctx.init(*job.scene, ls, h);
-    auto sampler = job.sampler->clone();
-    const bool media = variant == Variant::Media;
-    const int maxDepth = 7;
-    std::vector<PathVertex> cv(maxDepth + 2), lv(maxDepth + 1);
-    std::vector<BSDF> cb(maxDepth + 2), lb(maxDepth + 1);
+    SubpathPairs pairs(variant, h);
+    const BidirContext &ctx = pairs.ctx;
+    const LightSampler &ls = pairs.ls;
+    const bool media = pairs.media;
+    const int maxDepth = SubpathPairs::kMaxDepth;
+    std::vector<PathVertex> &lv = pairs.lv, &cv = pairs.cv;
+    std::vector<BSDF> &lb = pairs.lb, &cb = pairs.cb;
     CameraSums sums;
-    Arena arena;
     int compared = 0, point = 0, area = 0, medium = 0, maxT = 0;
     for (int i = 0; i < 1200; ++i) {
-        arena.reset();
-        sampler->startPixelSample({i % 16, (i / 16) % 16}, i / 256);
-        CameraSample cs;
-        Point2 u = sampler->get2D();
-        cs.pFilm = Point2(i % 16 + u.x, (i / 16) % 16 + u.y);
-        cs.pLens = sampler->get2D();
-        Ray ray;
-        job.scene->camera->generateRay(cs, &ray);
-        RNG rng{uint64_t(i)};
-        RNG *mrng = media ? &rng : nullptr;
-        const int nC = GenerateCameraSubpath(ctx, ray, *sampler, arena, maxDepth + 2, cv.data(), cb.data(), mrng);
-        sampler->startPixelSample({(i * 7 + 3) % 16, (i * 5 + 1) % 16}, 100 + i);
-        const int nL = GenerateLightSubpath(ctx, *sampler, arena, maxDepth + 1, lv.data(), lb.data(), mrng);
-        if (nL < 1) continue;
+        pairs.generate(i);
+        const int nC = pairs.cam.n;
+        if (pairs.light.n < 1) continue;
         const PathVertex &y0 = lv[0];
         ASSERT_TRUE(IsMatrixLightOrigin(y0));
         const SubpathView cam{cv.data(), cb.data(), nC}, origin{lv.data(), lb.data(), 1};

@@ -23,9 +23,11 @@ for t in $times; do
     "$here/equal_spp.py" "$scenes/multiroom-ajar.pbrt" "$refs/multiroom-ajar-ref.exr" --time "$t" \
         --seeds "$seeds" --jobs 2 --ref-noise 0.62 --args "--nthreads 1" \
         --outdir "$out/renders" $paper > "$out/multiroom-$t.md"
-    # maxdepth 65 without Russian roulette is out of reach (RESULTS.md): rrdepth 3 only.
+    # The Cornell box (maxdepth 65): every configuration at 20 and 40 s, the defaults at 120 s.
+    configs=$paper
+    [ "$t" -gt 40 ] && configs="bdpt mbdpt"
     "$here/equal_spp.py" "$shared/references/cornell-box/ref.pbrt" "$shared/references/cornell-box/ref.exr" \
         --time "$t" --seeds "$seeds" --jobs 2 --ref-noise "$(cut -d' ' -f1 "$shared/references/cornell-box/ref.noise")" \
-        --args "--nthreads 1" --outdir "$out/renders" bdpt mbdpt > "$out/cornell-$t.md"
+        --args "--nthreads 1" --outdir "$out/renders" $configs > "$out/cornell-$t.md"
 done
 cat "$out"/*.md

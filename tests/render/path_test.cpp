@@ -173,12 +173,14 @@ TEST(BDPT, RussianRouletteUnbiased) {
 
 // With visualizeweights, the MIS-weighted strategy layers (light tracing t = 1
 // included, through per-layer splats) add up to the main image (box filter:
-// both are per-pixel averages). Exact up to float rounding.
-TEST(BDPT, WeightedStrategyLayersSumToImage) {
+// both are per-pixel averages). Exact up to float rounding. bdpt, and mbdpt
+// with its matrix strategies (and M_{1,t} in the paper's configuration).
+static void CheckWeightedLayersSum(const std::string &integrator, const std::string &params) {
+    SCOPED_TRACE(integrator + " " + params);
     std::string scene =
         "LookAt 0 1 3.6  0 1 0  0 1 0\nCamera \"perspective\" \"float fov\" [40]\n"
         "Sampler \"random\"\nPixelFilter \"box\"\nFilm \"image\" \"integer xresolution\" [16] \"integer yresolution\" [16]\n"
-        "Integrator \"bdpt\" \"integer maxdepth\" [3] \"bool visualizeweights\" \"true\"\n"
+        "Integrator \"" + integrator + "\" \"integer maxdepth\" [3] \"bool visualizeweights\" \"true\" " + params + "\n"
         "WorldBegin\nMaterial \"matte\" \"rgb Kd\" [0.7 0.7 0.7]\n"
         "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-1 0 -1 -1 0 1 1 0 1 1 0 -1]\n"
         "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-1 0 -1 1 0 -1 1 2 -1 -1 2 -1]\n"
@@ -187,11 +189,12 @@ TEST(BDPT, WeightedStrategyLayersSumToImage) {
         "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] \"point P\" [-0.3 1.9 -0.3 0.3 1.9 -0.3 0.3 1.9 0.3 -0.3 1.9 0.3]\n"
         "AttributeEnd\nWorldEnd\n";
     Image img = RenderSceneText(scene, 16, 3).image;
+    const std::string prefix = integrator + "_s";
     std::vector<std::string> layers;
     for (const auto &l : img.layers())
-        if (l.rfind("bdpt_s", 0) == 0) layers.push_back(l);
-    ASSERT_TRUE(std::find(layers.begin(), layers.end(), "bdpt_s2_t1") != layers.end());
-    ASSERT_TRUE(std::find(layers.begin(), layers.end(), "bdpt_s4_t1") != layers.end());
+        if (l.rfind(prefix, 0) == 0) layers.push_back(l);
+    ASSERT_TRUE(std::find(layers.begin(), layers.end(), integrator + "_s2_t1") != layers.end());
+    ASSERT_TRUE(std::find(layers.begin(), layers.end(), integrator + "_s4_t1") != layers.end());
     Image main = img.layerRGB("");
     double t1Energy = 0;
     for (int y = 0; y < main.height(); ++y)
@@ -206,6 +209,12 @@ TEST(BDPT, WeightedStrategyLayersSumToImage) {
                 EXPECT_NEAR(sum, main.at(x, y, c), 1e-4 * (1 + main.at(x, y, c))) << x << "," << y << "," << c;
             }
     EXPECT_GT(t1Energy, 0);  // light tracing contributes and is visualised
+}
+
+TEST(BDPT, WeightedStrategyLayersSumToImage) {
+    CheckWeightedLayersSum("bdpt", "");
+    CheckWeightedLayersSum("mbdpt", "");
+    CheckWeightedLayersSum("mbdpt", "\"string configuration\" \"paper\"");
 }
 
 // Gradient integrators write every layer (light-tracing splats included)

@@ -123,7 +123,7 @@ ParamTable<MBDPTSettings> Table() {
 std::vector<ParamInfo> MBDPTParameters() { return Table().describe(); }
 
 MBDPTIntegrator::MBDPTIntegrator(const EntityDesc &desc)
-    : BidirFamily("mbdpt", 2), set_(Table().parse(desc)), loc_(desc.loc) {
+    : BidirFamily("mbdpt", 1), set_(Table().parse(desc)), loc_(desc.loc) {
     if (set_.visS >= 0 && set_.sampling == MatrixSampling::Pixel)
         throw Error(desc.loc, "mbdpt: \"visualizematrix\" needs the stored, reordered camera subpaths of a "
                               "row-ordered \"matrixsampler\" (lattice, lhs, random or diagonal), not \"pixel\"");
@@ -404,13 +404,15 @@ struct MBDPTIntegrator::TileConnector {
     }
 
     void record(Row &r, int s, int t, const ConnectResult &res, Float scale) {
-        if (res.splat) {
+        const int layer = in.strategyLayer(s, t);
+        const Spectrum shown = in.set_.visWeights ? res.L : res.unweighted;
+        if (res.splat) {  // t = 1: light tracing
             r.rec.splat(res.pRaster, res.L * (scale * in.splatScale_));
+            if (layer >= 0) r.rec.splat(res.pRaster, shown * (scale * in.splatScale_), layer);
             return;
         }
         r.L += res.L * scale;
-        int layer = in.strategyLayer(s, t);
-        if (layer >= 0) r.rec.addLayer(layer, (in.set_.visWeights ? res.L : res.unweighted) * (scale * r.c.w));
+        if (layer >= 0) r.rec.addLayer(layer, shown * (scale * r.c.w));
     }
 
     // Strategy (s, t) of the row's camera subpath with `lightView`.

@@ -43,7 +43,7 @@
 //   integer maxdepth 5              maximum path depth (edges - 1)
 //   string lightsamplestrategy "power"  uniform | power | spatial (= power)
 //   string misheuristic "balance"   balance (pbrt-v3) | power (exponent 2)
-//   bool visualizestrategies false  layers "mbdpt_s<S>_t<T>" (t >= 2): unweighted contribution of each strategy
+//   bool visualizestrategies false  layers "mbdpt_s<S>_t<T>" (t >= 1): unweighted contribution of each strategy
 //   bool visualizeweights false     the same layers, MIS-weighted
 //   integer rrdepth 3               Russian roulette on subpaths after this many bounces (-1: off)
 //   integer pixelbounds []          accepted (use --cropwindow instead)

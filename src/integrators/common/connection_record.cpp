@@ -27,23 +27,16 @@ Float AdjointCorrection(const Vec3 &ng, const Vec3 &ns, const Vec3 &wo, const Ve
     return AbsDot(wo, ns) * AbsDot(wi, ng) / den;
 }
 
-// The record's vertex as a PathVertex (what the camera-side functions read:
-// position, normals, wo, throughput, type, flags, medium).
 // The fields a record shares with its vertex, copied either way.
 template <class From, class To>
 void CopySharedFields(const From &f, To &t) {
-    t.p = f.p;
-    t.ng = f.ng;
-    t.ns = f.ns;
-    t.wo = f.wo;
-    t.beta[0] = f.beta[0], t.beta[1] = f.beta[1], t.beta[2] = f.beta[2];
-    t.betaExp = f.betaExp;
+    CopyVertexCore(f, t);
     t.type = f.type;
     t.flags = f.flags;
-    t.geomId = f.geomId;
-    t.mediumIndex = f.mediumIndex;
 }
 
+// The record's vertex as a PathVertex (what the camera-side functions read:
+// position, normals, wo, throughput, type, flags, medium).
 PathVertex AsVertex(const LightRecord &r) {
     PathVertex v;
     CopySharedFields(r, v);

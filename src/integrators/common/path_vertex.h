@@ -125,4 +125,19 @@ struct SubpathView {
     int n = 0;
 };
 
+// The fields every compact copy of a vertex keeps (connection records, VCM's
+// light vertices), copied either way: position, normals, wo, the packed
+// throughput, the surface and the medium.
+template <class From, class To>
+void CopyVertexCore(const From &f, To &t) {
+    t.p = f.p;
+    t.ng = f.ng;
+    t.ns = f.ns;
+    t.wo = f.wo;
+    t.beta[0] = f.beta[0], t.beta[1] = f.beta[1], t.beta[2] = f.beta[2];
+    t.betaExp = f.betaExp;
+    t.geomId = f.geomId;
+    t.mediumIndex = f.mediumIndex;
+}
+
 }  // namespace gradus

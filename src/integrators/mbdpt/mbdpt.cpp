@@ -60,6 +60,11 @@ constexpr int kConnectDim = 1 << 15;
 constexpr int kLightDim = 1 << 16;
 constexpr int kMatrixDim = 1 << 17;
 
+// Light subpath i has a column in M_{1,t}: an emitter vertex ConnectLightOrigin takes.
+bool HasMatrixOrigin(const SubpathStore &light, size_t i) {
+    return light.count(i) >= 1 && IsMatrixLightOrigin(*light.path(i));
+}
+
 double Seconds() {
     return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
@@ -231,7 +236,7 @@ void MBDPTIntegrator::reorder(PassContext &ctx) {
     eligible(paths_.light, cols_, maxLen);
     if (set_.nextEventMatrix)  // M_{1,t}'s columns: the emitter vertices (ConnectLightOrigin)
         for (size_t i = 0; i < N; ++i)
-            if (paths_.light.count(i) >= 1 && IsMatrixLightOrigin(*paths_.light.path(i))) cols_[1].push_back(uint32_t(i));
+            if (HasMatrixOrigin(paths_.light, i)) cols_[1].push_back(uint32_t(i));
     if (rows) {
         prefixDistances(paths_.camera, camDist_);
         eligible(paths_.camera, rows_, maxRow);
@@ -500,7 +505,7 @@ struct MBDPTIntegrator::TileConnector {
             return;
         }
         if (pass.diagonal) {  // Eq. 7
-            if (s == 1 && light.count(r.p) >= 1 && IsMatrixLightOrigin(*light.path(r.p)))
+            if (s == 1 && HasMatrixOrigin(light, r.p))
                 pending.push_back({s, t, nullptr, light.path(r.p), 1});
             else if (s >= 2 && light.eligible(r.p, s))
                 choose(s, t, in.colPos_[light.offset[r.p] + uint32_t(s - 1)], 1);

@@ -66,16 +66,9 @@ Float Mis(Float x, bool power) { return power ? x * x : x; }
 PathVertex AsPathVertex(const Scene &scene, const LightVertex &lv) {
     PathVertex v;
     v.type = lv.inMedium() ? VertexType::Medium : VertexType::Surface;
-    v.mediumIndex = lv.mediumIndex;
+    CopyVertexCore(lv, v);
     if (lv.inMedium()) v.medium = MediumAt(scene, lv.mediumIndex);
-    v.p = lv.p;
-    v.ng = lv.ng;
-    v.ns = lv.ns;
-    v.wo = lv.wo;
-    v.beta[0] = lv.beta[0], v.beta[1] = lv.beta[1], v.beta[2] = lv.beta[2];
-    v.betaExp = lv.betaExp;
     v.pdfFwd = lv.pdfFwd;
-    v.geomId = lv.geomId;
     v.primId = lv.primId;
     v.b1 = lv.b1;
     v.b2 = lv.b2;
@@ -98,14 +91,7 @@ int VCMLightVertices(const BidirContext &ctx, const PathVertex *v, const BSDF *b
         const bool prevMerge = w.merging && i - 1 >= 1 && w.mergeable(v[i - 1], &b[i - 1]);
         if (w.mergeable(v[i], &b[i]) || v[i].inMedium()) {
             LightVertex lv;
-            lv.p = v[i].p;
-            lv.ng = v[i].ng;
-            lv.ns = v[i].ns;
-            lv.wo = v[i].wo;
-            for (int c = 0; c < 3; ++c) lv.beta[c] = v[i].beta[c];
-            lv.betaExp = v[i].betaExp;
-            lv.mediumIndex = v[i].mediumIndex;
-            lv.geomId = v[i].geomId;
+            CopyVertexCore(v[i], lv);
             lv.primId = v[i].primId;
             lv.b1 = v[i].b1;
             lv.b2 = v[i].b2;

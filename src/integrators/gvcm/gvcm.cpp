@@ -213,7 +213,7 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, const Case2Base &cb, const Cam
                            const LightVertex &lv, const VCMCameraTerms *terms, Float etaX, Arena &arena,
                            Offset *o) const {
     const Scene &scene = *scene_;
-    const PathVertex &zo = sh.y.v[u], &zoPrev = sh.y.v[u - 1];
+    const PathVertex &zo = sh.y.v[u];
     const BSDF &bo = sh.y.b[u];
     const int d = cb.d, k = cb.k;
     const PathVertex &yd = L.v[d];
@@ -227,8 +227,8 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, const Case2Base &cb, const Cam
     Vec3 dirY, wiY;  // wiY: at z'_b towards the chain (or y_d)
     Float gY;
     Spectrum fcosY(1);
-    Float probY = 1, oPhotonY;  // oPhotonY: own density of z'_b (the offset photon)
-    Float prevGeomY;            // |cos| / d^2 at y'_{m-1} seen from z'_b
+    Float probY = 1;
+    WalkedInterior walked;  // the offset chain's interior y'_{d+1} .. y'_{m-1} (k > 0)
     if (k == 0) {
         count(Case2Empty);
         // Eq. 18: y_s = y_d connectable, reconnected to z'_b.
@@ -245,9 +245,6 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, const Case2Base &cb, const Cam
             count(FallbackBlocked);
             return false;
         }
-        // Own density of z'_b sampled from y_d: p_omega(y_d) G~ (below, after p_omega).
-        oPhotonY = -1;
-        prevGeomY = ConvertDensity(1, zo, yd);  // as the base's LightVertex::prevGeom
     } else {
         count(Case2Chain);
         // Eqs. 19-20: the base chain walked so that its end moves to z'_b with y_d
@@ -255,7 +252,6 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, const Case2Base &cb, const Cam
         // z'_b's surface), the reversibility test of Sec. 4 (the walk may find
         // another solution), the offset interior evaluated and its classes kept.
         ManifoldWalkResult res;
-        WalkedInterior walked;
         const ChainShiftFailure failure =
             ShiftChain(sctx_, scene, cb.chain, cb.chain.front().sp, EndpointSP(zo.p, Vec3(zo.ng), zo.geomId), cb.in,
                        TransportMode::Importance, arena, &res, &walked);
@@ -270,10 +266,6 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, const Case2Base &cb, const Cam
         gY = ChainSolidAnglePerArea(off);
         fcosY = walked.factor;
         probY = walked.prob;
-        // Own density of the offset photon after a Dirac vertex: remapped to 1, as the base's.
-        oPhotonY = Remap(lv.pdfFwd);
-        const Vec3 toS = off.v[k].sp.p - zo.p;
-        prevGeomY = AbsDot(Vec3(walked.si[k - 1].n), Normalize(toS)) / toS.lengthSquared();
     }
     if (!(gY > 0)) {
         count(FallbackWalk);
@@ -293,19 +285,45 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, const Case2Base &cb, const Cam
     // (and, with connections, the kernels' ratio: each merge's density with its own eta, Eqs. 22-23).
     o->rho = sh.rho[u] * (pY * gY * probY) / (cb.pX * cb.gX * cb.probX);
     if (terms) o->rho *= terms->etaU / etaX;
-    if (oPhotonY < 0) oPhotonY = pY * gY;  // empty chain: z'_b sampled from y_d
     o->w = 1;
-    if (terms) {
-        // Eq. 13 for the offset path (merge at z'_b of a photon from y'_{m-1}),
-        // with the base's light-side B_m (gvcm.h) and the offset's own kernel (its eta at z'_b).
-        const VCMWeights W{&kernel_, true, set_.lightTracing, false, true};  // connecting: the t = 1 terms
-        const Float om1 = bo.pdf(Vec3(zo.wo), wiY, TransportMode::Radiance) * prevGeomY;
-        const Float SL = VCMLightPrevSum(lv, om1, terms->H, W);
-        const Float cRef = VCMPrevConnectible(lv) ? 1 : 0;
-        const Float oPrev = ConvertDensity(bo.pdf(wiY, Vec3(zo.wo), TransportMode::Importance), zo, zoPrev);
-        o->w = terms->etaU * oPhotonY / (cRef + SL + VCMCameraSum(*terms, oPhotonY, oPrev, true, false, W));
-    }
+    if (terms) o->w = case2Weight(L, d, k, walked, pY, sh, u, arena);
     return true;
+}
+
+// w_y of a case-2 offset: Eq. 13 on the offset path itself, y_0 .. y_d, the
+// walked y'_{d+1} .. y'_{m-1}, z'_u .. z'_0, with the offset's own kernel (Eq.
+// 22), by the O(m + u) sums of MergeWeight. The offset changes the light
+// side's densities from y_{d-1} on (the direction at y_d and every vertex
+// after it), so the light pass's recursive B_m does not apply; with the
+// budget's one case-2 offset per merge vertex this costs less than the walk.
+Float GVCMIntegrator::case2Weight(const ShiftSubpath &L, int d, int k, const WalkedInterior &walked, Float pY,
+                                  const CameraShift &sh, int u, Arena &arena) const {
+    const int m = d + k + 1;  // light vertices y_0 .. y'_{m-1}; the merge's photon lands at z'_u
+    PathVertex *P = ArenaArray<PathVertex>(arena, m);
+    BSDF *PB = ArenaArray<BSDF>(arena, m);
+    for (int i = 0; i <= d; ++i) P[i] = L.v[i], PB[i] = L.b[i];
+    for (int j = 0; j < k; ++j) {
+        // The base's vertex record (flags, medium, material) at the walked position; Dirac
+        // densities 0, as GenerateLightSubpath stores them after and before a specular vertex.
+        PathVertex &v = P[d + 1 + j];
+        v = L.v[d + 1 + j];
+        v.p = walked.si[j].p;
+        v.ng = walked.si[j].n;
+        v.ns = walked.bsdf[j].ns();
+        v.wo = walked.si[j].wo;
+        v.pdfFwd = v.pdfRev = 0;
+        PB[d + 1 + j] = walked.bsdf[j];
+    }
+    if (k > 0) {
+        // y'_{d+1} sampled from y_d along dirY (its directional density pY); y_d's own
+        // reverse density is 0 (sampled from the Dirac y'_{d+1}), y_{d-1}'s from y_d
+        // given the offset's direction. (With k = 0 both are the junction's: MergeWeight's.)
+        P[d + 1].pdfFwd = ConvertDensity(pY, P[d], P[d + 1]);
+        P[d].pdfRev = 0;
+        if (d >= 1)
+            P[d - 1].pdfRev = PdfArea(bctx_, P[d], &PB[d], &P[d + 1], P[d - 1], TransportMode::Radiance);
+    }
+    return MergeWeight(bctx_, bctx_.strategies, SubpathView{P, PB, m}, SubpathView{sh.y.v, sh.y.b, u + 1}, m, u + 1);
 }
 
 Float GVCMIntegrator::mergeWeight(const VCMCameraTerms &t, const PathVertex &z, const PathVertex &zPrev,

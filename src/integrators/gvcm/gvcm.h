@@ -63,11 +63,10 @@
 // offset, base weight) for photons whose chain starts at an infinite light,
 // contains a glossy (near-specular, non-Dirac) vertex, or whose offset target
 // z'_b lies on another surface than the photon (the walk keeps its end on one
-// surface), and when the walk fails; the offset's MIS sums reuse the base's
-// light-side partial sum B_m and own density of y_{m-1}: exact for an empty
-// chain with a Lambertian y_{m-1}; through a specular chain the own density of
-// y'_{d+1} is the base's y_{d+1}'s (tests/gvcm test_pieces: w_y a few percent
-// off the enumerated weight, up to 2x for w_y below 0.01).
+// surface), and when the walk fails. A case-2 offset's weight w_y takes the
+// offset's own light-side densities (the direction at y_d and the walked chain
+// change them from y_{d-1} on, so the photon's stored B_m does not apply):
+// MergeWeight's O(m + u) sums on the offset path (case2Weight).
 //
 // Parameters (bidirectional family, bidir_family.h; MIS the balance heuristic):
 //   integer maxdepth 5               maximum path depth (edges - 1)
@@ -171,6 +170,10 @@ class GVCMIntegrator : public GBDPTIntegrator {
     bool case2Base(const ShiftSubpath &L, int m, Arena &arena, Case2Base *cb) const;
     bool case2(const ShiftSubpath &L, const Case2Base &cb, const CameraShift &sh, int u, const LightVertex &lv,
                const VCMCameraTerms *terms, Float etaX, Arena &arena, Offset *o) const;
+    // w_y of a case-2 offset (Eq. 13 on the offset path: y_0 .. y_d, the walked interior of
+    // k vertices, z'_u .. z'_0; pY: the offset's directional density at y_d).
+    Float case2Weight(const ShiftSubpath &L, int d, int k, const WalkedInterior &walked, Float pY,
+                      const CameraShift &sh, int u, Arena &arena) const;
 
     GVCMSettings gset_;
     bool merging_ = false;

@@ -134,6 +134,68 @@ TEST(GMLTShift, ReversibleWithReciprocalJacobians) {
     }
 }
 
+// The shift evaluates its offset on the changed prefix only (EvaluateChangedPrefix:
+// the factors of x_0 .. x_{last+1} on y, the rest from x's evaluation): F,
+// I, the film position and the camera side's densities up to the last moved
+// vertex must equal a full Evaluate of the offset (factors multiplied in
+// another order: rounding only). A stale factor (one not recomputed where
+// the shift moved a neighbour) changes F by far more than the bound.
+TEST(GMLTShift, ChangedPrefixEvaluationMatchesFullEvaluation) {
+    for (const ShiftScene &sc : ShiftScenes()) {
+        GMLTSetup g(sc.text, sc.threshold);
+        const Float thr = g.gm->gsettings().shiftThreshold;
+        const pmlt::Mutator &mut = g.gm->mutator();
+        Arena arena, scratch;
+        int shifted = 0, chains = 0, prefixes = 0;
+        double worstF = 0, worstP = 0;
+        ForEachStrategyPath(
+            g, 1500, 0xfeed, arena,
+            [&](const pmlt::State &x, const Spectrum &) {
+                for (int d = 0; d < kNumNeighbours; ++d) {
+                    pmlt::State y;
+                    double J = 0;
+                    if (mut.shift(x, Shifted(x, d), scratch, &y, &J) != ShiftStatus::Shifted) continue;
+                    ++shifted;
+                    pmlt::PathEval full;
+                    ASSERT_TRUE(pmlt::Evaluate(g.ctx(), g.gm->filmDomain(), y.x, y.bsdf.data(), &full)) << sc.name;
+                    ASSERT_TRUE(full.complete);
+                    prefixes += !y.e.complete;  // x was evaluated in full: the prefix path was taken
+                    for (const auto &[a, ref] : {std::pair{y.e.F.r, full.F.r}, std::pair{y.e.F.g, full.F.g},
+                                                 std::pair{y.e.F.b, full.F.b}})
+                        worstF = std::max(worstF, std::abs(double(a - ref)) / std::max(std::abs(double(ref)), 1e-300));
+                    EXPECT_EQ(y.e.pRaster.x, full.pRaster.x);
+                    EXPECT_EQ(y.e.pRaster.y, full.pRaster.y);
+                    // The eye chain x_1 .. x_b (the shift's specular classes), and whether a
+                    // second chain follows (the manifold branch: moved up to x_{c-1}).
+                    const int n = x.x.size();
+                    auto specular = [&](int i) {
+                        return pmlt::ShiftClassOf(x.x.v[size_t(i)], x.bsdf[size_t(i)], thr) != pmlt::ShiftClass::Rough;
+                    };
+                    int b = 1;
+                    while (b < n - 1 && specular(b)) ++b;
+                    chains += b < n - 1 && specular(b + 1);
+                    for (int i = 0; i <= b; ++i) {
+                        worstP = std::max(worstP, std::abs(double(y.e.pE[size_t(i)]) / double(full.pE[size_t(i)]) - 1));
+                        EXPECT_EQ(y.e.lobeE[size_t(i)], full.lobeE[size_t(i)]) << sc.name << " vertex " << i;
+                    }
+                }
+                scratch.reset();
+            },
+            [](int) {});
+        std::cout << "[ prefix ] " << sc.name << ": " << shifted << " shifts (" << prefixes
+                  << " evaluated on the changed prefix, " << chains
+                  << " with a second chain), largest relative difference of F " << worstF
+                  << ", of the eye densities " << worstP << "\n";
+        EXPECT_GT(shifted, 500) << sc.name;
+        EXPECT_EQ(prefixes, shifted) << sc.name;
+        EXPECT_LT(worstF, 1e-9) << sc.name;
+        EXPECT_LT(worstP, 1e-12) << sc.name;
+        if (sc.name == "specular-box" || sc.name == "glossy-box") {
+            EXPECT_GT(chains, 50) << sc.name << ": too few shifts through second chains";
+        }
+    }
+}
+
 // First hit of the camera ray from lens point o through film point s.
 bool PrimaryHit(const BidirContext &ctx, const Point3 &o, Point2 s, Point3 *p) {
     Ray ray;

@@ -107,7 +107,7 @@ ProposalResult Mutator::manifold(const State &xs, Sampler &u, Arena &arena, Stat
 }
 
 ProposalResult Mutator::manifoldMove(const State &xs, int b, int c, int endGeom, const Ray &ray, Arena &arena,
-                                     State *ys, double *jacobian, MutationStats *stats) const {
+                                     State *ys, double *jacobian, MutationStats *stats, bool prefixOnly) const {
     const Path &x = xs.x;
     const int n = x.size();
     const PathVertex &xc = x.v[size_t(c)];
@@ -167,7 +167,9 @@ ProposalResult Mutator::manifoldMove(const State &xs, int b, int c, int endGeom,
     y.v.insert(y.v.end(), x.v.begin() + c, x.v.end());
     yb.insert(yb.end(), xs.bsdf.begin() + c, xs.bsdf.end());
     for (int i = 1; i < n; ++i) y.v[size_t(i)].wo = PackedVec3(Dir(y.v[size_t(i)], y.v[size_t(i - 1)]));
-    if (!Evaluate(ctx_, film_, y, yb.data(), &ys->e)) return ProposalResult::Zero;
+    if (!(prefixOnly ? EvaluateChangedPrefix(ctx_, film_, y, yb.data(), xs.e, c - 1, &ys->e)
+                     : Evaluate(ctx_, film_, y, yb.data(), &ys->e)))
+        return ProposalResult::Zero;
     // K(y) / D_b(y) over K(x) / D_b(x) with K = Phi / P_trace: Phi the chain's
     // sampled directions (at x_b and at each near-specular vertex g) per unit
     // area at x_c and per unit of the kept half vectors O_g

@@ -592,7 +592,7 @@ Mutator::ShiftStatus Mutator::shift(const State &xs, Point2 pFilm, Arena &arena,
         int bm, c, endGeom;
         if (!ManifoldPattern(x, set_.mscene, cls.data(), &bm, &c, &endGeom)) return ShiftStatus::Unsupported;
         MutationStats local;
-        const ProposalResult r = manifoldMove(xs, b, c, endGeom, ray, arena, ys, jacobian, &local);
+        const ProposalResult r = manifoldMove(xs, b, c, endGeom, ray, arena, ys, jacobian, &local, true);
         if (stats) {
             stats->walks += local.walks;
             stats->walkFailures += local.walkFailures;
@@ -628,7 +628,8 @@ Mutator::ShiftStatus Mutator::shift(const State &xs, Point2 pFilm, Arena &arena,
         }
     }
     for (int i = 1; i < n; ++i) y.v[size_t(i)].wo = PackedVec3(Dir(y.v[size_t(i)], y.v[size_t(i - 1)]));
-    if (!Evaluate(ctx_, film_, y, yb.data(), &ys->e)) return ShiftStatus::Blocked;
+    // Only x_1 .. x_b moved: F and the eye densities of the changed prefix (the rest is x's).
+    if (!EvaluateChangedPrefix(ctx_, film_, y, yb.data(), xs.e, b, &ys->e)) return ShiftStatus::Blocked;
     // |d mu(y) / d mu(x)| = D_b(x) / D_b(y): x_1 .. x_b as functions of the
     // film point (whose shift has unit Jacobian) and of the copied half vectors
     // of near-specular vertices, x_{b+1} on held; the delta-free form of G-MLT

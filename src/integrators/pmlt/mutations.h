@@ -95,7 +95,9 @@ class Mutator {
     // vertices of class Dirac or NearSpecular (ShiftClassOf, Fig. 5a): the eye
     // chain follows x's lobe at a Dirac vertex and copies x's half vector at a
     // near-specular one; the walk keeps every half vector of S_m. On Shifted,
-    // y is the evaluated offset (I(y) > 0) and *jacobian = |d mu(y) / d mu(x)|
+    // y is the offset with F, I > 0 and the camera side's densities evaluated
+    // on its changed prefix (EvaluateChangedPrefix; not a chain state: no light
+    // side) and *jacobian = |d mu(y) / d mu(x)|
     // in the delta-free measure of path.h: D(x) / D(y), D the density of the
     // moved vertices per film area and per unit of the kept half vectors
     // (G-MLT Eqs. 12-15). Failures depend on the path's pattern, an offset
@@ -155,8 +157,10 @@ class Mutator {
     // re-traced along `ray`, the second chain walked to x_c (its non-Dirac
     // vertices, G-MLT's near-specular ones, keep their half vectors).
     // *jacobian = [K(y) / D_b(y)] / [K(x) / D_b(x)] (manifold_perturbation.cpp).
+    // prefixOnly (the shift): y evaluated on its changed prefix x_0 .. x_c only
+    // (EvaluateChangedPrefix: F and the camera side; y is not a chain state).
     ProposalResult manifoldMove(const State &x, int b, int c, int endGeom, const Ray &ray, Arena &arena, State *y,
-                                double *jacobian, MutationStats *stats) const;
+                                double *jacobian, MutationStats *stats, bool prefixOnly = false) const;
     Float bidirDensity(const State &s, int a, int nd, int na, int n) const;
 
     const BidirContext &ctx_;

@@ -81,19 +81,13 @@ bool SampleSpecularLobe(const BSDF &bsdf, const Vec3 &wo, bool transmit, Transpo
     return false;
 }
 
-bool Evaluate(const BidirContext &ctx, const FilmDomain &film, const Path &x, const BSDF *bsdfs, PathEval *e) {
-    const int n = x.size();
-    e->F = Spectrum(0);
-    e->I = 0;
-    e->pE.assign(size_t(n), 0);
-    e->pL.assign(size_t(n), 0);
-    e->lobeE.assign(size_t(n), 1);
-    e->lobeL.assign(size_t(n), 1);
-    if (n < 2 || x.v[0].type != VertexType::Camera) return false;
-    const PathVertex &c = x.v[0], &last = x.v[size_t(n - 1)];
-    // Camera: importance, film position, lens and direction densities. The
-    // film positions are sampled over the pixel bounds, film.scale times
-    // denser than the camera's density over the full film.
+namespace {
+
+// The camera's factor of F, We G(x_0, x_1), the film position and the lens and
+// x_1 densities (Evaluate). The film positions are sampled over the pixel
+// bounds, film.scale times denser than the camera's density over the full film.
+bool CameraFactor(const BidirContext &ctx, const FilmDomain &film, const Path &x, PathEval *e, Spectrum *factor) {
+    const PathVertex &c = x.v[0];
     const Vec3 w01 = Dir(c, x.v[1]);
     const Ray ray(c.p, w01);
     const Spectrum We = ctx.camera->We(ray, &e->pRaster);
@@ -102,47 +96,87 @@ bool Evaluate(const BidirContext &ctx, const FilmDomain &film, const Path &x, co
     ctx.camera->pdfWe(ray, &pdfPos, &pdfDir);
     e->pE[0] = e->pL[0] = pdfPos > 0 ? pdfPos : Float(1);
     e->pE[1] = ConvertDensity(pdfDir * film.scale, c, x.v[1]);
-    Spectrum F = We * GeometryTerm(ctx, c, x.v[1]);
+    *factor = We * GeometryTerm(ctx, c, x.v[1]);
+    return true;
+}
 
+// Scattering vertex x_i's factor of F and the densities of its neighbours from
+// it: pE[i + 1] (camera side) and, with lightSide, pL[i - 1] (light side).
+bool ScatterFactor(const BidirContext &ctx, const Path &x, const BSDF *bsdfs, int i, bool lightSide, PathEval *e,
+                   Spectrum *factor) {
+    const PathVertex &v = x.v[size_t(i)], &prev = x.v[size_t(i - 1)], &next = x.v[size_t(i + 1)];
+    const BSDF &b = bsdfs[i];
+    if (v.type != VertexType::Surface || !b) return false;
+    const Vec3 wo = Dir(v, prev), wi = Dir(v, next);
+    const Vec3 ns = Vec3(b.ns()), ng = Vec3(v.ng);
+    const Float cosNg = AbsDot(wi, ng);
+    if (cosNg == 0) return false;
+    Spectrum f;
+    Float pdfCam, pdfLight = 0;  // solid-angle densities towards next (camera side) and prev (light side)
+    if (v.delta()) {
+        // Delta-free specular factors (path.h): both lobes against mu = eta^2 |cos_ns| dw.
+        Float probE, probL = 1;
+        Spectrum fl, fImp;
+        if (!SpecularLobe(b, wo, wi, TransportMode::Radiance, &fl, &probE)) return false;
+        if (lightSide && !SpecularLobe(b, wi, wo, TransportMode::Importance, &fImp, &probL)) return false;
+        const Float muNext = AbsDot(wi, ns) * EtaSquared(b, wi);
+        f = fl * muNext;
+        pdfCam = probE * muNext;
+        if (lightSide) pdfLight = probL * AbsDot(wo, ns) * EtaSquared(b, wo);
+        e->lobeE[size_t(i)] = probE;
+        e->lobeL[size_t(i)] = probL;
+    } else {
+        f = b.f(wo, wi, TransportMode::Radiance);
+        pdfCam = b.pdf(wo, wi, TransportMode::Radiance);
+        if (lightSide) pdfLight = b.pdf(wi, wo, TransportMode::Importance);
+    }
+    // pbrt-v3's shading-normal convention for radiance transport (path.h).
+    *factor = f * (AbsDot(wi, ns) / cosNg) * GeometryTerm(ctx, v, next);
+    e->pE[size_t(i + 1)] = ConvertDensity(pdfCam, v, next);
+    if (lightSide) e->pL[size_t(i - 1)] = ConvertDensity(pdfLight, v, prev);
+    return true;
+}
+
+void ResetEval(int n, PathEval *e) {
+    e->F = Spectrum(0);
+    e->I = 0;
+    e->pE.assign(size_t(n), 0);
+    e->pL.assign(size_t(n), 0);
+    e->lobeE.assign(size_t(n), 1);
+    e->lobeL.assign(size_t(n), 1);
+    e->factor.assign(size_t(n), Spectrum(0));
+    e->complete = false;
+}
+
+bool SetContribution(const Spectrum &F, PathEval *e) {
+    if (F.isBlack() || !F.isFinite()) return false;
+    e->F = F;
+    const double y = F.y();
+    e->I = y > 0 ? Float(y) : 0;
+    return e->I > 0;
+}
+
+}  // namespace
+
+bool Evaluate(const BidirContext &ctx, const FilmDomain &film, const Path &x, const BSDF *bsdfs, PathEval *e) {
+    const int n = x.size();
+    ResetEval(n, e);
+    if (n < 2 || x.v[0].type != VertexType::Camera) return false;
+    const PathVertex &last = x.v[size_t(n - 1)];
+    if (!CameraFactor(ctx, film, x, e, &e->factor[0])) return false;
+    Spectrum F = e->factor[0];
     // Scattering vertices: F's factor and the densities of both neighbours.
     for (int i = 1; i + 1 < n; ++i) {
-        const PathVertex &v = x.v[size_t(i)], &prev = x.v[size_t(i - 1)], &next = x.v[size_t(i + 1)];
-        const BSDF &b = bsdfs[i];
-        if (v.type != VertexType::Surface || !b) return false;
-        const Vec3 wo = Dir(v, prev), wi = Dir(v, next);
-        const Vec3 ns = Vec3(b.ns()), ng = Vec3(v.ng);
-        const Float cosNg = AbsDot(wi, ng);
-        if (cosNg == 0) return false;
-        Spectrum f;
-        Float pdfCam, pdfLight;  // solid-angle densities towards next (camera side) and prev (light side)
-        if (v.delta()) {
-            // Delta-free specular factors (path.h): both lobes against mu = eta^2 |cos_ns| dw.
-            Float probE, probL;
-            Spectrum fl, fImp;
-            if (!SpecularLobe(b, wo, wi, TransportMode::Radiance, &fl, &probE)) return false;
-            if (!SpecularLobe(b, wi, wo, TransportMode::Importance, &fImp, &probL)) return false;
-            const Float muNext = AbsDot(wi, ns) * EtaSquared(b, wi), muPrev = AbsDot(wo, ns) * EtaSquared(b, wo);
-            f = fl * muNext;
-            pdfCam = probE * muNext;
-            pdfLight = probL * muPrev;
-            e->lobeE[size_t(i)] = probE;
-            e->lobeL[size_t(i)] = probL;
-        } else {
-            f = b.f(wo, wi, TransportMode::Radiance);
-            pdfCam = b.pdf(wo, wi, TransportMode::Radiance);
-            pdfLight = b.pdf(wi, wo, TransportMode::Importance);
-        }
-        // pbrt-v3's shading-normal convention for radiance transport (path.h).
-        F *= f * (AbsDot(wi, ns) / cosNg) * GeometryTerm(ctx, v, next);
+        if (!ScatterFactor(ctx, x, bsdfs, i, true, e, &e->factor[size_t(i)])) return false;
+        F *= e->factor[size_t(i)];
         if (F.isBlack()) return false;
-        e->pE[size_t(i + 1)] = ConvertDensity(pdfCam, v, next);
-        e->pL[size_t(i - 1)] = ConvertDensity(pdfLight, v, prev);
     }
     e->pL[0] = e->pE[0];
 
     // Emitter.
     const PathVertex &toward = x.v[size_t(n - 2)];
-    F *= EmitterValue(ctx, last, toward);
+    e->factor[size_t(n - 1)] = EmitterValue(ctx, last, toward);
+    F *= e->factor[size_t(n - 1)];
     if (F.isBlack() || !F.isFinite()) return false;
     const Light *light = EmitterOf(ctx, last);
     const bool deltaLight = light && IsDeltaLight(light->flags);
@@ -151,10 +185,29 @@ bool Evaluate(const BidirContext &ctx, const FilmDomain &film, const Path &x, co
     e->pL[size_t(n - 1)] = origin;
     e->pL[size_t(n - 2)] = n - 2 == 0 ? e->pE[0] : PdfLightDirection(ctx, last, toward);
     if (deltaLight) e->pE[size_t(n - 1)] = 0;  // a delta light is never hit
-    e->F = F;
-    const double y = F.y();
-    e->I = y > 0 ? Float(y) : 0;
-    return e->I > 0;
+    e->complete = SetContribution(F, e);
+    return e->complete;
+}
+
+bool EvaluateChangedPrefix(const BidirContext &ctx, const FilmDomain &film, const Path &y, const BSDF *bsdfs,
+                           const PathEval &ex, int last, PathEval *e) {
+    const int n = y.size();
+    if (!ex.complete || int(ex.factor.size()) != n) return Evaluate(ctx, film, y, bsdfs, e);
+    ResetEval(n, e);
+    if (n < 2 || y.v[0].type != VertexType::Camera) return false;
+    Spectrum F, factor;
+    if (!CameraFactor(ctx, film, y, e, &F)) return false;
+    // Vertices 1 .. last moved; x_{last+1}'s factor changes with its wo, the
+    // emitter's with the vertex before it; the factors after that are x's.
+    const int lastScatter = std::min(last + 1, n - 2);
+    for (int i = 1; i <= lastScatter; ++i) {
+        if (!ScatterFactor(ctx, y, bsdfs, i, false, e, &factor)) return false;
+        F *= factor;
+        if (F.isBlack()) return false;
+    }
+    for (int i = lastScatter + 1; i + 1 < n; ++i) F *= ex.factor[size_t(i)];
+    F *= last + 1 >= n - 1 ? EmitterValue(ctx, y.v[size_t(n - 1)], y.v[size_t(n - 2)]) : ex.factor[size_t(n - 1)];
+    return SetContribution(F, e);
 }
 
 PathVertex LensVertex(const BidirContext &ctx, const Ray &ray) {

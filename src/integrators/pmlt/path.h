@@ -67,6 +67,10 @@ struct PathEval {
     // At a specular vertex: the discrete probability of its lobe when the
     // camera side (lobeE) or light side (lobeL) samples through it (1 elsewhere).
     std::vector<Float> lobeE, lobeL;
+    // Each vertex's factor of F (the camera's We G(x_0, x_1), a scattering
+    // vertex's f |cos| G to the next, the emitter's value): F is their product.
+    std::vector<Spectrum> factor;
+    bool complete = false;  // every field above set (Evaluate); else only F, I, pRaster and the camera side's prefix
     bool valid() const { return I > 0; }
     // Density of sampling technique t (t camera vertices, n - t light
     // vertices) over vertices [lo, hi), the others given; 0 when the technique
@@ -79,6 +83,15 @@ struct PathEval {
 // I = 0) when the path carries nothing or lands outside the film domain.
 // Visibility is not tested: mutations trace or test every edge they create.
 bool Evaluate(const BidirContext &ctx, const FilmDomain &film, const Path &x, const BSDF *bsdfs, PathEval *e);
+// F(y), I, pRaster and the camera side's densities pE, lobeE on x_0 .. x_{last+2}
+// of a path y that equals an evaluated path x (ex: Evaluate's) from vertex
+// last + 1 on (positions, flags, BSDFs): the factors of x_0 .. x_{last+1} (and
+// the emitter's, if x_{last+1} is before it) evaluated on y, the rest taken from
+// ex.factor (G-MLT's shifts change only a prefix of the path). The light side
+// (pL, lobeL) is not computed and complete stays false; if ex is not complete,
+// a full Evaluate.
+bool EvaluateChangedPrefix(const BidirContext &ctx, const FilmDomain &film, const Path &y, const BSDF *bsdfs,
+                           const PathEval &ex, int last, PathEval *e);
 
 // True when technique t (camera vertices 0..t-1, light vertices t..n-1) can
 // produce the path: t = n needs an emitter the camera side can hit; otherwise

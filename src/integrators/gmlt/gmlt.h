@@ -7,7 +7,9 @@
 // proposes a new base path by one of pmlt's mutations and a uniform new d.
 // The offset path T_d(x) is pmlt's Mutator::shift (Sec. 5.1: one pixel with
 // x_0 held, the eye chain re-traced, the second chain walked; Jacobian of
-// Sec. 5.2 in the delta-free measure). Per state:
+// Sec. 5.2 in the delta-free measure), evaluated on its changed prefix only:
+// F(T_d x) takes the factors of the unchanged vertices from x's evaluation
+// and no light-side densities are computed (pmlt::EvaluateChangedPrefix). Per state:
 //   f*(z) = n(z) [F(T_d x) |T_d'| - F(x)]     (Eqs. 7, 9; n = 1/2 when the shift
 //            succeeds with F(T_d x) > 0, 1 otherwise; failures are symmetric)
 //   f(z)  = Y|f*(z)| + alpha (1/4) Y(F(x))    (Eq. 11; Y: luminance of the

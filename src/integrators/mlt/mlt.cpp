@@ -292,6 +292,7 @@ bool MLTIntegrator::loadChain(int64_t c, const std::string &s, size_t *at) {
     if (!GetBytes(s, at, &depth) || !GetBytes(s, at, &ch.L) || !GetBytes(s, at, &ch.I) ||
         !GetBytes(s, at, &ch.pRaster) || !ch.u.load(s, at))
         return false;
+    if (depth < 0 || depth > set_.maxDepth) return false;  // chainsPerDepth() indexes by it
     ch.depth = depth;
     return true;
 }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "core/error.h"
 #include "integrators/factories.h"
@@ -228,7 +229,7 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, const Case2Base &cb, const Cam
     Float gY;
     Spectrum fcosY(1);
     Float probY = 1;
-    WalkedInterior walked;  // the offset chain's interior y'_{d+1} .. y'_{m-1} (k > 0)
+    std::optional<WalkedInterior> walkedY;  // the offset chain's interior y'_{d+1} .. y'_{m-1} (k > 0)
     if (k == 0) {
         count(Case2Empty);
         // Eq. 18: y_s = y_d connectable, reconnected to z'_b.
@@ -252,6 +253,7 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, const Case2Base &cb, const Cam
         // z'_b's surface), the reversibility test of Sec. 4 (the walk may find
         // another solution), the offset interior evaluated and its classes kept.
         ManifoldWalkResult res;
+        WalkedInterior &walked = walkedY.emplace();
         const ChainShiftFailure failure =
             ShiftChain(sctx_, scene, cb.chain, cb.chain.front().sp, EndpointSP(zo.p, Vec3(zo.ng), zo.geomId), cb.in,
                        TransportMode::Importance, arena, &res, &walked);
@@ -286,7 +288,7 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, const Case2Base &cb, const Cam
     o->rho = sh.rho[u] * (pY * gY * probY) / (cb.pX * cb.gX * cb.probX);
     if (terms) o->rho *= terms->etaU / etaX;
     o->w = 1;
-    if (terms) o->w = case2Weight(L, d, k, walked, pY, sh, u, arena);
+    if (terms) o->w = case2Weight(L, d, k, walkedY ? &*walkedY : nullptr, pY, sh, u, arena);
     return true;
 }
 
@@ -296,7 +298,7 @@ bool GVCMIntegrator::case2(const ShiftSubpath &L, const Case2Base &cb, const Cam
 // side's densities from y_{d-1} on (the direction at y_d and every vertex
 // after it), so the light pass's recursive B_m does not apply; with the
 // budget's one case-2 offset per merge vertex this costs less than the walk.
-Float GVCMIntegrator::case2Weight(const ShiftSubpath &L, int d, int k, const WalkedInterior &walked, Float pY,
+Float GVCMIntegrator::case2Weight(const ShiftSubpath &L, int d, int k, const WalkedInterior *walked, Float pY,
                                   const CameraShift &sh, int u, Arena &arena) const {
     const int m = d + k + 1;  // light vertices y_0 .. y'_{m-1}; the merge's photon lands at z'_u
     PathVertex *P = ArenaArray<PathVertex>(arena, m);
@@ -307,12 +309,12 @@ Float GVCMIntegrator::case2Weight(const ShiftSubpath &L, int d, int k, const Wal
         // densities 0, as GenerateLightSubpath stores them after and before a specular vertex.
         PathVertex &v = P[d + 1 + j];
         v = L.v[d + 1 + j];
-        v.p = walked.si[j].p;
-        v.ng = walked.si[j].n;
-        v.ns = walked.bsdf[j].ns();
-        v.wo = walked.si[j].wo;
+        v.p = walked->si[j].p;
+        v.ng = walked->si[j].n;
+        v.ns = walked->bsdf[j].ns();
+        v.wo = walked->si[j].wo;
         v.pdfFwd = v.pdfRev = 0;
-        PB[d + 1 + j] = walked.bsdf[j];
+        PB[d + 1 + j] = walked->bsdf[j];
     }
     if (k > 0) {
         // y'_{d+1} sampled from y_d along dirY (its directional density pY); y_d's own

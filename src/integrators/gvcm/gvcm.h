@@ -171,8 +171,8 @@ class GVCMIntegrator : public GBDPTIntegrator {
     bool case2(const ShiftSubpath &L, const Case2Base &cb, const CameraShift &sh, int u, const LightVertex &lv,
                const VCMCameraTerms *terms, Float etaX, Arena &arena, Offset *o) const;
     // w_y of a case-2 offset (Eq. 13 on the offset path: y_0 .. y_d, the walked interior of
-    // k vertices, z'_u .. z'_0; pY: the offset's directional density at y_d).
-    Float case2Weight(const ShiftSubpath &L, int d, int k, const WalkedInterior &walked, Float pY,
+    // k vertices (walked; null for k = 0), z'_u .. z'_0; pY: the offset's directional density at y_d).
+    Float case2Weight(const ShiftSubpath &L, int d, int k, const WalkedInterior *walked, Float pY,
                       const CameraShift &sh, int u, Arena &arena) const;
 
     GVCMSettings gset_;

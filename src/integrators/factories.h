@@ -27,5 +27,11 @@ std::unique_ptr<Integrator> CreatePMLTIntegrator(const EntityDesc &desc);
 std::vector<ParamInfo> PMLTParameters();
 std::unique_ptr<Integrator> CreateGMLTIntegrator(const EntityDesc &desc);
 std::vector<ParamInfo> GMLTParameters();
+std::unique_ptr<Integrator> CreateWhittedIntegrator(const EntityDesc &desc);
+std::vector<ParamInfo> WhittedParameters();
+std::unique_ptr<Integrator> CreateDirectLightingIntegrator(const EntityDesc &desc);
+std::vector<ParamInfo> DirectLightingParameters();
+std::unique_ptr<Integrator> CreateAmbientOcclusionIntegrator(const EntityDesc &desc);
+std::vector<ParamInfo> AmbientOcclusionParameters();
 
 }  // namespace gradus

@@ -43,6 +43,18 @@ const std::vector<IntegratorInfo> &IntegratorRegistry() {
 #ifdef GRADUS_HAS_GMLT
         {"gmlt", "gradient-domain Metropolis light transport", CreateGMLTIntegrator, GMLTParameters},
 #endif
+#ifdef GRADUS_HAS_WHITTED
+        {"whitted", "Whitted ray tracing: direct light by one light sample per light, specular recursion (pbrt-v3)",
+         CreateWhittedIntegrator, WhittedParameters},
+#endif
+#ifdef GRADUS_HAS_DIRECTLIGHTING
+        {"directlighting", "direct lighting with MIS and specular recursion (pbrt-v3)", CreateDirectLightingIntegrator,
+         DirectLightingParameters},
+#endif
+#ifdef GRADUS_HAS_AMBIENTOCCLUSION
+        {"ambientocclusion", "ambient occlusion (pbrt-v3)", CreateAmbientOcclusionIntegrator,
+         AmbientOcclusionParameters},
+#endif
     };
     return table;
 }
@@ -52,7 +64,7 @@ std::unique_ptr<Integrator> CreateIntegrator(const EntityDesc &desc) {
         if (info.name == desc.type) return info.create(desc);
     std::string valid;
     for (const auto &info : IntegratorRegistry()) valid += (valid.empty() ? "" : ", ") + info.name;
-    // pbrt-v3 integrators Gradus lacks are named as such, not reported like typos.
+    // pbrt-v3 integrators left out of this build are named as such, not reported like typos.
     // (pbrt-v3's "sppm" reaches here only without vcm: the scene builder maps it to vcm's mode vm;
     // "volpath" always maps to path.)
     for (const char *pbrt : {"whitted", "directlighting", "sppm", "ambientocclusion", "mlt"})

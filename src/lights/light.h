@@ -46,6 +46,9 @@ class Light {
     // projection lights sit in `outside`; an area light has its shape's
     // interface; infinite and distant lights have none.
     MediumInterface mediumInterface;
+    // Samples per hit in directlighting's "all" strategy (pbrt-v3's "samples"
+    // of area and infinite lights; 1 for the others).
+    int nSamples = 1;
 
     virtual Spectrum power() const = 0;
     virtual void preprocess(const Bounds3 &sceneBounds) {}

@@ -515,7 +515,8 @@ std::shared_ptr<Light> CreateLight(const LightDesc &desc, const SceneDesc &scene
         light = std::make_shared<DistantLight>(desc.worldFromLight, L, from - to);
     } else if (t == "infinite" || t == "exinfinite") {
         Spectrum L = ps.getSpectrum("L", Spectrum(1), SpectrumKind::Illuminant) * scale;
-        ps.getInt("nsamples", 1);  // accepted: Gradus sets light samples in the integrator
+        // pbrt-v3's "samples" (alias "nsamples"): light samples per hit of directlighting's "all" strategy.
+        const int nSamples = ps.getInt("samples", ps.getInt("nsamples", 1));
         std::string map = ps.getString("mapname", "");
         if (!map.empty()) {
             Image img;
@@ -528,6 +529,7 @@ std::shared_ptr<Light> CreateLight(const LightDesc &desc, const SceneDesc &scene
         } else {
             light = std::make_shared<InfiniteLight>(desc.worldFromLight, L, nullptr);
         }
+        light->nSamples = std::max(1, nSamples);
     } else if (t == "goniometric" || t == "projection") {
         Spectrum I = ps.getSpectrum("I", Spectrum(1), SpectrumKind::Illuminant) * scale;
         const std::string map = ps.getString("mapname", "");

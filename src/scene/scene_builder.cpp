@@ -377,10 +377,12 @@ void SceneBuild::addAreaLights(const ShapeDesc &sd, const ShapeBuild &b, Geometr
         if (!b.mesh) throw UnsupportedError(ad.params.locOf("Lmap", ad.loc), "\"Lmap\" on non-triangle shapes");
         lmap = it->second;
     }
-    ad.params.getInt("nsamples", 1);
+    // pbrt-v3's "samples" (alias "nsamples"): light samples per hit of directlighting's "all" strategy.
+    const int nSamples = std::max(1, ad.params.getInt("samples", ad.params.getInt("nsamples", 1)));
     ad.params.checkUnused("AreaLightSource \"" + ad.type + "\"");
     auto addLight = [&](std::shared_ptr<AreaLight> al) {
         al->mediumInterface = rec->mediumInterface;
+        al->nSamples = nSamples;
         rec->areaLights.push_back(al.get());
         scene_->lights.push_back(al);
     };

@@ -14,8 +14,10 @@ class AgreementSlow : public ::testing::TestWithParam<AgreementParam> {};
 TEST_P(AgreementSlow, AgreesWithBdpt) {
     // gmlt: the default tier's reason (conformance_test.cpp), 8x the spp here too.
     const std::string &x = std::get<0>(GetParam());
-    CheckAgreement(x, std::get<1>(GetParam()), x == "gmlt" ? AgreementConfig{40, 512, 3000, 5000}
-                                                           : AgreementConfig{40, 64, 3000, 5000});
+    AgreementConfig cfg = x == "gmlt" ? AgreementConfig{40, 512, 3000, 5000} : AgreementConfig{40, 64, 3000, 5000};
+    std::string why;
+    if (!AgreementSetup(x, std::get<1>(GetParam()), &cfg, &why)) GTEST_SKIP() << why;
+    CheckAgreement(x, std::get<1>(GetParam()), cfg);
 }
 
 INSTANTIATE_TEST_SUITE_P(conformance_slow, AgreementSlow,

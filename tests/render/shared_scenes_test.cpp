@@ -70,3 +70,64 @@ INSTANTIATE_TEST_SUITE_P(shared, SharedScene,
                                  if (ch == '-') ch = '_';
                              return n;
                          });
+
+// The one-part close-ups of ../shared/scenes/pbrt-parts (gen.py writes them;
+// references by pbrt-v3 in ../shared/references/parts-*): the image mean within
+// 1% and each block of a 4 x 3 grid within 3% or 4 standard errors of the
+// reference, for path and bdpt. A block's standard error comes from K = 8
+// independent runs (Student's t with 7 dof: P(|t| > 4) = 0.5% per block, and a
+// block fails only if it is also off by 3%, which at 8 x 8 spp is many
+// standard errors for every block but the noisiest).
+namespace {
+struct PartCase {
+    const char *part, *integrator;
+};
+class PartScene : public ::testing::TestWithParam<PartCase> {};
+}  // namespace
+
+TEST_P(PartScene, MeanAndBlocksMatchPbrtV3) {
+    const PartCase c = GetParam();
+    const std::string dir = RefDir(std::string("parts-") + c.part);
+    if (!std::filesystem::exists(dir + "/ref.exr")) GTEST_SKIP() << "no shared references";
+    const Image ref = ReadImage(dir + "/ref.exr");
+    constexpr int K = 8, kSpp = 8, BX = 4, BY = 3;
+    const int w = ref.width(), h = ref.height();
+    auto blockMean = [&](const Image &img, int b) {  // b = BX * BY: the whole image
+        const int x0 = b == BX * BY ? 0 : (b % BX) * w / BX, x1 = b == BX * BY ? w : (b % BX + 1) * w / BX;
+        const int y0 = b == BX * BY ? 0 : (b / BX) * h / BY, y1 = b == BX * BY ? h : (b / BX + 1) * h / BY;
+        double s = 0;
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) s += (img.at(x, y, 0) + img.at(x, y, 1) + img.at(x, y, 2)) / 3.0;
+        return s / (double(x1 - x0) * (y1 - y0));
+    };
+    std::vector<std::vector<double>> runs(BX * BY + 1);
+    for (int k = 0; k < K; ++k) {
+        RenderResult r = RenderSceneFile(dir + "/ref.pbrt", kSpp, 100 + k, c.integrator);
+        ASSERT_EQ(r.image.width(), w);
+        for (int b = 0; b <= BX * BY; ++b) runs[b].push_back(blockMean(r.image, b));
+    }
+    for (int b = 0; b <= BX * BY; ++b) {
+        double m = 0, v = 0;
+        for (double x : runs[b]) m += x / K;
+        for (double x : runs[b]) v += (x - m) * (x - m) / (K - 1);
+        const double se = std::sqrt(v / K), r = blockMean(ref, b), rel = m / r - 1;
+        std::printf("%s %s %s: %+.2f%% (%.2f standard errors)\n", c.part, c.integrator,
+                    b == BX * BY ? "mean" : ("block " + std::to_string(b)).c_str(), 100 * rel, (m - r) / se);
+        if (b == BX * BY)
+            EXPECT_LT(std::abs(rel), 0.01) << c.part << " " << c.integrator << " image mean";
+        else
+            EXPECT_TRUE(std::abs(rel) < 0.03 || std::abs(m - r) < 4 * se)
+                << c.part << " " << c.integrator << " block " << b << ": " << 100 * rel << "%, " << (m - r) / se
+                << " standard errors";
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(parts, PartScene,
+                         ::testing::Values(PartCase{"disney", "path"}, PartCase{"disney", "bdpt"},
+                                           PartCase{"surfaces", "path"}, PartCase{"surfaces", "bdpt"},
+                                           PartCase{"lights", "path"}, PartCase{"lights", "bdpt"},
+                                           PartCase{"realistic", "path"}, PartCase{"realistic", "bdpt"},
+                                           PartCase{"hair", "path"}, PartCase{"hair", "bdpt"}),
+                         [](const ::testing::TestParamInfo<PartCase> &i) {
+                             return std::string(i.param.part) + "_" + i.param.integrator;
+                         });

@@ -533,7 +533,9 @@ std::shared_ptr<Light> CreateLight(const LightDesc &desc, const SceneDesc &scene
         if (!map.empty()) {
             Image img;
             try {
-                img = ReadImage(scene.resolve(map));
+                // 8-bit files as stored (code / 255), as pbrt-v3's InfiniteAreaLight reads them
+                // (imageio.cpp: no sRGB decoding for lights).
+                img = ReadImage(scene.resolve(map), IntegerPixels::Stored);
             } catch (const Error &e) {
                 throw Error(ps.locOf("mapname", desc.loc), e.what());
             }

@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <functional>
 #include <sstream>
 
@@ -257,6 +258,18 @@ TEST(LightMaps, ProjectionOfAMapResampledToPowersOfTwo) {
         const Case k = Projection(upLookup, path, 50, w, h);
         CheckSampleLi(k, 2.0, 40, true);
         std::remove(path.c_str());
+    }
+}
+
+// scenes/parts: the lights part with one light each reads its map from ../shared.
+TEST(LightMaps, PartsVariantsLoadTheSharedMaps) {
+    const std::string root = GRADUS_SOURCE_DIR;
+    if (!std::filesystem::exists(root + "/../shared/scenes/pbrt-parts/gonio.png")) GTEST_SKIP() << "no ../shared";
+    for (const std::string v : {"goniometric", "projection"}) {
+        const SceneDesc d = ParseFile(root + "/scenes/parts/lights-" + v + ".pbrt");
+        ASSERT_EQ(d.lights.size(), 1u) << v;
+        EXPECT_EQ(d.lights[0].type, v);
+        EXPECT_NO_THROW(CreateLight(d.lights[0], d)) << v;
     }
 }
 

@@ -149,6 +149,74 @@ std::string DefaultRGBLayer(const Image &image) {
     throw Error("image has no R,G,B (or Y) channels in any layer");
 }
 
+namespace {
+
+int NextPowerOfTwo(int n) {
+    int p = 1;
+    while (p < n) p *= 2;
+    return p;
+}
+
+// The resampling kernel at d source texels: the Lanczos window of two lobes,
+// sinc(pi d) sinc(pi d / 2) on |d| <= 2.
+double ResampleKernel(double d) {
+    const double x = std::abs(d) / 2;
+    if (x < 1e-5) return 1;
+    if (x > 1) return 0;
+    const double a = 3.14159265358979323846 * x;
+    return (std::sin(2 * a) / (2 * a)) * (std::sin(a) / a);
+}
+
+// Taps of output texel i of m along an axis of n source texels: the four
+// source texels nearest its centre (i + 1/2) n / m, indices wrapped, with
+// normalised kernel weights.
+struct Taps {
+    int index[4];
+    double weight[4];
+};
+std::vector<Taps> ResampleTaps(int n, int m) {
+    std::vector<Taps> taps(static_cast<size_t>(m));
+    for (int i = 0; i < m; ++i) {
+        const double centre = (i + 0.5) * n / m;
+        const int first = int(std::floor(centre - 1.5));
+        double sum = 0;
+        for (int k = 0; k < 4; ++k) {
+            const int j = first + k;
+            taps[size_t(i)].index[k] = ((j % n) + n) % n;
+            sum += taps[size_t(i)].weight[k] = ResampleKernel(j + 0.5 - centre);
+        }
+        for (double &w : taps[size_t(i)].weight) w /= sum;
+    }
+    return taps;
+}
+
+}  // namespace
+
+Image ResampleToPowerOfTwo(const Image &image) {
+    const int w = image.width(), h = image.height();
+    const int W = NextPowerOfTwo(w), H = NextPowerOfTwo(h);
+    if ((W == w && H == h) || w == 0 || h == 0) return image;
+    const size_t nc = size_t(image.numChannels());
+    // Along x (rows of the source), then along y; the clamp follows the second pass.
+    const std::vector<Taps> tx = ResampleTaps(w, W), ty = ResampleTaps(h, H);
+    std::vector<double> wide(size_t(W) * h * nc, 0.0);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < W; ++x)
+            for (int k = 0; k < 4; ++k)
+                for (size_t c = 0; c < nc; ++c)
+                    wide[(size_t(y) * W + x) * nc + c] += tx[size_t(x)].weight[k] * image.at(tx[size_t(x)].index[k], y, int(c));
+    Image out(W, H, image.channelNames());
+    out.metadata = image.metadata;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x)
+            for (size_t c = 0; c < nc; ++c) {
+                double v = 0;
+                for (int k = 0; k < 4; ++k) v += ty[size_t(y)].weight[k] * wide[(size_t(ty[size_t(y)].index[k]) * W + x) * nc + c];
+                out.at(x, y, int(c)) = float(std::max(0.0, v));
+            }
+    return out;
+}
+
 float SRGBToLinear(float v) {
     if (v <= 0.04045f) return v / 12.92f;
     return std::pow((v + 0.055f) / 1.055f, 2.4f);

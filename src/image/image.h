@@ -89,10 +89,23 @@ std::string DefaultRGBLayer(const Image &image);
 float SRGBToLinear(float v);
 float LinearToSRGB(float v);
 
-// Reads EXR (all channels, multi-layer), PNG (8/16-bit, sRGB decoded to linear),
-// PFM (either endianness); other formats stb_image knows (JPEG, TGA, BMP, HDR) too.
+// How ReadImage turns the integer pixels of 8/16-bit files (PNG, TGA, JPEG,
+// BMP) into floats: sRGB-decoded to linear, or the stored value over 255 (65535)
+// as pbrt-v3's ReadImage gives them to its lights (imageio.cpp, ReadImagePNG/TGA:
+// no inverse gamma). Alpha is always the stored value; float formats ignore this.
+enum class IntegerPixels { SRGBDecoded, Stored };
+
+// Reads EXR (all channels, multi-layer), PNG (8/16-bit), PFM (either
+// endianness); other formats stb_image knows (JPEG, TGA, BMP, HDR) too.
 // Format is chosen by the file's magic bytes. Throws gradus::Error naming the file on failure.
-Image ReadImage(const std::string &filename);
+Image ReadImage(const std::string &filename, IntegerPixels ints = IntegerPixels::SRGBDecoded);
+
+// pbrt-v3's MIP-map base level (mipmap.h, MIPMap constructor): an image whose
+// width or height is not a power of two is resampled, separably, to the next
+// powers of two with a 4-tap Lanczos kernel (sinc(pi d) sinc(pi d / 2), |d| <= 2
+// source texels, weights normalised per output texel), the image repeating
+// beyond its edges, and negative results clamped to 0. Other images are returned as they are.
+Image ResampleToPowerOfTwo(const Image &image);
 
 // Throws Error if an EXR file's headers claim attribute sizes beyond the file
 // (run by ReadImage before OpenEXR reads the headers).

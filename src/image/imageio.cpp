@@ -424,7 +424,7 @@ void WritePFM(const std::string &filename, const Image &image) {
 
 // ---------------------------------------------------------------- PNG & co.
 
-Image ReadSTB(const std::string &filename, const std::vector<unsigned char> &bytes) {
+Image ReadSTB(const std::string &filename, const std::vector<unsigned char> &bytes, IntegerPixels ints) {
     if (bytes.size() > size_t(INT32_MAX)) throw Error(filename + ": file too large");
     const stbi_uc *buf = bytes.data();
     int len = int(bytes.size());
@@ -465,12 +465,13 @@ Image ReadSTB(const std::string &filename, const std::vector<unsigned char> &byt
         int ww, hh, nn;
         stbi_us *pix = stbi_load_16_from_memory(buf, len, &ww, &hh, &nn, 0);
         if (!pix) fail();
-        fill(pix, [](stbi_us v) { return SRGBToLinear(v / 65535.f); },
+        const bool decode = ints == IntegerPixels::SRGBDecoded;
+        fill(pix, [decode](stbi_us v) { return decode ? SRGBToLinear(v / 65535.f) : v / 65535.f; },
              [](stbi_us v) { return v / 65535.f; });
         stbi_image_free(pix);
     } else {
         float lut[256];
-        for (int i = 0; i < 256; ++i) lut[i] = SRGBToLinear(i / 255.f);
+        for (int i = 0; i < 256; ++i) lut[i] = ints == IntegerPixels::SRGBDecoded ? SRGBToLinear(i / 255.f) : i / 255.f;
         int ww, hh, nn;
         stbi_uc *pix = stbi_load_from_memory(buf, len, &ww, &hh, &nn, 0);
         if (!pix) fail();
@@ -505,7 +506,7 @@ void WritePNG(const std::string &filename, const Image &image) {
 
 }  // namespace
 
-Image ReadImage(const std::string &filename) {
+Image ReadImage(const std::string &filename, IntegerPixels ints) {
     try {
         unsigned char magic[4] = {0, 0, 0, 0};
         {
@@ -524,7 +525,7 @@ Image ReadImage(const std::string &filename) {
         RecordInputFile(filename, bytes.data(), bytes.size());
         if (magic[0] == 'P' && (magic[1] == 'F' || magic[1] == 'f'))
             return ReadPFM(filename, bytes);
-        return ReadSTB(filename, bytes);
+        return ReadSTB(filename, bytes, ints);
     } catch (const Error &) {
         throw;
     } catch (const std::exception &e) {

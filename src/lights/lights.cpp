@@ -108,12 +108,23 @@ class PointLight : public Light {
 };
 
 // ---------------------------------------------------------------- spot light
-// An RGB image looked up bilinearly at (s, t) in [0,1]^2 with texel centres at
-// (i + 1/2) / n and coordinates wrapping (pbrt-v3's image maps of lights read
-// their MIP-map's finest level with the repeat wrap mode). Row 0 is t = 0.
+// The map of a goniometric or projection light as pbrt-v3 builds and reads it
+// (lights/goniometric.h, lights/projection.cpp): the file's stored values
+// (8-bit PNG/TGA as value / 255, no sRGB decoding: imageio.cpp, ReadImagePNG),
+// the finest level of a MIPMap (sides not powers of two resampled up to them,
+// see ResampleToPowerOfTwo), looked up bilinearly at (s, t) in [0,1]^2 with
+// texel centres at (i + 1/2) / n and coordinates wrapping (MIPMap::Lookup with
+// width 0, ImageWrap::Repeat). Row 0 (the file's top row) is t = 0.
 class LightImage {
   public:
-    explicit LightImage(const Image &img) : w_(img.width()), h_(img.height()) {
+    // Reads the map with pbrt-v3's pixel encoding.
+    static std::unique_ptr<LightImage> Read(const std::string &filename) {
+        return std::make_unique<LightImage>(ReadImage(filename, IntegerPixels::Stored));
+    }
+    explicit LightImage(const Image &file) : fileW_(file.width()), fileH_(file.height()) {
+        const Image img = ResampleToPowerOfTwo(file);
+        w_ = img.width();
+        h_ = img.height();
         Image rgb = img.layerRGB("");
         texels_.resize(size_t(w_) * h_);
         for (int y = 0; y < h_; ++y)
@@ -125,6 +136,8 @@ class LightImage {
     }
     int width() const { return w_; }
     int height() const { return h_; }
+    // The file's aspect ratio (before resampling).
+    Float aspect() const { return Float(fileW_) / fileH_; }
     Spectrum average() const { return sum_ / Float(size_t(w_) * h_); }
     Spectrum lookup(Point2 st) const {
         const Float x = st.x * w_ - 0.5, y = st.y * h_ - 0.5;
@@ -141,7 +154,7 @@ class LightImage {
         y = ((y % h_) + h_) % h_;
         return texels_[size_t(y) * w_ + x];
     }
-    int w_, h_;
+    int fileW_, fileH_, w_ = 0, h_ = 0;
     std::vector<Spectrum> texels_;
     Spectrum sum_;
 };
@@ -230,7 +243,7 @@ class ProjectionLight : public DirectionalPointLight {
   public:
     ProjectionLight(const Transform &w, const Spectrum &I, std::unique_ptr<LightImage> map, Float fovDeg)
         : DirectionalPointLight(w, I), map_(std::move(map)) {
-        const Float aspect = map_ ? Float(map_->width()) / map_->height() : 1;
+        const Float aspect = map_ ? map_->aspect() : 1;
         sx_ = aspect > 1 ? aspect : 1;
         sy_ = aspect > 1 ? 1 : 1 / aspect;
         tanHalf_ = std::tan(Radians(fovDeg) / 2);
@@ -521,7 +534,9 @@ std::shared_ptr<Light> CreateLight(const LightDesc &desc, const SceneDesc &scene
         if (!map.empty()) {
             Image img;
             try {
-                img = ReadImage(scene.resolve(map));
+                // 8-bit files as stored (code / 255), as pbrt-v3's InfiniteAreaLight reads them
+                // (imageio.cpp: no sRGB decoding for lights).
+                img = ReadImage(scene.resolve(map), IntegerPixels::Stored);
             } catch (const Error &e) {
                 throw Error(ps.locOf("mapname", desc.loc), e.what());
             }
@@ -536,7 +551,7 @@ std::shared_ptr<Light> CreateLight(const LightDesc &desc, const SceneDesc &scene
         std::unique_ptr<LightImage> img;
         if (!map.empty()) {
             try {
-                img = std::make_unique<LightImage>(ReadImage(scene.resolve(map)));
+                img = LightImage::Read(scene.resolve(map));
             } catch (const Error &e) {
                 throw Error(ps.locOf("mapname", desc.loc), e.what());
             }

@@ -271,6 +271,78 @@ TEST(ImageIO, PngIsSRGBEncoded) {
     EXPECT_EQ(raw[2], 188);
 }
 
+// IntegerPixels::Stored: the file's codes over 255, as pbrt-v3's ReadImage hands
+// PNG maps to its lights; alpha is the stored value in both modes.
+TEST(ImageIO, PngStoredValuesWithoutSRGBDecoding) {
+    TempDir dir;
+    std::string f = dir.file("codes.png");
+    const unsigned char px[8] = {0, 1, 60, 90, 128, 200, 254, 255};  // two RGBA pixels
+    png_image png;
+    std::memset(&png, 0, sizeof(png));
+    png.version = PNG_IMAGE_VERSION;
+    png.width = 2;
+    png.height = 1;
+    png.format = PNG_FORMAT_RGBA;
+    ASSERT_TRUE(png_image_write_to_file(&png, f.c_str(), 0, px, 0, nullptr));
+    const Image stored = ReadImage(f, IntegerPixels::Stored), decoded = ReadImage(f);
+    for (int x = 0; x < 2; ++x)
+        for (int c = 0; c < 4; ++c) {
+            const float code = px[4 * x + c] / 255.f;
+            EXPECT_EQ(stored.at(x, 0, c), code) << x << " " << c;
+            // sRGB (IEC 61966-2-1) decoding of the colour channels by default.
+            const float srgb = code <= 0.04045f ? code / 12.92f : std::pow((code + 0.055f) / 1.055f, 2.4f);
+            EXPECT_NEAR(decoded.at(x, 0, c), c == 3 ? code : srgb, 1e-6f) << x << " " << c;
+        }
+    EXPECT_NEAR(decoded.at(1, 0, 0), 0.2158605f, 1e-6f);  // code 128
+}
+
+// ResampleToPowerOfTwo against the convolution it stands for, summed here over
+// every source texel (the image repeating): output texel (X, Y) of W x H has its
+// centre at ((X + 1/2) w / W, (Y + 1/2) h / H) in source texels, the kernel is
+// k(d) = sinc(pi d) sinc(pi d / 2) for |d| < 2, normalised per axis, and the
+// result is clamped at 0 (pbrt-v3, mipmap.h, MIPMap::MIPMap and resampleWeights).
+TEST(Image, ResampleToPowerOfTwoIsTheLanczosConvolution) {
+    auto sinc = [](double x) { return x == 0 ? 1.0 : std::sin(x) / x; };
+    auto k = [&](double d) { return std::abs(d) < 2 ? sinc(M_PI * d) * sinc(M_PI * d / 2) : 0.0; };
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(0, 1);
+    for (auto [w, h] : {std::pair{6, 3}, std::pair{5, 8}, std::pair{3, 5}}) {
+        Image img(w, h, {"R", "G", "B", "A"});
+        for (float &v : img.data()) v = u(rng) < 0.3f ? 0.f : u(rng);  // edges: negative lobes get clamped
+        img.metadata["note"] = "kept";
+        const Image out = ResampleToPowerOfTwo(img);
+        int W = 1, H = 1;
+        while (W < w) W *= 2;
+        while (H < h) H *= 2;
+        ASSERT_EQ(out.width(), W);
+        ASSERT_EQ(out.height(), H);
+        ASSERT_EQ(out.channelNames(), img.channelNames());
+        EXPECT_EQ(out.metadata.at("note"), std::string("kept"));
+        int clamped = 0;
+        for (int Y = 0; Y < H; ++Y)
+            for (int X = 0; X < W; ++X)
+                for (int c = 0; c < 4; ++c) {
+                    const double cx = (X + 0.5) * w / W, cy = (Y + 0.5) * h / H;
+                    double sum = 0, kx = 0, ky = 0;
+                    for (int a = -3 * w; a < 4 * w; ++a) kx += k(a + 0.5 - cx);
+                    for (int b = -3 * h; b < 4 * h; ++b) ky += k(b + 0.5 - cy);
+                    for (int b = -3 * h; b < 4 * h; ++b)
+                        for (int a = -3 * w; a < 4 * w; ++a) {
+                            const double wt = k(a + 0.5 - cx) * k(b + 0.5 - cy);
+                            if (wt != 0) sum += wt * img.at(((a % w) + w) % w, ((b % h) + h) % h, c);
+                        }
+                    const double expect = std::max(0.0, sum / (kx * ky));
+                    clamped += sum < 0;
+                    EXPECT_NEAR(out.at(X, Y, c), expect, 1e-6) << w << "x" << h << " at " << X << " " << Y << " " << c;
+                }
+        if (W != w) EXPECT_GT(clamped, 0) << w << "x" << h << ": no clamped texel exercised";
+    }
+    // Powers of two are left as they are.
+    Image p2(4, 2, {"R", "G", "B"});
+    for (float &v : p2.data()) v = u(rng) - 0.5f;
+    EXPECT_EQ(ResampleToPowerOfTwo(p2).data(), p2.data());
+}
+
 TEST(ImageIO, PfmRoundTripExact) {
     TempDir dir;
     Image img = Image::RGB(5, 3);

@@ -3,8 +3,10 @@
 // pdfLe(), sampleLe()/pdfLe() agreement, and power() against numerical
 // integrals. Significance: 1% for the whole suite (Sidak-corrected per test).
 #include <gtest/gtest.h>
+#include <png.h>
 #include <unistd.h>
 #include <cstdio>
+#include <cstring>
 
 #include "image/image.h"
 #include "lights/light.h"
@@ -350,6 +352,31 @@ TEST(InfiniteLight, PowerMatchesQuadrature) {
 // A non-finite direction (a degenerate ray in a fuzzed gbdpt scene) reached
 // the texel lookup's int conversion (UBSan): it now has no radiance and no
 // density, for a map and for a constant environment.
+// An 8-bit PNG environment map gives its codes / 255 (pbrt-v3 reads light maps
+// without sRGB decoding): at each texel centre's direction (theta from +z down
+// the rows, phi = atan2(y, x) across the columns) Le is L times that texel.
+TEST(InfiniteLight, PngMapValuesAsStored) {
+    const unsigned char codes[4 * 2 * 3] = {10, 60, 128, 200, 255, 1, 90, 30, 140, 250, 5, 77,
+                                            33, 66, 99, 120, 180, 240, 45, 135, 225, 2, 128, 254};
+    const std::string path = "/tmp/gradus_lights_test_env_" + std::to_string(::getpid()) + ".png";
+    png_image png;
+    std::memset(&png, 0, sizeof(png));
+    png.version = PNG_IMAGE_VERSION;
+    png.width = 4;
+    png.height = 2;
+    png.format = PNG_FORMAT_RGB;
+    ASSERT_TRUE(png_image_write_to_file(&png, path.c_str(), 0, codes, 0, nullptr));
+    auto l = MakeLight("LightSource \"infinite\" \"rgb L\" [2 2 2] \"string mapname\" \"" + path + "\"");
+    for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 4; ++x) {
+            const Float theta = Pi * (y + 0.5) / 2, phi = 2 * Pi * (x + 0.5) / 4;
+            const Vec3 w(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta));
+            const Spectrum Le = l->Le(Ray(Point3(0, 0, 0), w));  // a ray escaping along w
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(Le[c], 2 * codes[3 * (4 * y + x) + c] / 255.0, 1e-6) << x << " " << y;
+        }
+    std::remove(path.c_str());
+}
+
 TEST(InfiniteLight, NonFiniteDirectionHasNoRadiance) {
     Image map = TestMap();
     Bounds3 b;

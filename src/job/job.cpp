@@ -239,6 +239,7 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
     CreateJobIntegrator(desc, opts, &job, &idesc);
     // 4. The scene, and the scene parts this integrator refuses.
     job.scene = BuildScene(desc, res);
+    job.warnings.insert(job.warnings.end(), job.scene->notes.begin(), job.scene->notes.end());
     RefuseUnhandledParts(*job.integrator, *job.scene, desc, idesc);
     RecordJobProvenance(desc, opts, sdesc, idesc, res, crop, &job);
     return job;

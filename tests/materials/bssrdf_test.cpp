@@ -194,7 +194,9 @@ struct BeamModel {
         };
         return HalfLine(integrand, relTol);
     }
-    double profile(double r, double relTol) const { return singleScattering(r, relTol) + multipleScattering(r, relTol); }
+    double profile(double r, double relTol) const {
+        return singleScattering(r, relTol) + multipleScattering(r, relTol);
+    }
 };
 
 // Exact Fresnel moments: the integral of Fr(mu) mu^i over mu in [0, 1], light

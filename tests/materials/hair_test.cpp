@@ -443,8 +443,8 @@ TEST(Hair, SigmaAFromConcentrationAndReflectance) {
 // material is compared, at hits on a tube and for several direction pairs, with
 // one given only the expected sigma_a (computed here from the published formulas).
 TEST(Hair, ParameterPrecedenceAndNotes) {
-    const std::string shape = "\nShape \"curve\" \"string type\" \"cylinder\" \"point P\" [-1 0 0 -0.3 0 0 0.3 0 0 1 0 0] "
-                              "\"float width\" 0.4";
+    const std::string shape = "\nShape \"curve\" \"string type\" \"cylinder\" "
+                              "\"point P\" [-1 0 0 -0.3 0 0 0.3 0 0 1 0 0] \"float width\" 0.4";
     const Spectrum col(0.5, 0.4, 0.3);
     auto fromColor = [&](double bn) {
         Spectrum s;

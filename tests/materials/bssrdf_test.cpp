@@ -68,7 +68,7 @@ Float PlaneIntegral(G g, Float sigmaT) {
 // --- An independent photon-beam-diffusion evaluation ------------------------------
 // The model of Habel, Christensen & Jarosz 2013 with the boundary of d'Eon & Irving
 // 2011, as pbrt-v3 defines it (book Sec. 15.5), evaluated from its integrals with
-// converged adaptive quadrature (not the 100-point quantile rule of bssrdf.cpp) and
+// converged adaptive quadrature (not the 100-node quantile rule of bssrdf.cpp) and
 // with Fresnel written out here. sigma_t = 1; g is the Henyey-Greenstein parameter.
 
 // Unpolarised Fresnel reflectance from index n1 into n2 at incidence cosine cosI.
@@ -156,8 +156,8 @@ struct BeamModel {
     // the interface (Fresnel from inside; total internal reflection above the
     // critical angle), cos(theta_o) = t / d for the exit area.
     double singleScattering(double r, double relTol) const {
-        // Depths above t_c (sin theta_o = r / d > 1 / eta) reflect totally; below it
-        // 1 - Fr grows as sqrt(t - t_c): t = t_c + u^2 makes the integrand smooth.
+        // Scattering shallower than t_c (sin theta_o = r / d > 1 / eta) is totally
+        // reflected; deeper, 1 - Fr grows as sqrt(t - t_c): t = t_c + u^2 smooths it.
         const double tc = r / std::tan(std::asin(1 / eta));
         auto integrand = [&](double t) {
             const double d = std::hypot(r, t), cosO = t / d;

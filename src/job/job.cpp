@@ -58,8 +58,10 @@ static void RefuseUnhandledParts(const Integrator &integrator, const Scene &scen
                 mloc = md.loc;
                 break;
             }
-        throw Error(at, "Integrator \"" + idesc.type + "\" does not render subsurface scattering (material made at " +
-                            mloc.str() + "); BSSRDFs render with path");
+        // Without an Integrator directive (--integrator on a scene without one) the material's place.
+        throw Error(idesc.present ? idesc.loc : mloc, "Integrator \"" + idesc.type +
+                                                        "\" does not render subsurface scattering (material made at " +
+                                                        mloc.str() + "); BSSRDFs render with path");
     }
     if (!scene.camera->hasImportance() && !integrator.rendersCamerasWithoutImportance())
         throw Error(idesc.present ? idesc.loc : desc.camera.loc,
@@ -239,6 +241,7 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
     CreateJobIntegrator(desc, opts, &job, &idesc);
     // 4. The scene, and the scene parts this integrator refuses.
     job.scene = BuildScene(desc, res);
+    job.warnings.insert(job.warnings.end(), job.scene->notes.begin(), job.scene->notes.end());
     RefuseUnhandledParts(*job.integrator, *job.scene, desc, idesc);
     RecordJobProvenance(desc, opts, sdesc, idesc, res, crop, &job);
     return job;

@@ -282,12 +282,21 @@ class HairMaterial : public Material {
 
 }  // namespace
 
-std::shared_ptr<Material> CreateHairMaterial(const ParamSet &p, const NamedTextures &tex, const FileLoc &loc) {
+std::shared_ptr<Material> CreateHairMaterial(const ParamSet &p, const NamedTextures &tex, const FileLoc &loc,
+                                             std::vector<std::string> *notes) {
     auto m = std::make_shared<HairMaterial>();
     // pbrt-v3's precedence: sigma_a, then color, then the melanins (the others are
-    // ignored, as pbrt-v3 does with a warning); none: eumelanin 1.3.
+    // ignored with a note, as pbrt-v3 warns); none: eumelanin 1.3.
     const bool hasSigma = p.has("sigma_a"), hasColor = p.has("color");
     const bool hasMel = p.has("eumelanin") || p.has("pheomelanin");
+    if (notes && (hasSigma || hasColor)) {
+        const char *winner = hasSigma ? "sigma_a" : "color";
+        for (const char *name : {"color", "eumelanin", "pheomelanin"})
+            if (p.has(name) && std::string(name) != winner)
+                notes->push_back(p.locOf(name, loc).str() + ": material \"hair\": \"" + name +
+                                 "\" is ignored since \"" + winner + "\" is given (precedence: sigma_a, color, "
+                                 "eumelanin/pheomelanin)");
+    }
     if (hasSigma) m->sigmaA = GetSpectrumTexture(p, "sigma_a", Spectrum(0), tex, loc);
     if (hasColor) m->color = GetSpectrumTexture(p, "color", Spectrum(0), tex, loc);
     if (p.has("eumelanin")) m->eumelanin = GetFloatTexture(p, "eumelanin", 0, tex, loc);

@@ -20,6 +20,8 @@
 #pragma once
 #include <array>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "materials/bsdf.h"
 #include "materials/material.h"
@@ -68,7 +70,10 @@ class HairBxDF : public BxDF {
 
 // The "hair" material (called by CreateMaterial). Parameters as pbrt-v3:
 // sigma_a, color, eumelanin, pheomelanin (precedence in that order; none given:
-// eumelanin 1.3), eta 1.55, beta_m 0.3, beta_n 0.3, alpha 2 (degrees).
-std::shared_ptr<Material> CreateHairMaterial(const ParamSet &params, const NamedTextures &textures, const FileLoc &loc);
+// eumelanin 1.3), eta 1.55, beta_m 0.3, beta_n 0.3, alpha 2 (degrees). A
+// parameter the precedence ignores adds a located note to `notes` (when given),
+// as pbrt-v3 warns.
+std::shared_ptr<Material> CreateHairMaterial(const ParamSet &params, const NamedTextures &textures, const FileLoc &loc,
+                                             std::vector<std::string> *notes = nullptr);
 
 }  // namespace gradus

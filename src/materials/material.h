@@ -2,6 +2,7 @@
 #pragma once
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/arena.h"
 #include "materials/bsdf.h"
@@ -32,9 +33,10 @@ class Material {
 // parameters (textures resolved through `textures`); unknown types and known
 // but unsupported pbrt-v3 materials throw located errors. The caller runs
 // desc.params.checkUnused() afterwards. `named` resolves "mix" components; `scene`
-// (when given) resolves relative file names such as "fourier"'s bsdffile.
+// (when given) resolves relative file names such as "fourier"'s bsdffile; `notes`
+// (when given) receives located notes on parameters read but ignored (pbrt-v3's warnings).
 std::shared_ptr<Material> CreateMaterial(const MaterialDesc &desc, const NamedTextures &textures,
                                          const std::map<std::string, std::shared_ptr<Material>> &named,
-                                         const SceneDesc *scene = nullptr);
+                                         const SceneDesc *scene = nullptr, std::vector<std::string> *notes = nullptr);
 
 }  // namespace gradus

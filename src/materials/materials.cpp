@@ -310,11 +310,11 @@ Roughness ReadRoughness(const ParamSet &p, const NamedTextures &tex, const FileL
 
 std::shared_ptr<Material> CreateMaterial(const MaterialDesc &desc, const NamedTextures &tex,
                                          const std::map<std::string, std::shared_ptr<Material>> &named,
-                                         const SceneDesc *scene) {
+                                         const SceneDesc *scene, std::vector<std::string> *notes) {
     const ParamSet &p = desc.params;
     const FileLoc &loc = desc.loc;
     const std::string &t = desc.type;
-    if (t == "hair") return CreateHairMaterial(p, tex, loc);  // no bumpmap in pbrt-v3's hair
+    if (t == "hair") return CreateHairMaterial(p, tex, loc, notes);  // no bumpmap in pbrt-v3's hair
     if (t == "" || t == "none" || t == "interface") return std::make_shared<InterfaceMaterial>();
     if (t == "mix") {
         std::vector<std::string> names = p.getStrings("materials");

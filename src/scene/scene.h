@@ -94,6 +94,8 @@ class Scene {
     const Medium *cameraMedium = nullptr;        // the medium the camera sits in
     Bounds3 bounds;
     SceneFeatures features;
+    // Located notes for the user from building (parameters read but ignored).
+    std::vector<std::string> notes;
 };
 
 }  // namespace gradus

@@ -244,7 +244,7 @@ void SceneBuild::buildMaterials() {
             md.params.checkUnused("Material \"" + md.type + "\"");
             continue;
         }
-        auto m = CreateMaterial(md, textures_, named, &desc_);
+        auto m = CreateMaterial(md, textures_, named, &desc_, &scene_->notes);
         md.params.checkUnused("Material \"" + md.type + "\"");
         if (!md.name.empty()) named[md.name] = m;
         matByIndex_[i] = m.get();

@@ -2,7 +2,8 @@
 // parameter sets, sample/eval consistency, white-furnace energy (<= 1 where the model
 // conserves energy, against a quadrature of f |cos| where it does not), reciprocity,
 // the diffuse lobes against Burley 2012's closed form, roughness reporting, parameter
-// handling and located errors.
+// handling (defaults against pbrt-v3's literals, out-of-range texture values against the
+// bounds written out) and located errors.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -499,15 +500,142 @@ TEST(Disney, ZooParameterSetsAndDefaults) {
     BSDF b = m->getBSDF(si, arena, TransportMode::Radiance);
     EXPECT_EQ(b.eta(), 1.5);
     EXPECT_TRUE(b.flags() & BSDF_TRANSMISSION);
-    // Defaults equal pbrt-v3's: color 0.5, roughness 0.5, eta 1.5, ... (DisneyParams()).
     MaterialDesc dd = ParseMaterial("Material \"disney\"");
     auto md = CreateMaterial(dd, {}, {});
     SurfaceInteraction si2 = FlatHit();
-    BSDF bd = md->getBSDF(si2, arena, TransportMode::Radiance);
-    DisneyBxDF ref{DisneyParams()};
-    Vec3 wo = Dir(0.6, 0.3), wi = Dir(0.8, 2.0);
-    EXPECT_EQ(bd.f(wo, wi).g, ref.f(wo, wi, TransportMode::Radiance).g);
-    EXPECT_EQ(bd.eta(), 1);  // no transmission by default
+    EXPECT_EQ(md->getBSDF(si2, arena, TransportMode::Radiance).eta(), 1);  // no transmission by default
+}
+
+namespace {
+
+// f and pdf of two materials at a fixed set of direction pairs (both hemispheres,
+// both transport modes): bit-identical, or (when differ is set) not identical.
+void ExpectSameScattering(const std::shared_ptr<Material> &a, const std::shared_ptr<Material> &b,
+                          const std::string &what, bool differ = false) {
+    Arena arena;
+    SurfaceInteraction sa = FlatHit(), sb = FlatHit();
+    const BSDF ba = a->getBSDF(sa, arena, TransportMode::Radiance), bb = b->getBSDF(sb, arena, TransportMode::Radiance);
+    ASSERT_TRUE(ba && bb) << what;
+    bool same = ba.eta() == bb.eta();
+    for (Float co : {0.9, 0.45, -0.3})
+        for (Float ci : {0.8, 0.2, -0.6, -0.95})
+            for (Float phi : {0.4, 2.5})
+                for (TransportMode mode : {TransportMode::Radiance, TransportMode::Importance}) {
+                    const Vec3 wo = Dir(co, 1.1), wi = Dir(ci, 1.1 + phi);
+                    const Spectrum fa = ba.f(wo, wi, mode), fb = bb.f(wo, wi, mode);
+                    same = same && fa.r == fb.r && fa.g == fb.g && fa.b == fb.b &&
+                           ba.pdf(wo, wi, mode) == bb.pdf(wo, wi, mode);
+                }
+    EXPECT_EQ(same, !differ) << what;
+}
+
+std::shared_ptr<Material> Disney(const std::string &params, const NamedTextures &tex = {}) {
+    MaterialDesc d = ParseMaterial("Material \"disney\" " + params);
+    auto m = CreateMaterial(d, tex, {});
+    d.params.checkUnused("Material");
+    return m;
+}
+
+}  // namespace
+
+// Defaults: pbrt-v3's CreateDisneyMaterial (materials/disney.cpp) reads color 0.5,
+// metallic 0, eta 1.5, roughness 0.5, speculartint 0, anisotropic 0, sheen 0,
+// sheentint 0.5, clearcoat 0, clearcoatgloss 1, spectrans 0, scatterdistance 0,
+// thin false, flatness 0, difftrans 1. Each omitted parameter must scatter exactly as
+// that literal written out, in a setting where the parameter shows (e.g. sheentint
+// with sheen on), and differently from a nearby value (so the comparison can fail).
+TEST(Disney, DefaultsArePbrtV3s) {
+    struct Case {
+        const char *context, *literal, *nearby;
+    } cases[] = {
+        {"", "\"rgb color\" [0.5 0.5 0.5]", "\"rgb color\" [0.55 0.5 0.5]"},
+        {"", "\"float metallic\" [0]", "\"float metallic\" [0.1]"},
+        {"", "\"float eta\" [1.5]", "\"float eta\" [1.45]"},
+        {"", "\"float roughness\" [0.5]", "\"float roughness\" [0.45]"},
+        // (the tint shows in the Schlick part of the Fresnel blend: metallic in (0, 1))
+        {"\"rgb color\" [0.8 0.3 0.2] \"float metallic\" [0.5]", "\"float speculartint\" [0]",
+         "\"float speculartint\" [0.1]"},
+        {"", "\"float anisotropic\" [0]", "\"float anisotropic\" [0.1]"},
+        {"", "\"float sheen\" [0]", "\"float sheen\" [0.1]"},
+        {"\"rgb color\" [0.8 0.3 0.2] \"float sheen\" [1]", "\"float sheentint\" [0.5]", "\"float sheentint\" [0.4]"},
+        {"", "\"float clearcoat\" [0]", "\"float clearcoat\" [0.1]"},
+        {"\"float clearcoat\" [1]", "\"float clearcoatgloss\" [1]", "\"float clearcoatgloss\" [0.9]"},
+        {"", "\"float spectrans\" [0]", "\"float spectrans\" [0.1]"},
+        {"", "\"bool thin\" \"false\"", "\"bool thin\" \"true\""},
+        {"\"bool thin\" \"true\"", "\"float flatness\" [0]", "\"float flatness\" [0.1]"},
+        {"\"bool thin\" \"true\"", "\"float difftrans\" [1]", "\"float difftrans\" [0.9]"},
+        {"", "\"rgb scatterdistance\" [0 0 0]", nullptr},  // > 0 is refused (see below)
+    };
+    for (const Case &c : cases) {
+        const std::string ctx = c.context;
+        auto omitted = Disney(ctx), literal = Disney(ctx + " " + c.literal);
+        ExpectSameScattering(omitted, literal, ctx + " / " + c.literal);
+        if (c.nearby) ExpectSameScattering(omitted, Disney(ctx + " " + c.nearby), ctx + " / " + c.nearby, true);
+    }
+}
+
+// Out-of-range values (a texture may give them; constants are located errors) act as
+// the nearest valid value, written here as a literal: [0, 1] for the weights, tints,
+// gloss and anisotropy, >= 0 for roughness, sheen, clearcoat and the colour (pbrt-v3
+// clamps the colour), [0.001, 1000] for eta.
+TEST(Disney, OutOfRangeTextureValuesClamp) {
+    struct Fixed : FloatTexture {  // a constant that is not a ConstantTexture (no range check)
+        Float v;
+        explicit Fixed(Float x) : v(x) {}
+        Float evaluate(const SurfaceInteraction &) const override { return v; }
+    };
+    struct FixedColor : SpectrumTexture {
+        Spectrum v;
+        explicit FixedColor(Spectrum x) : v(x) {}
+        Spectrum evaluate(const SurfaceInteraction &) const override { return v; }
+    };
+    // Settings in which the parameter shows (the tint through the Schlick part of the
+    // metallic Fresnel blend).
+    const char *tint = "\"rgb color\" [0.8 0.3 0.2] \"float metallic\" [0.5]",
+               *sheen = "\"rgb color\" [0.8 0.3 0.2] \"float sheen\" [1]", *coat = "\"float clearcoat\" [1]",
+               *thin = "\"bool thin\" \"true\"", *trans = "\"float spectrans\" [0.5]";
+    struct Case {
+        const char *context, *name;
+        Float value;
+        const char *literal, *inside;  // the bound, and a value just inside it
+    } cases[] = {
+        {"", "metallic", 1.7, "\"float metallic\" [1]", "\"float metallic\" [0.9]"},
+        {"", "metallic", -0.4, "\"float metallic\" [0]", "\"float metallic\" [0.1]"},
+        {"", "spectrans", 1.3, "\"float spectrans\" [1]", "\"float spectrans\" [0.9]"},
+        {"", "spectrans", -0.2, "\"float spectrans\" [0]", "\"float spectrans\" [0.1]"},
+        {"", "roughness", -0.3, "\"float roughness\" [0]", "\"float roughness\" [0.1]"},
+        {tint, "speculartint", 2, "\"float speculartint\" [1]", "\"float speculartint\" [0.9]"},
+        {tint, "speculartint", -1, "\"float speculartint\" [0]", "\"float speculartint\" [0.1]"},
+        {"", "anisotropic", 1.5, "\"float anisotropic\" [1]", "\"float anisotropic\" [0.9]"},
+        {"", "anisotropic", -0.5, "\"float anisotropic\" [0]", "\"float anisotropic\" [0.1]"},
+        {"", "sheen", -1, "\"float sheen\" [0]", "\"float sheen\" [0.1]"},
+        {sheen, "sheentint", 1.8, "\"float sheentint\" [1]", "\"float sheentint\" [0.9]"},
+        {sheen, "sheentint", -0.8, "\"float sheentint\" [0]", "\"float sheentint\" [0.1]"},
+        {"", "clearcoat", -2, "\"float clearcoat\" [0]", "\"float clearcoat\" [0.1]"},
+        {coat, "clearcoatgloss", 1.5, "\"float clearcoatgloss\" [1]", "\"float clearcoatgloss\" [0.9]"},
+        {coat, "clearcoatgloss", -1, "\"float clearcoatgloss\" [0]", "\"float clearcoatgloss\" [0.1]"},
+        {thin, "flatness", 2, "\"float flatness\" [1]", "\"float flatness\" [0.9]"},
+        {thin, "flatness", -2, "\"float flatness\" [0]", "\"float flatness\" [0.1]"},
+        {thin, "difftrans", 3, "\"float difftrans\" [1]", "\"float difftrans\" [0.9]"},
+        {thin, "difftrans", -1, "\"float difftrans\" [0]", "\"float difftrans\" [0.1]"},
+        {trans, "eta", 5000, "\"float eta\" [1000]", "\"float eta\" [900]"},
+        {trans, "eta", -1, "\"float eta\" [0.001]", "\"float eta\" [0.002]"},
+    };
+    for (const Case &c : cases) {
+        NamedTextures tex;
+        tex.floats["t"] = std::make_shared<Fixed>(c.value);
+        const std::string ctx = c.context, what = ctx + " " + c.name + " " + std::to_string(c.value);
+        auto textured = Disney(ctx + " \"texture " + c.name + "\" \"t\"", tex);
+        ExpectSameScattering(textured, Disney(ctx + " " + c.literal), what + " / " + c.literal);
+        // ... and the bound shows in this setting (the comparison can fail).
+        ExpectSameScattering(textured, Disney(ctx + " " + c.inside), what + " / " + c.inside, true);
+    }
+    NamedTextures tex;
+    tex.spectra["c"] = std::make_shared<FixedColor>(Spectrum(-0.5, 0.3, 1.2));
+    ExpectSameScattering(Disney("\"texture color\" \"c\"", tex), Disney("\"rgb color\" [0 0.3 1.2]"),
+                         "color (-0.5, 0.3, 1.2) / [0 0.3 1.2]");
+    ExpectSameScattering(Disney("\"texture color\" \"c\"", tex), Disney("\"rgb color\" [0.05 0.3 1.2]"),
+                         "color (-0.5, 0.3, 1.2) / [0.05 0.3 1.2]", true);
 }
 
 TEST(Disney, BadParametersAreLocatedErrors) {

@@ -47,7 +47,10 @@ void BDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &a
 
     Spectrum L(0);
     for (int t = 1; t <= nC; ++t) {
-        for (int s = 0; s <= nL; ++s) {
+        // s = 1 samples its own light point: it runs even when the light subpath is
+        // empty (a projector's emission sample outside its slide, a failed sampleLe),
+        // or next-event estimation would be lost with it.
+        for (int s = 0; s <= std::max(nL, scene.lights.empty() ? 0 : 1); ++s) {
             int depth = s + t - 2;
             if ((s == 1 && t == 1) || depth < 0 || depth > set_.maxDepth) continue;
             ConnectSamples u;

@@ -394,7 +394,8 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
     run.traceSubpaths(ray);
     run.shiftCameraSubpath();
     for (int t = 1; t <= (connections_ ? run.cam.n : 0); ++t)
-        for (int s = 0; s <= run.light.n; ++s) run.strategy(s, t, &out);
+        // s = 1 samples its own light point: it runs even with an empty light subpath (bdpt.cpp).
+        for (int s = 0; s <= std::max(run.light.n, scene_->lights.empty() ? 0 : 1); ++s) run.strategy(s, t, &out);
     out.primal = run.primal;
     addStrategies(CameraState{&run.cam, run.shifts, inside, w, &arena, &sampler}, &out);
     return out;

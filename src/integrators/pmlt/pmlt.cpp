@@ -163,7 +163,8 @@ uint64_t PMLTIntegrator::forEachStrategy(uint64_t key, int64_t k, Arena &arena,
     const uint64_t ckey = key ^ kBootstrapTag ^ kConnectTag;  // the seed's connection key
     uint64_t nonFinite = 0;
     for (int t = 1; t <= smp.nC; ++t)
-        for (int s = 0; s <= smp.nL; ++s) {
+        // s = 1 samples its own light point: it runs even with an empty light subpath (bdpt.cpp).
+        for (int s = 0; s <= std::max(smp.nL, ctx_.scene->lights.empty() ? 0 : 1); ++s) {
             const int depth = s + t - 2;
             if (depth < 0 || depth > set_.maxDepth || (s == 1 && t == 1)) continue;
             if (direct_ && s + t <= 3) continue;  // rendered by renderDirect

@@ -122,8 +122,9 @@ TEST(MediaBidir, AbsorbingSlabBDPT) { CheckSlab("bdpt"); }
 TEST(MediaBidir, AbsorbingSlabVCM) { CheckSlab("vcm"); }
 TEST(MediaBidir, AbsorbingSlabMBDPT) { CheckSlab("mbdpt"); }
 // mlt: 256 mutations per pixel; every path of light has depth 0 (the
-// emitter is black, the slab does not scatter), where the bootstrap's 4096
-// states estimate b.
+// emitter is black, the slab does not scatter). The image's luminance is b,
+// whose depth-0 states pass the slab or not (distance sampling in one channel):
+// 65536 of them keep a 2% bias detectable.
 TEST(MediaBidir, AbsorbingSlabMLT) {
     CheckSlab("mlt", "\"integer bootstrapsamples\" [65536] \"integer chains\" [64]");
 }
@@ -197,7 +198,7 @@ TEST(MediaBidir, BdptVcmPathAgreeOnFogBox) {
 // fog-box as it is (homogeneous fog and smoke: spectral-MIS distance sampling,
 // exact transmittance) and with its fog replaced by a density grid over the
 // room (delta tracking in the walks, ratio tracking in the connections; zero
-// voxels give empty majorant cells), sigma_t = 0.4 x density in every channel
+// voxels give empty majorant cells), sigma_t = 0.5 x density in every channel
 // and a coloured albedo. Both keep the material-less smoke sphere, a medium
 // interface inside the fog that walks and connections cross.
 std::string FogBoxText() { return ReadFile(std::string(GRADUS_SOURCE_DIR) + "/scenes/media/fog-box.pbrt"); }
@@ -260,8 +261,11 @@ void CheckMLTAgreesWithBdpt(const std::string &text, int K, int mltSpp, int boot
     EXPECT_TRUE(down.reject) << "power check: a 5% bias (x1/1.05) is not detected: " << down.describe();
 }
 
+// Measured (2 shared cores, loaded): 10 s and 15 s; smallest power margin
+// (|t|/critical of a 5% bias) 1.31 on fog-box (K 16), 1.74 on the grid (K 24;
+// 1.21 with K 16).
 TEST(MediaMLT, AgreesWithBdptOnFogBox) { CheckMLTAgreesWithBdpt(FogBoxText(), 16, 64, 20000, 32); }
-TEST(MediaMLT, AgreesWithBdptOnGridFogBox) { CheckMLTAgreesWithBdpt(GridFogBoxText(), 16, 64, 20000, 32); }
+TEST(MediaMLT, AgreesWithBdptOnGridFogBox) { CheckMLTAgreesWithBdpt(GridFogBoxText(), 24, 64, 20000, 32); }
 
 // ---------------------------------------------------------------- refusal
 TEST(MediaBidir, GBDPTRefusesMediaWithALocatedError) {

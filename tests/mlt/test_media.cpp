@@ -14,7 +14,7 @@ namespace {
 
 // scenes/media/fog-box.pbrt (a homogeneous smoke sphere behind a material-less
 // interface) with its fog replaced by a 3x2x3 density grid over the room
-// (grey sigma_t 0.4 x density): delta tracking in the walks, ratio tracking in
+// (grey sigma_t 0.5 x density): delta tracking in the walks, ratio tracking in
 // the connections.
 std::string GridFogBox() {
     std::ifstream f(std::string(GRADUS_SOURCE_DIR) + "/scenes/media/fog-box.pbrt");

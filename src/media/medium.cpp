@@ -62,12 +62,12 @@ Spectrum ExpNeg(const Spectrum &sigma, Float d) {
 }
 }  // namespace
 
-Spectrum HomogeneousMedium::Tr(const Ray &ray, RNG &) const { return ExpNeg(sigmaT, CappedDistance(ray)); }
+Spectrum HomogeneousMedium::Tr(const Ray &ray, UniformSource) const { return ExpNeg(sigmaT, CappedDistance(ray)); }
 
 // Spectral MIS distance sampling (pbrt-v3 Sec. 15.2.1): a channel chosen
 // uniformly, the distance from its exponential; the pdf is the average over
 // channels (the one-sample MIS of the three exponentials).
-Spectrum HomogeneousMedium::sample(const Ray &ray, RNG &rng, MediumInteraction *mi) const {
+Spectrum HomogeneousMedium::sample(const Ray &ray, UniformSource rng, MediumInteraction *mi) const {
     const Float len = ray.d.length();
     const int ch = std::min(int(rng.uniform() * 3), 2);
     const Float dist = sigmaT[ch] > 0 ? -std::log(1 - rng.uniform()) / sigmaT[ch] : Infinity;
@@ -202,7 +202,7 @@ bool GridMedium::clip(const Ray &ray, Ray *local, Float *t0, Float *t1) const {
 
 // Ratio tracking (Novak et al. 2014, Sec. 4.2) against the cells' majorants
 // sigma_t * max d (the exponential steps restart at each cell boundary: memoryless).
-Spectrum GridMedium::Tr(const Ray &ray, RNG &rng) const {
+Spectrum GridMedium::Tr(const Ray &ray, UniformSource rng) const {
     Ray local;
     Float t0, t1;
     if (maxDensity_ <= 0 || sigmaT_ <= 0 || !clip(ray, &local, &t0, &t1)) return Spectrum(1);
@@ -224,7 +224,7 @@ Spectrum GridMedium::Tr(const Ray &ray, RNG &rng) const {
 // the cells' majorants: a tentative collision is real with probability
 // d(p) / max d of its cell; a real one scatters with the albedo
 // sigma_s / sigma_t as throughput factor (absorption folded in).
-Spectrum GridMedium::sample(const Ray &ray, RNG &rng, MediumInteraction *mi) const {
+Spectrum GridMedium::sample(const Ray &ray, UniformSource rng, MediumInteraction *mi) const {
     Ray local;
     Float t0, t1;
     if (maxDensity_ <= 0 || sigmaT_ <= 0 || !clip(ray, &local, &t0, &t1)) return Spectrum(1);

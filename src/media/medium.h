@@ -7,9 +7,10 @@
 // names the media inside (against the geometric normal n) and outside (along
 // n); a surface whose interface is not a transition (inside == outside, or no
 // MediumInterface given) keeps the medium of the ray that hit it.
-// Random numbers: distance sampling and transmittance estimates draw from an
-// RNG the integrator seeds per sample (delta and ratio tracking take an
-// unbounded number of them), never from the pixel sampler's dimensions.
+// Random numbers: distance sampling and transmittance estimates draw from a
+// UniformSource (delta and ratio tracking take an unbounded number of them):
+// an RNG the integrator seeds per sample, never the pixel sampler's
+// dimensions, or mlt's primary samples (samplers/uniform_source.h).
 #pragma once
 #include <memory>
 #include <string>
@@ -20,6 +21,7 @@
 #include "core/spectrum.h"
 #include "core/transform.h"
 #include "samplers/rng.h"
+#include "samplers/uniform_source.h"
 
 namespace gradus {
 
@@ -49,11 +51,11 @@ class Medium {
     virtual ~Medium() = default;
     // Transmittance along ray from t = 0 to ray.tMax (ray.d need not be unit;
     // t is in units of |d|). Unbiased estimate (exact for homogeneous media).
-    virtual Spectrum Tr(const Ray &ray, RNG &rng) const = 0;
+    virtual Spectrum Tr(const Ray &ray, UniformSource rng) const = 0;
     // Samples a scattering point along ray in [0, ray.tMax) (pbrt-v3's
     // Medium::Sample). Returns the throughput factor: Tr * sigma_s / pdf when
     // *mi was filled (mi->medium set), Tr / P(no scattering) otherwise.
-    virtual Spectrum sample(const Ray &ray, RNG &rng, MediumInteraction *mi) const = 0;
+    virtual Spectrum sample(const Ray &ray, UniformSource rng, MediumInteraction *mi) const = 0;
     // True when sigma_t is the same in every channel.
     virtual bool greySigmaT() const = 0;
     HGPhase phase;
@@ -67,8 +69,8 @@ class Medium {
 class HomogeneousMedium : public Medium {
   public:
     HomogeneousMedium(const Spectrum &sigmaA, const Spectrum &sigmaS, Float g);
-    Spectrum Tr(const Ray &ray, RNG &rng) const override;
-    Spectrum sample(const Ray &ray, RNG &rng, MediumInteraction *mi) const override;
+    Spectrum Tr(const Ray &ray, UniformSource rng) const override;
+    Spectrum sample(const Ray &ray, UniformSource rng, MediumInteraction *mi) const override;
     bool greySigmaT() const override;
     const Spectrum sigmaA, sigmaS, sigmaT;
 };
@@ -84,8 +86,8 @@ class GridMedium : public Medium {
   public:
     GridMedium(const Spectrum &sigmaA, const Spectrum &sigmaS, Float g, const Transform &worldFromMedium,
                Point3 p0, Point3 p1, int nx, int ny, int nz, std::vector<Float> density);
-    Spectrum Tr(const Ray &ray, RNG &rng) const override;
-    Spectrum sample(const Ray &ray, RNG &rng, MediumInteraction *mi) const override;
+    Spectrum Tr(const Ray &ray, UniformSource rng) const override;
+    Spectrum sample(const Ray &ray, UniformSource rng, MediumInteraction *mi) const override;
     bool greySigmaT() const override { return true; }
     Float density(const Point3 &pMedium) const;  // in the medium's space
 

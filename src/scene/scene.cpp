@@ -59,7 +59,7 @@ bool Scene::occluded(const Ray &r) const {
     return accel.occluded(r);
 }
 
-Spectrum Scene::transmittance(const Interaction &a, const Medium *ma, const Interaction &b, RNG &rng) const {
+Spectrum Scene::transmittance(const Interaction &a, const Medium *ma, const Interaction &b, UniformSource rng) const {
     if (!features.media) return unoccluded(a, b) ? Spectrum(1) : Spectrum(0);
     GRADUS_STAT_COUNTER("Rays/Transmittance rays", nTr);
     ++nTr;

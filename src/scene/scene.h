@@ -81,7 +81,7 @@ class Scene {
     // product of the media's transmittances over the segments between the
     // interfaces crossed (pbrt-v3's VisibilityTester::Tr). Equals
     // unoccluded(a, b) ? 1 : 0 in a scene without media.
-    Spectrum transmittance(const Interaction &a, const Medium *ma, const Interaction &b, RNG &rng) const;
+    Spectrum transmittance(const Interaction &a, const Medium *ma, const Interaction &b, UniformSource rng) const;
 
     EmbreeAccel accel;
     std::vector<GeometryRecord> geometry;   // indexed by record id (EmbreeAccel)

@@ -99,10 +99,10 @@ TEST(VolPath, AbsorbingSlabAttenuatesExponentially) {
 
 // Integrators without media support refuse the scene at the Integrator
 // directive, naming themselves and the medium; path (and pbrt-v3's volpath,
-// which maps to it) renders it.
+// which maps to it) and mlt render it.
 TEST(VolPath, OtherIntegratorsRefuseMediaWithALocatedError) {
     const std::string text = FurnaceInMedium(1.0, 0.0, "homogeneous");
-    for (const char *name : {"gpt", "gbdpt", "gvcm", "mlt", "pmlt", "gmlt"}) {
+    for (const char *name : {"gpt", "gbdpt", "gvcm", "pmlt", "gmlt"}) {
         std::string err;
         try {
             MakeTestJob(ParseString(text, "test.pbrt", "."), 1, 0, name);
@@ -116,4 +116,5 @@ TEST(VolPath, OtherIntegratorsRefuseMediaWithALocatedError) {
     std::string volpath = text;
     volpath.replace(volpath.find("\"path\""), 6, "\"volpath\"");
     EXPECT_NO_THROW(MakeTestJob(ParseString(volpath, "test.pbrt", "."), 1, 0));
+    EXPECT_NO_THROW(MakeTestJob(ParseString(text, "test.pbrt", "."), 1, 0, "mlt"));
 }

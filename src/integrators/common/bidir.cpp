@@ -53,8 +53,8 @@ enum class MediaStep { Miss, Surface, Medium, Absorbed, Stuck };
 // Traces *ray through the interfaces (surfaces without a material), sampling a
 // scattering distance in the medium of each segment (pbrt-v3's
 // Medium::Sample); *beta takes the factors, *medium the medium at the end.
-MediaStep TraceThroughMedia(const Scene &scene, Ray *ray, const Medium **medium, RNG &rng, SurfaceInteraction *isect,
-                            MediumInteraction *mi, Spectrum *beta) {
+MediaStep TraceThroughMedia(const Scene &scene, Ray *ray, const Medium **medium, UniformSource rng,
+                            SurfaceInteraction *isect, MediumInteraction *mi, Spectrum *beta) {
     for (int k = 0;; ++k) {
         const bool hit = scene.intersect(*ray, isect);
         if (*medium) {
@@ -84,7 +84,7 @@ struct Walk {
     const int maxVertices;
     PathVertex *path;
     BSDF *bsdfs;
-    RNG *rng;
+    UniformSource rng;
     const bool media;
     Ray ray;
     Spectrum beta;
@@ -100,7 +100,7 @@ struct Walk {
             if (h == Scene::SurfaceHit::Stuck) return MediaStep::Stuck;
             return h == Scene::SurfaceHit::Hit ? MediaStep::Surface : MediaStep::Miss;
         }
-        return TraceThroughMedia(scene, &ray, &medium, *rng, isect, mi, &beta);
+        return TraceThroughMedia(scene, &ray, &medium, rng, isect, mi, &beta);
     }
 
     // Russian roulette on the throughput relative to the subpath's start, after
@@ -225,7 +225,7 @@ struct Walk {
 // (`medium`, distances from *rng); a scattering there is a medium vertex.
 int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sampler &sampler, Arena &arena,
                TransportMode mode, int n, int maxVertices, PathVertex *path, BSDF *bsdfs, const Medium *medium,
-               RNG *rng) {
+               UniformSource rng) {
     GRADUS_STAT_COUNTER("BDPT/Subpath vertices", nVerts);
     GRADUS_STAT_COUNTER("BDPT/Medium vertices", nMediumVerts);
     const Scene &scene = *ctx.scene;
@@ -309,11 +309,11 @@ const Medium *MediumTowards(const BidirContext &ctx, const PathVertex &v, const 
 }
 
 Spectrum Transmittance(const BidirContext &ctx, const PathVertex &a, const Interaction &ia, const Interaction &ib,
-                       RNG *rng) {
+                       UniformSource rng) {
     const Scene &scene = *ctx.scene;
     if (!scene.features.media) return scene.unoccluded(ia, ib) ? Spectrum(1) : Spectrum(0);
     GRADUS_CHECK(rng);
-    return scene.transmittance(ia, MediumTowards(ctx, a, ib.p - ia.p), ib, *rng);
+    return scene.transmittance(ia, MediumTowards(ctx, a, ib.p - ia.p), ib, rng);
 }
 
 Float ScatterPdf(const PathVertex &v, const BSDF &bsdf, const Vec3 &wo, const Vec3 &wi, TransportMode mode) {
@@ -390,7 +390,7 @@ void BidirContext::init(const Scene &s, const LightSampler &ls, MISHeuristic h) 
 }
 
 int GenerateCameraSubpath(const BidirContext &ctx, const Ray &ray, Sampler &sampler, Arena &arena,
-                          int maxVertices, PathVertex *path, BSDF *bsdfs, RNG *mediaRng) {
+                          int maxVertices, PathVertex *path, BSDF *bsdfs, UniformSource mediaRng) {
     if (maxVertices <= 0) return 0;
     PathVertex &v = path[0];
     v = PathVertex();
@@ -439,7 +439,7 @@ void BidirDimensions::startConnection(Sampler &sampler, int s, int t) {
 }
 
 int GenerateLightSubpath(const BidirContext &ctx, Sampler &sampler, Arena &arena, int maxVertices, PathVertex *path,
-                         BSDF *bsdfs, RNG *mediaRng) {
+                         BSDF *bsdfs, UniformSource mediaRng) {
     Float uSel = sampler.get1D();
     Point2 u1 = sampler.get2D(), u2 = sampler.get2D();
     if (maxVertices <= 0) return 0;

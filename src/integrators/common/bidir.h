@@ -36,8 +36,9 @@
 // (no cosine at medium vertices); the distance-sampling densities are left out
 // of every strategy alike, so the weights still sum to one. Medium vertices
 // are connectible, never mergeable. Random numbers of the media (distances,
-// transmittance) come from a per-sample RNG the caller passes; a scene without
-// media takes none and runs the code it ran before.
+// transmittance) come from a UniformSource the caller passes (a per-sample
+// RNG; mlt: its primary samples); a scene without media takes none and runs
+// the code it ran before.
 #pragma once
 #include <vector>
 
@@ -48,6 +49,7 @@
 #include "scene/scene.h"
 #include "samplers/rng.h"
 #include "samplers/sampler.h"
+#include "samplers/uniform_source.h"
 
 namespace gradus {
 
@@ -113,7 +115,7 @@ struct BidirContext {
 // Sampler use per medium vertex: the same (1D unused, 2D phase direction).
 // mediaRng: distance sampling (required when the scene has media, else unused).
 int GenerateCameraSubpath(const BidirContext &ctx, const Ray &ray, Sampler &sampler, Arena &arena,
-                          int maxVertices, PathVertex *path, BSDF *bsdfs, RNG *mediaRng = nullptr);
+                          int maxVertices, PathVertex *path, BSDF *bsdfs, UniformSource mediaRng = {});
 // Fixed blocks of sampler dimensions for one bidirectional sample taken from
 // the pixel sampler (bdpt, gbdpt): the camera subpath from the sampler's
 // dimension d0 at construction, the light subpath and each strategy's
@@ -139,7 +141,7 @@ class BidirDimensions {
 // Light subpath: picks a light (1D), samples emission (2D position + 2D direction),
 // then up to maxVertices - 1 scattering vertices. Returns the number of vertices.
 int GenerateLightSubpath(const BidirContext &ctx, Sampler &sampler, Arena &arena, int maxVertices,
-                         PathVertex *path, BSDF *bsdfs, RNG *mediaRng = nullptr);
+                         PathVertex *path, BSDF *bsdfs, UniformSource mediaRng = {});
 // The per-sample RNG of the media for a camera sample (seed, film and lens position).
 RNG CameraSampleMediaRNG(const Sampler &sampler, const CameraSample &cs);
 
@@ -154,7 +156,7 @@ const Medium *MediumTowards(const BidirContext &ctx, const PathVertex &v, const 
 // Visibility between vertex a (interaction ia) and interaction ib: in a scene
 // with media the transmittance from a's medium towards b (rng required), else 1 or 0.
 Spectrum Transmittance(const BidirContext &ctx, const PathVertex &a, const Interaction &ia, const Interaction &ib,
-                       RNG *rng);
+                       UniformSource rng);
 // |cos| of direction w at a scattering vertex (1 at medium vertices: no foreshortening).
 inline Float ScatterCos(const PathVertex &v, const Vec3 &w) {
     return v.type == VertexType::Medium ? Float(1) : AbsDot(w, Vec3(v.ns));
@@ -226,8 +228,9 @@ struct ConnectSamples {
     // The connection edge is known to be unoccluded (a shifted path that
     // reuses its base's edge, G-BDPT): no shadow ray is traced.
     bool knownVisible = false;
-    // Transmittance estimates (scenes with media; the sample's media RNG).
-    RNG *rng = nullptr;
+    // Transmittance estimates (scenes with media; the sample's media RNG, or
+    // mlt's connection stream).
+    UniformSource rng;
     // s = 1: only a sampled infinite or distant light contributes (M-BDPT's
     // next-event estimation through the matrix covers the other lights).
     bool infiniteLightsOnly = false;

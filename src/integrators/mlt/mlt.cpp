@@ -66,6 +66,9 @@ MLTIntegrator::MLTIntegrator(const EntityDesc &desc)
       loc_(desc.loc) {}
 
 void MLTIntegrator::preprocess(const Scene &scene, Film &film) {
+    // Path vertices name media by a one-byte index (path_vertex.h).
+    if (scene.features.media && scene.media.size() > 255)
+        throw Error(loc_, "mlt supports at most 255 media (the scene has " + std::to_string(scene.media.size()) + ")");
     // N_d (mlt.h: bootstrapvertices): an equal share of the vertex cap per
     // depth, a state of depth d having d + 2 vertices.
     const int64_t depths = set_.maxDepth + 1;
@@ -106,6 +109,11 @@ Spectrum MLTIntegrator::contribution(PrimarySampler &u, int depth, Arena &arena,
         cu.uLight = u.get2D();
     }
     if (t == 1) cu.uLens = u.get2D();
+    const int64_t connectAt = u.streamPosition();  // the transmittances continue the stream from here
+    // Media (pbrt-v3's MLT): distances, delta and ratio tracking draw from the
+    // primary samples of the stream in use, interleaved with the subpath's and
+    // the connection's own numbers, so that small steps perturb them too.
+    const UniformSource media = ctx_.scene->features.media ? UniformSource(u) : UniformSource();
 
     const int maxCam = set_.maxDepth + 2, maxLight = set_.maxDepth + 1;
     PathVertex *camV, *lightV;
@@ -126,7 +134,7 @@ Spectrum MLTIntegrator::contribution(PrimarySampler &u, int depth, Arena &arena,
         Ray ray;
         w = ctx_.camera->generateRay(cs, &ray);
         if (w == 0) return Spectrum(0);
-        nC = GenerateCameraSubpath(ctx_, ray, u, arena, t, camV, camB);
+        nC = GenerateCameraSubpath(ctx_, ray, u, arena, t, camV, camB, media);
         if (nC != t) return Spectrum(0);
         pFilm = cs.pFilm;
     } else {
@@ -138,9 +146,11 @@ Spectrum MLTIntegrator::contribution(PrimarySampler &u, int depth, Arena &arena,
     int nL = 0;
     if (s >= 2) {
         u.startStream(mlt::kLightStream);
-        nL = GenerateLightSubpath(ctx_, u, arena, s, lightV, lightB);
+        nL = GenerateLightSubpath(ctx_, u, arena, s, lightV, lightB, media);
         if (nL != s) return Spectrum(0);
     }
+    u.startStream(mlt::kConnectionStream, connectAt);
+    cu.rng = media;
     ConnectResult r;
     if (!ConnectBDPT(ctx_, SubpathView{lightV, lightB, nL}, SubpathView{camV, camB, nC}, s, t, cu, &r))
         return Spectrum(0);

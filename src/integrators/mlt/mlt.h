@@ -54,6 +54,15 @@
 // get their light from the large steps. The weights use the bootstrap's b
 // and b_d, so the estimate is consistent (bias O(1 / bootstrap size)), not
 // unbiased for any bootstrap as pbrt-v3's; the image mean is no longer b.
+// Participating media as pbrt-v3's MLT (its subpaths and connections are
+// BDPT's): medium vertices on both subpaths and transmittance in the
+// connections (integrators/common/bidir.h). Every random number of the media
+// (distance sampling, delta tracking, ratio-tracking transmittance) is read
+// from the primary samples, in the stream being read (camera and light
+// subpaths: interleaved with the walk's numbers; connection: after the s = 1
+// and t = 1 numbers), as pbrt-v3's MLTSampler serves Medium::Sample and
+// Medium::Tr: mutations perturb them like the rest. A scene without media
+// reads exactly the numbers it read before.
 // Lights are chosen by power, as in pbrt-v3. Splats are unfiltered (the pixel
 // holding the raster point), as pbrt-v3's MLT; the chains sample the film's
 // pixel bounds (pbrt-v3: the filter's sample bounds, the margin of which an
@@ -87,6 +96,7 @@ class MLTIntegrator : public MetropolisIntegrator {
   public:
     explicit MLTIntegrator(const EntityDesc &desc);
     std::string name() const override { return "mlt"; }
+    bool rendersMedia() const override { return true; }  // medium vertices of the shared core (above)
     void preprocess(const Scene &scene, Film &film) override;
     int defaultSamplesPerPixel() const override { return set_.mutationsPerPixel; }
     void finish(const Film &film, const RenderStats &stats, Image *out) override;

@@ -76,11 +76,13 @@ class PrimarySampler : public Sampler {
             }
         proposing_ = false;
     }
-    // Subsequent get1D/get2D read stream `s` from its first coordinate.
-    void startStream(int s) {
+    // Subsequent get1D/get2D read stream `s` from its coordinate `at` (0: the first).
+    void startStream(int s, int64_t at = 0) {
         stream_ = s;
-        next_ = 0;
+        next_ = at;
     }
+    // The coordinate of the current stream that the next get1D reads.
+    int64_t streamPosition() const { return next_; }
     int64_t coordinates() const { return int64_t(coords_.size()); }
     // Checkpoints: the state between mutations (coordinates with their ages,
     // the age and the last large step), appended to / read from bytes.

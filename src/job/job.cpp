@@ -210,6 +210,10 @@ void RecordJobProvenance(const SceneDesc &desc, const BuildOptions &opts, const 
                       " " + std::to_string(crop[3]);
     m["quick"] = MetaValue::Int(opts.quick ? 1 : 0);
     m["variance_layers"] = MetaValue::Int(job->film->varianceLayers() ? 1 : 0);
+    if (opts.environment.given()) {
+        m["environment"] = opts.environment.describe();
+        job->environmentIdentity = opts.environment.identity();
+    }
     InputFilesSummary in = InputFiles();
     m["scene_files"] = MetaValue::Int(in.files);
     m["scene_bytes"] = MetaValue::Int(int64_t(in.bytes));
@@ -257,6 +261,8 @@ std::string RenderIdentity(const RenderJob &job, const RenderOptions &opts) {
     id += "spp: " + std::to_string(opts.spp) + " (" + std::to_string(opts.sppPerPass) + " per pass)\n";
     id += "seed: " + std::to_string(job.sampler->seed()) + "\n";
     if (job.film->varianceLayers()) id += "variance layers: yes\n";  // (absent in older checkpoints)
+    // --envmap (likewise absent without it): the map's contents are in scene_hash, not its path.
+    if (job.environmentIdentity.size()) id += "environment: " + job.environmentIdentity + "\n";
     return id;
 }
 

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "image/image.h"
+#include "job/environment.h"
 #include "render/integrator.h"
 #include "parser/scene_desc.h"
 #include "render/film.h"
@@ -31,6 +32,10 @@ struct BuildOptions {
     bool variance = false;
     // --param NAME=VALUE: integrator parameters from the command line (replace the scene's).
     std::vector<std::string> paramOverrides;
+    // --envmap, --envmap-scale, --envmap-rotate (job/environment.h): applied
+    // to the SceneDesc when the scene file is loaded (render_route.h); recorded
+    // here in the provenance.
+    EnvironmentOptions environment;
 };
 
 struct RenderJob {
@@ -45,6 +50,8 @@ struct RenderJob {
     // sampler, film, filter and integrator, resolution, crop, quick flag,
     // input files and their hash (RenderJobImage adds the render's figures).
     Metadata provenance;
+    // What --envmap adds to the render's identity (checkpoints): "" without it.
+    std::string environmentIdentity;
 };
 
 RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts);

@@ -7,16 +7,27 @@
 
 namespace gradus {
 
-SceneDesc LoadSceneFile(const std::string &file, const GltfOptions &gltf) {
+SceneDesc LoadSceneFile(const std::string &file, const GltfOptions &gltf, const EnvironmentOptions &env) {
     ResetInputFiles();
-    return IsGltfFile(file) ? LoadGltfScene(file, gltf) : ParseFile(file);
+    const bool isGltf = IsGltfFile(file);
+    GltfOptions g = gltf;
+    if (env.given()) g.defaultEnvironment = false;
+    SceneDesc desc = isGltf ? LoadGltfScene(file, g) : ParseFile(file);
+    AddEnvironmentLight(env, isGltf, &desc);
+    return desc;
 }
+
+namespace {
+double SecondsSince(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
 
 RenderJob LoadRenderJob(const std::string &file, const GltfOptions &gltf, const BuildOptions &bo, double *seconds) {
     const auto t0 = std::chrono::steady_clock::now();
-    SceneDesc desc = LoadSceneFile(file, gltf);
+    SceneDesc desc = LoadSceneFile(file, gltf, bo.environment);
     RenderJob job = BuildRenderJob(desc, bo);
-    *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    *seconds = SecondsSince(t0);
     return job;
 }
 

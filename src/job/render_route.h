@@ -13,7 +13,9 @@ namespace gradus {
 
 // Reads a pbrt-v3 or glTF 2.0 scene (by the file's extension) after clearing
 // the record of input files: a render's provenance starts with its scene.
-SceneDesc LoadSceneFile(const std::string &file, const GltfOptions &gltf);
+// The environment options (env.image read by LoadEnvironmentMap) turn the
+// glTF default environment off and add --envmap's light.
+SceneDesc LoadSceneFile(const std::string &file, const GltfOptions &gltf, const EnvironmentOptions &env = {});
 
 // LoadSceneFile and BuildRenderJob; *seconds = the time both took (the
 // output's scene_load_seconds).

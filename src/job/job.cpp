@@ -13,6 +13,7 @@
 #include "core/provenance.h"
 #include "integrators/registry.h"
 #include "job/checkpoint.h"
+#include "render/display.h"
 
 namespace gradus {
 
@@ -432,6 +433,17 @@ RenderResult RenderJobImage(RenderJob &job, const RenderOptions &opts) {
     CheckpointSession checkpoints(job, opts, t[0]);
     checkpoints.begin(&loopOpts);
     checkpoints.installWriter(&loopOpts);
+    // The live display starts with the film as the loop finds it (a resumed one is not black).
+    std::unique_ptr<FilmDisplay> display;
+    if (!opts.displayServer.empty() && !opts.debug) {
+        const std::string &f = job.film->filename();
+        try {  // (gradus checked the address before loading: this fails only if its name stopped resolving)
+            display = std::make_unique<FilmDisplay>(ParseDisplayAddress(opts.displayServer), *job.film,
+                                                    f.substr(f.find_last_of('/') + 1), opts.displayLayers, opts.quiet);
+        } catch (const Error &e) {
+            std::fprintf(stderr, "gradus: warning: %s; the render goes on without a display\n", e.what());
+        }
+    }
     RenderResult r;
     r.stats = RunRender(*job.integrator, *job.scene, *job.film, *job.sampler, loopOpts);
     checkpoints.writeFinal(r.stats);
@@ -448,6 +460,7 @@ RenderResult RenderJobImage(RenderJob &job, const RenderOptions &opts) {
     r.image.originY = film.pixelBounds().pMin.y;
     r.image.displayWidth = film.fullResolution().x;
     r.image.displayHeight = film.fullResolution().y;
+    if (display) display->finish(r.image);  // the final image (after finish: e.g. a reconstruction)
     return r;
 }
 

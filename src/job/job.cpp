@@ -194,7 +194,8 @@ void CreateJobIntegrator(const SceneDesc &desc, const BuildOptions &opts, Render
 
 // 5. Provenance: the resolved parameters of every entity and the input files.
 void RecordJobProvenance(const SceneDesc &desc, const BuildOptions &opts, const EntityDesc &sdesc,
-                         const EntityDesc &idesc, Point2i res, const Float crop[4], RenderJob *job) {
+                         const EntityDesc &idesc, Point2i res, const Float crop[4], const InputFilesSummary &in,
+                         RenderJob *job) {
     const EntityDesc &fd = desc.film;
     Metadata &m = job->provenance;
     auto entity = [](const EntityDesc &e, const std::string &type) {
@@ -215,7 +216,6 @@ void RecordJobProvenance(const SceneDesc &desc, const BuildOptions &opts, const 
         m["environment"] = opts.environment.describe();
         job->environmentIdentity = opts.environment.identity();
     }
-    InputFilesSummary in = InputFiles();
     m["scene_files"] = MetaValue::Int(in.files);
     m["scene_bytes"] = MetaValue::Int(int64_t(in.bytes));
     m["scene_hash"] = "fnv1a64:" + in.hash;
@@ -223,7 +223,8 @@ void RecordJobProvenance(const SceneDesc &desc, const BuildOptions &opts, const 
 
 }  // namespace
 
-RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
+RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts, std::shared_ptr<Scene> scene,
+                         const InputFilesSummary *inputs) {
     RenderJob job;
     job.warnings = desc.notes;
     Point2i res;
@@ -243,9 +244,9 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
     EntityDesc idesc;
     CreateJobIntegrator(desc, opts, &job, &idesc);
     // 4. The scene, and the scene parts this integrator refuses.
-    job.scene = BuildScene(desc, res);
+    job.scene = scene ? std::move(scene) : std::shared_ptr<Scene>(BuildScene(desc, res));
     RefuseUnhandledParts(*job.integrator, *job.scene, desc, idesc);
-    RecordJobProvenance(desc, opts, sdesc, idesc, res, crop, &job);
+    RecordJobProvenance(desc, opts, sdesc, idesc, res, crop, inputs ? *inputs : InputFiles(), &job);
     return job;
 }
 

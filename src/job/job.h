@@ -6,6 +6,7 @@
 #include <memory>
 #include <string>
 
+#include "core/provenance.h"
 #include "image/image.h"
 #include "job/environment.h"
 #include "render/integrator.h"
@@ -39,7 +40,7 @@ struct BuildOptions {
 };
 
 struct RenderJob {
-    std::unique_ptr<Scene> scene;
+    std::shared_ptr<Scene> scene;  // shared by the jobs of a kept scene (render_route.h)
     std::unique_ptr<Film> film;
     std::unique_ptr<Sampler> sampler;
     std::unique_ptr<Integrator> integrator;
@@ -54,7 +55,12 @@ struct RenderJob {
     std::string environmentIdentity;
 };
 
-RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts);
+// With `scene`, that Scene (built by an earlier BuildRenderJob of the same
+// desc with the same resolution, crop, quick and environment options) is
+// shared instead of building one, and `inputs` (the files its load read) is
+// recorded as the provenance of input files.
+RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts, std::shared_ptr<Scene> scene = nullptr,
+                         const InputFilesSummary *inputs = nullptr);
 
 // A finished render: the film image with all layers after Integrator::finish,
 // with the job's provenance and the render's figures as typed metadata

@@ -25,7 +25,9 @@
 #include "render/integrator.h"
 #include "render/params.h"
 #include "reconstruction/reconstruction.h"
+#include "job/environment.h"
 #include "job/render_route.h"
+#include "render/display.h"
 #include "integrators/registry.h"
 
 namespace py = pybind11;
@@ -196,12 +198,23 @@ py::dict Describe(const std::string &name) {
 
 // ---- scenes and renders -----------------------------------------------------------
 
+// A loaded scene: parsed and built once; renders share the built Scene
+// (job/render_route.h: LoadedScene) unless they ask for other environment
+// options, which build it anew (and keep that build).
 struct PyScene {
     std::string path;
-    GltfOptions gltf;
-    BuildOptions build;  // the scene's overrides (resolution, crop, quick)
-    py::dict info;       // from the validating build at load time
+    std::shared_ptr<LoadedScene> loaded;  // guarded by gRenderMutex
+    py::dict info;                        // from the build at load time
 };
+
+// The environment options of a load or a render (map "" = none given).
+EnvironmentOptions Environment(const std::string &map, double scale, double rotate) {
+    EnvironmentOptions e;
+    e.map = map;
+    e.scale = scale;
+    e.rotateDegrees = rotate;
+    return e;
+}
 
 // What a render hands back from its thread.
 struct RenderOutput {
@@ -212,31 +225,36 @@ struct RenderOutput {
     std::vector<std::string> notes;
 };
 
-PyScene LoadScene(const std::string &path, std::optional<std::pair<int, int>> resolution,
-                  std::optional<std::vector<double>> crop, const std::string &camera, bool quick) {
+PyScene LoadPyScene(const std::string &path, std::optional<std::pair<int, int>> resolution,
+                  std::optional<std::vector<double>> crop, const std::string &camera, bool quick,
+                  const std::string &envmap, double envmapScale, double envmapRotate) {
     PyScene s;
     s.path = path;
-    s.gltf.camera = camera;
-    s.build.quiet = true;
-    s.build.checkOutput = false;  // the module writes no file
-    s.build.quick = quick;
-    if (resolution) s.build.resolution = {resolution->first, resolution->second};
+    GltfOptions gltf;
+    gltf.camera = camera;
+    BuildOptions build;
+    build.quiet = true;
+    build.checkOutput = false;  // the module writes no file
+    build.quick = quick;
+    if (resolution) build.resolution = {resolution->first, resolution->second};
     if (crop) {
-        s.build.hasCrop = true;
-        for (int i = 0; i < 4; ++i) s.build.crop[i] = Float((*crop)[size_t(i)]);
+        build.hasCrop = true;
+        for (int i = 0; i < 4; ++i) build.crop[i] = Float((*crop)[size_t(i)]);
     }
+    build.environment = Environment(envmap, envmapScale, envmapRotate);
     if (!camera.empty() && !IsGltfFile(path))
         throw py::value_error("camera applies to glTF scenes (.gltf, .glb); pbrt scenes place glTF cameras with GltfAsset");
-    // Parsed and built once, so that the scene's errors are raised here.
+    // Parsed and built once: the scene's errors are raised here, and renders use the build.
     RenderJob job;
-    double seconds = 0;
     try {
         py::gil_scoped_release nogil;
         std::lock_guard<std::mutex> lock(gRenderMutex);
-        job = LoadRenderJob(path, s.gltf, s.build, &seconds);
+        LoadEnvironmentMap(&build.environment);  // before the scene, as gradus does
+        s.loaded = gradus::LoadScene(path, gltf, build, &job);
     } catch (const Error &e) {
         RaiseFromError(e, path);
     }
+    const double seconds = s.loaded->seconds;
     const Point2i full = job.film->fullResolution();
     const Bounds2i &pb = job.film->pixelBounds();
     s.info["resolution"] = py::make_tuple(full.x, full.y);
@@ -278,12 +296,21 @@ struct RenderWatch {
     RenderOutput out;
 };
 
-// The render thread: loads and renders into w.out (or sets w.failure), then w.done.
-void RenderThread(const PyScene &s, const BuildOptions &bo, RenderOptions &ro, const std::string &commandLine,
-                  RenderWatch &w) {
+// The render thread: builds the job on the kept scene (or loads and builds
+// the scene anew when bo's environment differs from its, keeping that one)
+// and renders into w.out (or sets w.failure), then w.done.
+void RenderThread(PyScene &s, BuildOptions &bo, RenderOptions &ro, const std::string &commandLine, RenderWatch &w) {
     try {
         double loadSeconds = 0;
-        RenderJob job = LoadRenderJob(s.path, s.gltf, bo, &loadSeconds);
+        RenderJob job;
+        if (s.loaded->sharesWith(bo)) {
+            bo.environment.image = s.loaded->build.environment.image;
+            job = BuildLoadedJob(*s.loaded, bo, &loadSeconds);
+        } else {
+            LoadEnvironmentMap(&bo.environment);
+            s.loaded = gradus::LoadScene(s.path, s.loaded->gltf, bo, &job);
+            loadSeconds = s.loaded->seconds;
+        }
         ResolveSampleCount(job, bo, &ro);
         w.sppTotal = ro.spp;
         RenderResult r = RenderLoadedJob(job, ro, s.path, commandLine, loadSeconds);
@@ -343,18 +370,34 @@ void WatchRender(RenderWatch &w, const py::object &progress, std::chrono::steady
 // `progress`. A Python exception there (KeyboardInterrupt, or one raised by
 // `progress`) stops the render as gradus's first SIGINT does; it is raised
 // once the render loop has stopped.
-py::dict Render(const PyScene &s, const std::string &integrator, long long spp, double time, long long seed,
+py::dict Render(PyScene &s, const std::string &integrator, long long spp, double time, long long seed,
                 int threads, const std::vector<std::string> &params, py::object progress,
-                const std::string &commandLine) {
-    BuildOptions bo = s.build;
+                const std::string &commandLine, const std::string &envmap, double envmapScale, double envmapRotate,
+                const std::string &displayServer, bool displayLayers) {
+    if (!displayServer.empty()) {
+        try {
+            ParseDisplayAddress(displayServer);  // before anything is rendered
+        } catch (const Error &e) {
+            throw py::value_error(e.what());
+        }
+    }
+    BuildOptions bo;
+    RenderOptions ro;
+    {
+        py::gil_scoped_release nogil;
+        std::lock_guard<std::mutex> lock(gRenderMutex);
+        bo = s.loaded->build;
+    }
+    bo.environment = Environment(envmap, envmapScale, envmapRotate);
     bo.integratorOverride = integrator;
     bo.sppOverride = int(spp);
     bo.seed = uint64_t(seed);
     bo.paramOverrides = params;
-    RenderOptions ro;
     ro.nthreads = threads;
     ro.timeLimit = time;
     ro.quiet = true;
+    ro.displayServer = displayServer;
+    ro.displayLayers = displayLayers;
     RenderWatch w;
     ro.afterPass = [&w](const RenderStats &st) { w.sppDone = st.spp; };
 
@@ -555,9 +598,10 @@ PYBIND11_MODULE(_gradus, m) {
         .def_readonly("path", &PyScene::path)
         .def_readonly("info", &PyScene::info)
         .def("render", &Render, py::arg("integrator"), py::arg("spp"), py::arg("time"), py::arg("seed"),
-             py::arg("threads"), py::arg("params"), py::arg("progress"), py::arg("command_line"));
-    m.def("load_scene", &LoadScene, py::arg("path"), py::arg("resolution"), py::arg("crop"), py::arg("camera"),
-          py::arg("quick"));
+             py::arg("threads"), py::arg("params"), py::arg("progress"), py::arg("command_line"), py::arg("envmap"),
+             py::arg("envmap_scale"), py::arg("envmap_rotate"), py::arg("display_server"), py::arg("display_layers"));
+    m.def("load_scene", &LoadPyScene, py::arg("path"), py::arg("resolution"), py::arg("crop"), py::arg("camera"),
+          py::arg("quick"), py::arg("envmap"), py::arg("envmap_scale"), py::arg("envmap_rotate"));
     m.def("reconstruct", &ReconstructArrays, py::arg("primal"), py::arg("dx"), py::arg("dy"), py::arg("method"),
           py::arg("alpha"), py::arg("primal_var"), py::arg("dx_var"), py::arg("dy_var"), py::arg("return_stats"));
     m.def("metrics", &Metrics, py::arg("test"), py::arg("ref"), py::arg("discard_fraction"),

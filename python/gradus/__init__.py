@@ -9,8 +9,10 @@
     result.stats["seconds"]     # render statistics
 
 A render takes the command line's route (load, build, render), so it equals
-``gradus SCENE --seed S ...`` bit for bit at equal options. Renders release
-the GIL; Ctrl-C stops one cleanly (KeyboardInterrupt once the loop has stopped).
+``gradus SCENE --seed S ...`` bit for bit at equal options; the scene is
+loaded and built once by ``load_scene`` and its renders share the build.
+Renders release the GIL; Ctrl-C stops one cleanly (KeyboardInterrupt once the
+loop has stopped).
 """
 import math
 import numbers
@@ -114,15 +116,50 @@ def _integer(name, value, lo, hi):
     return int(value)
 
 
-class Scene:
-    """A loaded scene (``load_scene``). Its figures come from a build at load
-    time: ``resolution``, ``integrator`` and ``spp`` (the scene's), ``features``,
-    ``notes``, ``provenance`` (the metadata records of the scene)."""
+def _environment(envmap, scale, rotate, base=None):
+    """The environment options (map, scale, rotate) and their gradus options;
+    None takes base's value (a Scene's), else the default."""
+    base_map, base_scale, base_rotate = base or ("", 1.0, 0.0)
+    if envmap is None:
+        envmap = base_map
+    elif not isinstance(envmap, (str, os.PathLike)):
+        raise TypeError("envmap: expected a file name or \"none\", got %r" % (envmap,))
+    else:
+        envmap = os.fspath(envmap)
+        if not envmap:
+            raise ValueError("envmap: expected a file name or \"none\", got an empty string")
+        if envmap != "none":
+            envmap = os.path.abspath(envmap)
+    scale = base_scale if scale is None else float(scale)
+    rotate = base_rotate if rotate is None else float(rotate)
+    if not (math.isfinite(scale) and scale >= 0):
+        raise ValueError("envmap_scale must be a finite number >= 0, got %r" % scale)
+    if not math.isfinite(rotate):
+        raise ValueError("envmap_rotate must be a finite number of degrees, got %r" % rotate)
+    if (scale != 1 or rotate != 0) and envmap in ("", "none"):
+        raise ValueError("envmap_scale and envmap_rotate need envmap=FILE")
+    args = []
+    if envmap:
+        args += ["--envmap", envmap]
+    if scale != 1:
+        args += ["--envmap-scale", repr(scale)]
+    if rotate != 0:
+        args += ["--envmap-rotate", repr(rotate)]
+    return (envmap, scale, rotate), args
 
-    def __init__(self, handle, overrides, args):
+
+class Scene:
+    """A loaded scene (``load_scene``), parsed and built once: its renders
+    share the build (a render with other environment options builds the scene
+    anew and keeps that build). Its figures come from the build at load time:
+    ``resolution``, ``integrator`` and ``spp`` (the scene's), ``features``,
+    ``notes``, ``provenance`` (the metadata records of the scene), ``load_seconds``."""
+
+    def __init__(self, handle, overrides, args, environment):
         self._scene = handle
         self._overrides = dict(overrides)
-        self._args = list(args)  # the overrides as gradus options
+        self._args = list(args)  # the overrides as gradus options (without the environment's)
+        self._environment = environment  # (map, scale, rotate) of load_scene
         info = handle.info
         self.path = handle.path
         self.resolution = tuple(info["resolution"])
@@ -132,12 +169,14 @@ class Scene:
         self.features = info["features"]
         self.notes = list(info["notes"])
         self.provenance = dict(info["provenance"])
+        self.load_seconds = info["load_seconds"]  # parse and build (renders then build their jobs only)
 
     def __repr__(self):
         return "<gradus.Scene %r %dx%d integrator=%s spp=%d>" % (self.path, self.resolution[0],
                                                                   self.resolution[1], self.integrator, self.spp)
 
-    def render(self, integrator=None, spp=None, time=None, seed=0, threads=None, params=None, progress=None):
+    def render(self, integrator=None, spp=None, time=None, seed=0, threads=None, params=None, progress=None,
+               envmap=None, envmap_scale=None, envmap_rotate=None, display_server=None, display_layers=False):
         """Renders the scene and returns a RenderResult.
 
         integrator -- a name of ``integrators()`` (default: the scene's)
@@ -152,9 +191,14 @@ class Scene:
         progress   -- called as progress(spp_done, spp_total, seconds) while
                       rendering (spp_total is 0 with a time budget alone); an
                       exception it raises stops the render and is re-raised
+        envmap, envmap_scale, envmap_rotate -- gradus's --envmap FILE|"none",
+                      --envmap-scale, --envmap-rotate (default: load_scene's)
+        display_server -- "HOST:PORT" of a viewer speaking tev's protocol, to
+                      which the film streams while it renders (gradus
+                      --display-server); display_layers: its layers too
 
-        The scene is loaded anew (as the command line does), so the render
-        equals ``gradus SCENE --seed S [...]`` bit for bit.
+        The render shares the scene's build (no render modifies a built
+        scene), so it equals ``gradus SCENE --seed S [...]`` bit for bit.
         """
         args = []
         if integrator is not None:
@@ -180,8 +224,19 @@ class Scene:
             args += ["--param", texts[-1]]
         if progress is not None and not callable(progress):
             raise TypeError("progress: expected a callable")
-        command = " ".join(shlex.quote(a) for a in ["gradus", self.path] + self._args + args) + " (Python module)"
-        d = self._scene.render(integrator or "", spp or 0, time or 0.0, seed, threads or 0, texts, progress, command)
+        environment, env_args = _environment(envmap, envmap_scale, envmap_rotate, self._environment)
+        if display_server is not None:
+            if not isinstance(display_server, str):
+                raise TypeError("display_server: expected \"HOST:PORT\", got %r" % (display_server,))
+            args += ["--display-server", display_server]
+        if display_layers:
+            if display_server is None:
+                raise ValueError("display_layers needs display_server")
+            args += ["--display-layers"]
+        command = " ".join(shlex.quote(a) for a in ["gradus", self.path] + self._args + env_args + args)
+        command += " (Python module)"
+        d = self._scene.render(integrator or "", spp or 0, time or 0.0, seed, threads or 0, texts, progress, command,
+                               *environment, display_server or "", bool(display_layers))
         return RenderResult._from_dict(d, stats=d["stats"])
 
 
@@ -189,12 +244,13 @@ def load_scene(path, **overrides):
     """Loads a pbrt-v3 (.pbrt) or glTF 2.0 (.gltf, .glb) scene.
 
     Overrides (as gradus's options): resolution=(w, h), cropwindow=(x0, x1, y0,
-    y1), camera="name" (glTF), quick=True (1/4 resolution, 1/8 of the samples).
-    The scene is parsed and built once here, so its errors raise SceneError
-    (with file, line and column) from this call.
+    y1), camera="name" (glTF), quick=True (1/4 resolution, 1/8 of the samples),
+    envmap="sky.exr" or "none", envmap_scale=S, envmap_rotate=DEG (--envmap ...).
+    The scene is parsed and built once here (its errors raise SceneError, with
+    file, line and column, from this call); renders use this build.
     """
     path = os.path.abspath(os.fspath(path))
-    known = {"resolution", "cropwindow", "camera", "quick"}
+    known = {"resolution", "cropwindow", "camera", "quick", "envmap", "envmap_scale", "envmap_rotate"}
     unknown = sorted(set(overrides) - known)
     if unknown:
         raise TypeError("load_scene: unknown override %s (known: %s)" % (", ".join(unknown), ", ".join(sorted(known))))
@@ -217,8 +273,10 @@ def load_scene(path, **overrides):
     quick = bool(overrides.get("quick", False))
     if quick:
         args += ["--quick"]
-    handle = _gradus.load_scene(path, resolution, crop, camera, quick)
-    return Scene(handle, overrides, args)
+    environment, _ = _environment(overrides.get("envmap"), overrides.get("envmap_scale"),
+                                  overrides.get("envmap_rotate"))
+    handle = _gradus.load_scene(path, resolution, crop, camera, quick, *environment)
+    return Scene(handle, overrides, args, environment)
 
 
 def reconstruct(primal, dx, dy, method="hybrid", alpha=None, primal_var=None, dx_var=None, dy_var=None,

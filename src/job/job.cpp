@@ -13,6 +13,7 @@
 #include "core/provenance.h"
 #include "integrators/registry.h"
 #include "job/checkpoint.h"
+#include "render/display.h"
 
 namespace gradus {
 
@@ -195,7 +196,8 @@ void CreateJobIntegrator(const SceneDesc &desc, const BuildOptions &opts, Render
 
 // 5. Provenance: the resolved parameters of every entity and the input files.
 void RecordJobProvenance(const SceneDesc &desc, const BuildOptions &opts, const EntityDesc &sdesc,
-                         const EntityDesc &idesc, Point2i res, const Float crop[4], RenderJob *job) {
+                         const EntityDesc &idesc, Point2i res, const Float crop[4], const InputFilesSummary &in,
+                         RenderJob *job) {
     const EntityDesc &fd = desc.film;
     Metadata &m = job->provenance;
     auto entity = [](const EntityDesc &e, const std::string &type) {
@@ -212,7 +214,10 @@ void RecordJobProvenance(const SceneDesc &desc, const BuildOptions &opts, const 
                       " " + std::to_string(crop[3]);
     m["quick"] = MetaValue::Int(opts.quick ? 1 : 0);
     m["variance_layers"] = MetaValue::Int(job->film->varianceLayers() ? 1 : 0);
-    InputFilesSummary in = InputFiles();
+    if (opts.environment.given()) {
+        m["environment"] = opts.environment.describe();
+        job->environmentIdentity = opts.environment.identity();
+    }
     m["scene_files"] = MetaValue::Int(in.files);
     m["scene_bytes"] = MetaValue::Int(int64_t(in.bytes));
     m["scene_hash"] = "fnv1a64:" + in.hash;
@@ -220,7 +225,8 @@ void RecordJobProvenance(const SceneDesc &desc, const BuildOptions &opts, const 
 
 }  // namespace
 
-RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
+RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts, std::shared_ptr<Scene> scene,
+                         const InputFilesSummary *inputs) {
     RenderJob job;
     job.warnings = desc.notes;
     Point2i res;
@@ -240,10 +246,10 @@ RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts) {
     EntityDesc idesc;
     CreateJobIntegrator(desc, opts, &job, &idesc);
     // 4. The scene, and the scene parts this integrator refuses.
-    job.scene = BuildScene(desc, res);
+    job.scene = scene ? std::move(scene) : std::shared_ptr<Scene>(BuildScene(desc, res));
     job.warnings.insert(job.warnings.end(), job.scene->notes.begin(), job.scene->notes.end());
     RefuseUnhandledParts(*job.integrator, *job.scene, desc, idesc);
-    RecordJobProvenance(desc, opts, sdesc, idesc, res, crop, &job);
+    RecordJobProvenance(desc, opts, sdesc, idesc, res, crop, inputs ? *inputs : InputFiles(), &job);
     return job;
 }
 
@@ -260,6 +266,8 @@ std::string RenderIdentity(const RenderJob &job, const RenderOptions &opts) {
     id += "spp: " + std::to_string(opts.spp) + " (" + std::to_string(opts.sppPerPass) + " per pass)\n";
     id += "seed: " + std::to_string(job.sampler->seed()) + "\n";
     if (job.film->varianceLayers()) id += "variance layers: yes\n";  // (absent in older checkpoints)
+    // --envmap (likewise absent without it): the map's contents are in scene_hash, not its path.
+    if (job.environmentIdentity.size()) id += "environment: " + job.environmentIdentity + "\n";
     return id;
 }
 
@@ -429,6 +437,17 @@ RenderResult RenderJobImage(RenderJob &job, const RenderOptions &opts) {
     CheckpointSession checkpoints(job, opts, t[0]);
     checkpoints.begin(&loopOpts);
     checkpoints.installWriter(&loopOpts);
+    // The live display starts with the film as the loop finds it (a resumed one is not black).
+    std::unique_ptr<FilmDisplay> display;
+    if (!opts.displayServer.empty() && !opts.debug) {
+        const std::string &f = job.film->filename();
+        try {  // (gradus checked the address before loading: this fails only if its name stopped resolving)
+            display = std::make_unique<FilmDisplay>(ParseDisplayAddress(opts.displayServer), *job.film,
+                                                    f.substr(f.find_last_of('/') + 1), opts.displayLayers, opts.quiet);
+        } catch (const Error &e) {
+            std::fprintf(stderr, "gradus: warning: %s; the render goes on without a display\n", e.what());
+        }
+    }
     RenderResult r;
     r.stats = RunRender(*job.integrator, *job.scene, *job.film, *job.sampler, loopOpts);
     checkpoints.writeFinal(r.stats);
@@ -445,6 +464,7 @@ RenderResult RenderJobImage(RenderJob &job, const RenderOptions &opts) {
     r.image.originY = film.pixelBounds().pMin.y;
     r.image.displayWidth = film.fullResolution().x;
     r.image.displayHeight = film.fullResolution().y;
+    if (display) display->finish(r.image);  // the final image (after finish: e.g. a reconstruction)
     return r;
 }
 

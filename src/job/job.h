@@ -6,7 +6,9 @@
 #include <memory>
 #include <string>
 
+#include "core/provenance.h"
 #include "image/image.h"
+#include "job/environment.h"
 #include "render/integrator.h"
 #include "parser/scene_desc.h"
 #include "render/film.h"
@@ -31,10 +33,14 @@ struct BuildOptions {
     bool variance = false;
     // --param NAME=VALUE: integrator parameters from the command line (replace the scene's).
     std::vector<std::string> paramOverrides;
+    // --envmap, --envmap-scale, --envmap-rotate (job/environment.h): applied
+    // to the SceneDesc when the scene file is loaded (render_route.h); recorded
+    // here in the provenance.
+    EnvironmentOptions environment;
 };
 
 struct RenderJob {
-    std::unique_ptr<Scene> scene;
+    std::shared_ptr<Scene> scene;  // shared by the jobs of a kept scene (render_route.h)
     std::unique_ptr<Film> film;
     std::unique_ptr<Sampler> sampler;
     std::unique_ptr<Integrator> integrator;
@@ -45,9 +51,16 @@ struct RenderJob {
     // sampler, film, filter and integrator, resolution, crop, quick flag,
     // input files and their hash (RenderJobImage adds the render's figures).
     Metadata provenance;
+    // What --envmap adds to the render's identity (checkpoints): "" without it.
+    std::string environmentIdentity;
 };
 
-RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts);
+// With `scene`, that Scene (built by an earlier BuildRenderJob of the same
+// desc with the same resolution, crop, quick and environment options) is
+// shared instead of building one, and `inputs` (the files its load read) is
+// recorded as the provenance of input files.
+RenderJob BuildRenderJob(const SceneDesc &desc, const BuildOptions &opts, std::shared_ptr<Scene> scene = nullptr,
+                         const InputFilesSummary *inputs = nullptr);
 
 // A finished render: the film image with all layers after Integrator::finish,
 // with the job's provenance and the render's figures as typed metadata

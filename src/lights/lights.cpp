@@ -531,7 +531,9 @@ std::shared_ptr<Light> CreateLight(const LightDesc &desc, const SceneDesc &scene
         // pbrt-v3's "samples" (alias "nsamples"): light samples per hit of directlighting's "all" strategy.
         const int nSamples = ps.getInt("samples", ps.getInt("nsamples", 1));
         std::string map = ps.getString("mapname", "");
-        if (!map.empty()) {
+        if (desc.map) {
+            light = std::make_shared<InfiniteLight>(desc.worldFromLight, L, desc.map.get());
+        } else if (!map.empty()) {
             Image img;
             try {
                 // 8-bit files as stored (code / 255), as pbrt-v3's InfiniteAreaLight reads them

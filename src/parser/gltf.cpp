@@ -243,7 +243,8 @@ class Loader {
         if (useCamera) chooseCamera(wholeScene);
     }
 
-    bool hasLights() const { return emissive_ || punctual_; }
+    bool hasPunctualLights() const { return punctual_; }
+    bool hasEmitters() const { return emissive_; }
     Float cameraAspect() const { return cameraAspect_; }
 
   private:
@@ -1187,13 +1188,17 @@ SceneDesc LoadGltfScene(const std::string &filename, const GltfOptions &opts) {
     fn.loc = loc;
     fn.strings = {StemOf(filename) + ".exr"};
     desc.film.params.add(fn);
-    if (!loader.hasLights()) {
+    // Without punctual lights, a uniform white environment (radiance 1) lights
+    // the scene, emissive surfaces or not (glTF viewers light such files too).
+    if (!loader.hasPunctualLights() && opts.defaultEnvironment) {
         LightDesc env;
         env.type = "infinite";
         env.present = true;
         env.loc = loc;
         desc.lights.push_back(env);
-        desc.notes.push_back(filename + ": no lights or emissive materials: a uniform white environment lights the scene");
+        desc.notes.push_back(filename + ": no punctual lights: a uniform white environment lights the scene" +
+                             (loader.hasEmitters() ? " besides its emissive surfaces" : "") +
+                             " (--envmap none turns it off, --envmap FILE replaces it)");
     }
     return desc;
 }

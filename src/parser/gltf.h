@@ -17,6 +17,9 @@ struct GltfOptions {
     // Camera to render: a camera's or a camera node's name; "" = the first
     // camera in the scene's node order.
     std::string camera;
+    // A uniform white environment for a file without punctual lights (off:
+    // gradus --envmap none, or --envmap FILE, which brings its own).
+    bool defaultEnvironment = true;
 };
 
 // True for names ending in .gltf or .glb (any case).
@@ -25,7 +28,7 @@ bool IsGltfFile(const std::string &filename);
 // A whole scene from a glTF file: everything above, plus a default film
 // (640x480, or 480 rows at the camera's aspect ratio) writing <stem>.exr; a
 // default camera when the file has none and a uniform white environment when
-// it has no light, each said in SceneDesc::notes.
+// it has no punctual light (opts.defaultEnvironment), each said in SceneDesc::notes.
 SceneDesc LoadGltfScene(const std::string &filename, const GltfOptions &opts);
 
 // Adds a glTF asset to `desc` under worldFromAsset (the GltfAsset directive of

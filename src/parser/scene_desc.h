@@ -14,6 +14,8 @@
 
 namespace gradus {
 
+class Image;
+
 struct EntityDesc {
     std::string type;  // e.g. "perspective", "matte", "trianglemesh"; for MakeNamedMaterial the "string type" value
     ParamSet params;
@@ -39,6 +41,9 @@ struct MaterialDesc : EntityDesc {
 struct LightDesc : EntityDesc {
     Transform worldFromLight;
     std::string outsideMedium;
+    // An "infinite" light's map already read (gradus --envmap): R, G, B, used
+    // instead of a "mapname" file.
+    std::shared_ptr<const Image> map;
 };
 
 struct ShapeDesc : EntityDesc {

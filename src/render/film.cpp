@@ -117,7 +117,22 @@ void FilmTile::addCount(Point2i p, double n) {
     count_[index(p)] += n;
 }
 
+void Film::setWatcher(FilmWatcher *w) {
+    std::lock_guard<std::mutex> lock(watchMutex_);
+    watcher_ = w;
+}
+
+void Film::setSplatSamples(double sppTotal) {
+    std::unique_lock<std::mutex> lock(watchMutex_, std::defer_lock);
+    if (watcher_) lock.lock();
+    splatSpp_ = sppTotal;
+    if (watcher_) watcher_->merged(bounds_, true);  // every splat's weight changed
+}
+
 void Film::mergeTile(const FilmTile &t) {
+    // Merges are serial (the render loop's ordered merge); the lock is for a watcher's readPixels.
+    std::unique_lock<std::mutex> lock(watchMutex_, std::defer_lock);
+    if (watcher_) lock.lock();
     for (int y = std::max(t.bounds_.pMin.y, bounds_.pMin.y); y < std::min(t.bounds_.pMax.y, bounds_.pMax.y); ++y)
         for (int x = std::max(t.bounds_.pMin.x, bounds_.pMin.x); x < std::min(t.bounds_.pMax.x, bounds_.pMax.x);
              ++x) {
@@ -139,6 +154,28 @@ void Film::mergeTile(const FilmTile &t) {
             layerSplats_[s.layer][index(p)] += s.v;
         }
     }
+    if (watcher_) {
+        Bounds2i b;
+        b.pMin = {std::max(t.bounds_.pMin.x, bounds_.pMin.x), std::max(t.bounds_.pMin.y, bounds_.pMin.y)};
+        b.pMax = {std::min(t.bounds_.pMax.x, bounds_.pMax.x), std::min(t.bounds_.pMax.y, bounds_.pMax.y)};
+        if (!t.splats_.empty()) watcher_->merged(bounds_, true);
+        else if (b.area() > 0) watcher_->merged(b, false);
+    }
+}
+
+void Film::readPixels(const Bounds2i &b, const std::vector<int> &layers, float *out) const {
+    // As toOutput, without counting the clamped values (the render's figure).
+    auto put = [&](const Spectrum &v) {
+        constexpr double big = std::numeric_limits<float>::max();
+        for (int c = 0; c < 3; ++c) *out++ = float(std::abs(v[c]) <= big ? v[c] : v[c] > 0 ? big : -big);
+    };
+    std::lock_guard<std::mutex> lock(watchMutex_);
+    for (int y = b.pMin.y; y < b.pMax.y; ++y)
+        for (int x = b.pMin.x; x < b.pMax.x; ++x) {
+            const size_t i = index({x, y});
+            put(mainPixel(i));
+            for (int l : layers) put(layerPixel(l, i));
+        }
 }
 
 float Film::toOutput(double v) const {
@@ -150,15 +187,18 @@ float Film::toOutput(double v) const {
     return float(v > 0 ? big : -big);
 }
 
+Spectrum Film::mainPixel(size_t i) const {
+    Spectrum v(0);
+    if (weight_[i] != 0) v = sum_[i] / weight_[i];
+    if (splatSpp_ > 0) v += splat_[i] / splatSpp_;
+    return v * scale_;
+}
+
 Image Film::mainImage() const {
     Image img = Image::RGB(bounds_.width(), bounds_.height());
     for (int y = 0; y < bounds_.height(); ++y)
         for (int x = 0; x < bounds_.width(); ++x) {
-            size_t i = size_t(y) * bounds_.width() + x;
-            Spectrum v(0);
-            if (weight_[i] != 0) v = sum_[i] / weight_[i];
-            if (splatSpp_ > 0) v += splat_[i] / splatSpp_;
-            v *= scale_;
+            const Spectrum v = mainPixel(size_t(y) * bounds_.width() + x);
             for (int c = 0; c < 3; ++c) img.at(x, y, c) = toOutput(v[c]);
         }
     return img;

@@ -5,6 +5,7 @@
 #pragma once
 #include <atomic>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,16 @@ struct Bounds2i {
 };
 
 class FilmTile;
+
+// Observes a film while it renders (render/display.h): merged() runs under the
+// film's watch lock right after each merge, with the pixels it touched
+// (clipped to the film's bounds; all of them when it carried splats). It
+// must be quick: the merging thread holds the lock.
+class FilmWatcher {
+  public:
+    virtual ~FilmWatcher() = default;
+    virtual void merged(const Bounds2i &pixels, bool allPixels) = 0;
+};
 
 // What a layer accumulates: per-pixel sample sums (FilmTile::addLayer), splats
 // (FilmTile::addSplat), or both. A layer holds storage only for its kinds
@@ -48,6 +59,7 @@ class Film {
     int addLayer(const std::string &name, LayerUse use = LayerUse::Both, bool written = true);
     int numLayers() const { return int(layerNames_.size()); }
     const std::string &layerName(int i) const { return layerNames_[i]; }
+    bool layerWritten(int i) const { return layerWritten_[i] != 0; }
     // Whether integrators keep per-pixel squared values for variance layers
     // (gradus --variance; gradient integrators: 240 bytes per pixel). Set before
     // Integrator::preprocess adds the layers.
@@ -59,7 +71,15 @@ class Film {
     std::unique_ptr<FilmTile> makeSplatTile() const;
     void mergeTile(const FilmTile &tile);
     // Number of camera samples per pixel taken so far (for splat normalisation).
-    void setSplatSamples(double sppTotal) { splatSpp_ = sppTotal; }
+    void setSplatSamples(double sppTotal);
+
+    // A watcher (nullptr: none) of the merges while it is set; merges then take
+    // the watch lock, which readPixels takes as well (unwatched films lock nothing).
+    void setWatcher(FilmWatcher *w);
+    // Output values (as toImage writes them) of the pixels of b (inside
+    // pixelBounds(), row-major), per pixel the main R, G, B and then R, G, B of
+    // each layer listed; safe while other threads merge.
+    void readPixels(const Bounds2i &b, const std::vector<int> &layers, float *out) const;
     double splatSamples() const { return splatSpp_; }
 
     // Final images (cropped size).
@@ -111,6 +131,9 @@ class Film {
     static constexpr double kLayerBytesPerPixel = 2 * sizeof(Spectrum);  // an upper bound (LayerUse::Both)
     void checkMemory(const std::string &what, double bytesPerPixel) const;
     mutable std::atomic<uint64_t> clamped_{0};
+    FilmWatcher *watcher_ = nullptr;
+    mutable std::mutex watchMutex_;
+    Spectrum mainPixel(size_t i) const;
 };
 
 class FilmTile {

@@ -49,6 +49,11 @@ struct RenderOptions {
     double checkpointInterval = 300;  // --checkpoint-interval
     std::string resumeFile;           // --resume
     int passBegin = 0, passEnd = -1;  // --passes A:B: render passes [A, B) only (-1: to the end)
+    // --display-server HOST:PORT: stream the film to a tev viewer while it
+    // renders (render/display.h; RenderJobImage runs it); --display-layers:
+    // the film's layers as well.
+    std::string displayServer;
+    bool displayLayers = false;
     // Loop level (set by RenderJobImage): start at pass firstPass with
     // firstSpp samples per pixel done (-1: firstPass x samples per pass);
     // stop before pass lastPass (-1: none); run every pass whole even when

@@ -194,8 +194,15 @@ TEST(GltfLoader, CornellBoxStructure) {
     EXPECT_EQ(Numbers(d.materials[1].params, "basecolor"), (std::vector<double>{0.62, 0.07, 0.05}));
     EXPECT_EQ(Numbers(d.materials[1].params, "metallic"), std::vector<double>{0});
     EXPECT_EQ(Numbers(d.materials[1].params, "roughness"), std::vector<double>{1});
-    // No default environment: the file has an emitter.
-    EXPECT_TRUE(d.lights.empty());
+    // No punctual light: the default environment besides the emitter, said in a
+    // note; off on request (gradus --envmap none).
+    ASSERT_EQ(d.lights.size(), 1u);
+    EXPECT_EQ(d.lights[0].type, "infinite");
+    bool noted = false;
+    for (const auto &n : d.notes)
+        noted |= n.find("uniform white environment lights the scene besides its emissive surfaces") != std::string::npos;
+    EXPECT_TRUE(noted);
+    EXPECT_TRUE(Load("cornell.gltf", "", false).lights.empty());
 }
 
 TEST(GltfLoader, CameraTransformAndYfov) {

@@ -19,9 +19,10 @@
 namespace gradus::gltftest {
 
 inline std::string Data(const std::string &name) { return std::string(GLTF_TEST_DATA) + "/" + name; }
-inline SceneDesc Load(const std::string &name, const std::string &camera = "") {
+inline SceneDesc Load(const std::string &name, const std::string &camera = "", bool defaultEnvironment = true) {
     GltfOptions o;
     o.camera = camera;
+    o.defaultEnvironment = defaultEnvironment;
     return LoadGltfScene(Data(name), o);
 }
 inline std::string ReadText(const std::string &path) {

@@ -1,11 +1,14 @@
 """Renders through the module equal the command line's bit for bit at equal options."""
+import socket
+import struct
+import threading
 import time
 
 import numpy as np
 import pytest
 
 import gradus
-from conftest import CORNELL, CORNELL_GLB, assert_same_layers, run_tool
+from conftest import CORNELL, CORNELL_GLB, assert_same_layers, bits, run_tool
 
 # Records that differ between two runs of the same render: timings, memory, the invocation.
 VARYING = ("seconds", "peak_rss_mb", "command_line")
@@ -103,3 +106,129 @@ def test_progress_is_reported_and_can_stop_the_render(tiny_cornell):
     # The module is usable afterwards: same image as before.
     again = tiny_cornell.render(integrator="path", spp=8)
     assert_same_layers(again, r)
+
+
+# ---- a kept scene, environment maps, the live display ------------------------------------
+
+def test_kept_scene_skips_the_load_and_equals_the_cli(tmp_path):
+    # The scene file is broken after load_scene: renders use the kept build
+    # (a reload would raise), with the provenance of the original file; five other
+    # integrators in between leave the build as it was.
+    scene = tmp_path / "cb.pbrt"
+    scene.write_text(open(CORNELL).read())
+    s = gradus.load_scene(scene, resolution=(20, 16))
+    cli = cli_render(tmp_path, str(scene), ["--resolution", "20x16", "--spp", "2", "--seed", "4"])
+    scene.write_text("WorldBegin\nShape \"nonsense\"\n")
+    first = s.render(spp=2, seed=4)
+    for integrator in ("pmlt", "gbdpt", "vcm", "mlt", "directlighting"):
+        s.render(integrator=integrator, spp=1, seed=1)
+    again = s.render(spp=2, seed=4)
+    for r in (first, again):
+        assert_same_layers(r, cli)
+        assert r.metadata["scene_hash"] == cli.metadata["scene_hash"]
+    assert again.metadata["scene_load_seconds"] < 0.05  # the job's build only
+
+
+def write_map(path, rgb, w=16, h=8):
+    gradus.write_image(path, {"": np.tile(np.asarray(rgb, np.float32), (h, w, 1))})
+
+
+def test_envmap_equals_cli(tmp_path):
+    sky = tmp_path / "sky.exr"
+    write_map(sky, [0.3, 0.6, 1.2])
+    args = ["--resolution", "16x16", "--spp", "2", "--seed", "3"]
+    env = ["--envmap", str(sky), "--envmap-scale", "2.5", "--envmap-rotate", "40"]
+    s = gradus.load_scene(CORNELL_GLB, resolution=(16, 16))
+    plain = s.render(spp=2, seed=3)
+    lit = s.render(spp=2, seed=3, envmap=sky, envmap_scale=2.5, envmap_rotate=40)  # builds anew
+    assert_same_layers(lit, cli_render(tmp_path, CORNELL_GLB, args + env))
+    assert lit.metadata["environment"] == '"%s" scale 2.5 rotate 40' % sky
+    assert "--envmap %s --envmap-scale 2.5 --envmap-rotate 40" % sky in lit.metadata["command_line"]
+    none = s.render(spp=2, seed=3, envmap="none")
+    assert_same_layers(none, cli_render(tmp_path, CORNELL_GLB, args + ["--envmap", "none"]))
+    assert_same_layers(s.render(spp=2, seed=3), plain)  # back to the default environment
+    # Given at load time, the map is the scene's: renders share that build.
+    k = gradus.load_scene(CORNELL_GLB, resolution=(16, 16), envmap=sky, envmap_scale=2.5, envmap_rotate=40)
+    assert_same_layers(k.render(spp=2, seed=3), lit)
+    # An option left out keeps the scene's value (here the rotation).
+    assert_same_layers(k.render(spp=2, seed=3, envmap_scale=1), s.render(spp=2, seed=3, envmap=sky, envmap_rotate=40))
+
+
+def test_envmap_errors(tmp_path, tiny_cornell):
+    with pytest.raises(gradus.SceneError, match="nothere.exr: cannot open") as e:
+        tiny_cornell.render(spp=1, envmap=tmp_path / "nothere.exr")
+    assert e.value.file == "<command line --envmap>"
+    with pytest.raises(gradus.SceneError, match="nothere.exr: cannot open"):
+        gradus.load_scene(CORNELL, envmap=tmp_path / "nothere.exr")
+    with pytest.raises(ValueError, match="need envmap"):
+        tiny_cornell.render(spp=1, envmap_scale=2)
+    with pytest.raises(ValueError, match="envmap_scale"):
+        tiny_cornell.render(spp=1, envmap=tmp_path / "x.exr", envmap_scale=-1)
+    tiny_cornell.render(spp=1)  # usable afterwards
+
+
+class Viewer(threading.Thread):
+    """A loopback receiver of tev's protocol: rebuilds the image the packets describe."""
+
+    def __init__(self):
+        super().__init__(daemon=True)
+        self.sock = socket.socket()
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.listen(1)
+        self.sock.settimeout(60)
+        self.address = "127.0.0.1:%d" % self.sock.getsockname()[1]
+        self.data = b""
+
+    def run(self):
+        conn, _ = self.sock.accept()
+        while True:
+            chunk = conn.recv(1 << 16)
+            if not chunk:
+                break
+            self.data += chunk
+        conn.close()
+
+    def image(self):
+        img, channels, at = None, [], 0
+        while at < len(self.data):
+            n, kind = struct.unpack_from("<IB", self.data, at)
+            p, at = self.data[at:at + n], at + n
+            assert len(p) == n
+            fields = p[6:].split(b"\0", 1)  # grab focus byte at 5, then the name
+            rest, k = fields[1], 0
+
+            def cstring():
+                nonlocal k
+                end = rest.index(b"\0", k)
+                s, k = rest[k:end].decode(), end + 1
+                return s
+            if kind == 4:
+                w, h, nc = struct.unpack_from("<3i", rest, 0)
+                k = 12
+                channels = [cstring() for _ in range(nc)]
+                img = np.zeros((h, w, nc), np.float32)
+            else:
+                assert kind == 6
+                (nc,) = struct.unpack_from("<i", rest, 0)
+                k = 4
+                names = [cstring() for _ in range(nc)]
+                x, y, w, h = struct.unpack_from("<4i", rest, k)
+                offsets = struct.unpack_from("<%dq" % nc, rest, k + 16)
+                strides = struct.unpack_from("<%dq" % nc, rest, k + 16 + 8 * nc)
+                values = np.frombuffer(rest, np.float32, offset=k + 16 + 16 * nc)
+                for name, o, st in zip(names, offsets, strides):
+                    img[y:y + h, x:x + w, channels.index(name)] = values[o::st][:w * h].reshape(h, w)
+        return img, channels
+
+
+def test_display_server_receives_the_final_image(tiny_cornell):
+    viewer = Viewer()
+    viewer.start()
+    r = tiny_cornell.render(spp=2, display_server=viewer.address)
+    viewer.join(30)
+    img, channels = viewer.image()
+    assert channels == ["R", "G", "B"]
+    assert np.array_equal(bits(img), bits(r.image))
+    assert r.metadata["command_line"].endswith("--display-server %s (Python module)" % viewer.address)
+    with pytest.raises(ValueError, match="HOST:PORT"):
+        tiny_cornell.render(spp=1, display_server="nohost")

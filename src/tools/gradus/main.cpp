@@ -16,6 +16,7 @@
 #include "parser/gltf.h"
 #include "parser/scene_desc.h"
 #include "job/render_route.h"
+#include "render/display.h"
 #include "integrators/registry.h"
 
 using namespace gradus;
@@ -48,6 +49,18 @@ const char *kUsage =
     "  --debugpixel x,y[,s] re-run the samples (or sample s) of one pixel single-threaded with the\n"
     "                       random numbers of the full render; prints vertices and contributions\n"
     "                       on stdout and writes no image\n"
+    "  --envmap FILE|none   light the scene with a lat-long HDR map (.exr, .hdr, .pfm) as an\n"
+    "                       infinite light (pbrt-v3's mapping: the top row at the up axis, u = phi/2pi);\n"
+    "                       the up axis is +z for pbrt scenes, +y for glTF scenes. glTF scenes without\n"
+    "                       punctual lights get a uniform white environment instead: FILE replaces it,\n"
+    "                       \"none\" turns it off\n"
+    "  --envmap-scale S     multiplies the map's radiance (default 1)\n"
+    "  --envmap-rotate DEG  turns the map DEG degrees about the up axis (+z pbrt, +y glTF),\n"
+    "                       counterclockwise seen from above (right-handed)\n"
+    "  --display-server HOST:PORT   stream the film while it renders to a viewer speaking tev's\n"
+    "                       protocol (e.g. tev, listening on 127.0.0.1:14158), up to 4 updates/s;\n"
+    "                       a viewer that cannot be reached is a warning, not an error\n"
+    "  --display-layers     also stream the film's layers (primal, dx, ...)\n"
     "  --variance           gradient integrators also write primal_var, dx_var, dy_var\n"
     "                       (240 more bytes per pixel while rendering)\n"
     "  --quick              1/4 resolution and 1/8 of the samples\n"
@@ -106,6 +119,7 @@ struct CommandLine {
     std::string sceneFile;
     GltfOptions gltfOpts;
     bool printStats = false, splitting = false;
+    bool envScaleGiven = false, envRotateGiven = false;
     std::string commandLine;
     int exitStatus = -1;  // >= 0: exit with it, nothing to render
 };
@@ -225,6 +239,21 @@ void RenderOption(ArgCursor &arg, CommandLine &cl) {
         bo.quick = true;
     } else if (a == "--variance") {
         bo.variance = true;
+    } else if (a == "--envmap") {
+        bo.environment.map = arg.next();
+        if (bo.environment.map.empty()) Fail("--envmap expects a file name or \"none\"");
+    } else if (a == "--envmap-scale") {
+        const char *v = arg.next();
+        bo.environment.scale = ParseDouble(a, v);
+        if (bo.environment.scale < 0) Fail("--envmap-scale must be >= 0, got " + std::string(v));
+        cl.envScaleGiven = true;
+    } else if (a == "--envmap-rotate") {
+        bo.environment.rotateDegrees = ParseDouble(a, arg.next());
+        cl.envRotateGiven = true;
+    } else if (a == "--display-server") {
+        ro.displayServer = arg.next();
+    } else if (a == "--display-layers") {
+        ro.displayLayers = true;
     } else if (a == "--quiet") {
         bo.quiet = ro.quiet = true;
     } else if (a == "--stats") {
@@ -255,6 +284,9 @@ CommandLine ParseCommandLine(int argc, char **argv) {
     if (cl.splitting && cl.ro.checkpointFile.empty())
         Fail("--passes needs --checkpoint FILE (the partial render's output)");
     if (cl.splitting && cl.ro.debug) Fail("--passes and --debugpixel exclude each other");
+    if ((cl.envScaleGiven || cl.envRotateGiven) && !cl.bo.environment.addsLight())
+        Fail(std::string(cl.envScaleGiven ? "--envmap-scale" : "--envmap-rotate") + " needs --envmap FILE");
+    if (cl.ro.displayLayers && cl.ro.displayServer.empty()) Fail("--display-layers needs --display-server HOST:PORT");
     for (int i = 0; i < argc; ++i) cl.commandLine += (i ? " " : "") + std::string(argv[i]);
     return cl;
 }
@@ -282,6 +314,15 @@ int Render(CommandLine &cl) {
     if (!bo.outfileOverride.empty()) CheckWritableImagePath(bo.outfileOverride);
     if (!cl.gltfOpts.camera.empty() && !IsGltfFile(cl.sceneFile))
         Fail("--camera applies to glTF scenes (.gltf, .glb); pbrt scenes place glTF cameras with GltfAsset");
+    // The viewer's address and the environment map too, before the scene.
+    if (!ro.displayServer.empty()) {
+        try {
+            ParseDisplayAddress(ro.displayServer);
+        } catch (const Error &e) {
+            Fail(e.what());
+        }
+    }
+    LoadEnvironmentMap(&bo.environment);
     double loadSec = 0;
     RenderJob job = LoadRenderJob(cl.sceneFile, cl.gltfOpts, bo, &loadSec);
     // Always said: e.g. scene parameters an --integrator override does not use.

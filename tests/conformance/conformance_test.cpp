@@ -335,7 +335,12 @@ TEST_P(Agreement, AgreesWithBdpt) {
     // a run's mean varies ~10x more than pmlt's (whose every state splats b).
     // At 8 spp a 5% bias is not resolved; K = 32 runs of 256 spp resolve it
     // (K = 16 left the outdoor scene's power margin at 0.99 in one CI run).
+    // gmlt at K 32 x 256 spp cost 440 s of the default tier's ~770 s on the three
+    // scenes (two shared cores): the default tier runs it on outdoor only (70 s),
+    // the slow tier on all three with 8x the samples.
     const std::string &x = std::get<0>(GetParam());
+    if (x == "gmlt" && std::get<1>(GetParam()) != "outdoor")
+        GTEST_SKIP() << "gmlt agrees with bdpt on this scene in the slow tier (conformance_slow_test)";
     AgreementConfig cfg = x == "gmlt" ? AgreementConfig{32, 256, 1000, 2000} : AgreementConfig{16, 8, 1000, 2000};
     std::string why;
     if (!AgreementSetup(x, std::get<1>(GetParam()), &cfg, &why)) GTEST_SKIP() << why;

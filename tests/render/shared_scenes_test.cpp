@@ -51,8 +51,12 @@ TEST_P(SharedScene, MeanWithinOnePercentAndErrorFalls) {
         const ImageMetrics m = CompareImages(r.image, ref);
         std::printf("%s %s %d spp: relMSE %.5g (floor %.2g), mean rel diff %+.3f%%\n", c.scene, c.integrator, spp,
                     m.relmse, floor, 100 * m.meanRelDiff);
-        if (spp == c.spp) EXPECT_LT(std::abs(m.meanRelDiff), 0.01) << c.scene << " " << c.integrator << " " << spp << " spp";
-        if (prev > 0) EXPECT_LT(m.relmse - floor, (prev - floor) / 2.5) << c.scene << " " << c.integrator;
+        if (spp == c.spp) {
+            EXPECT_LT(std::abs(m.meanRelDiff), 0.01) << c.scene << " " << c.integrator << " " << spp << " spp";
+        }
+        if (prev > 0) {
+            EXPECT_LT(m.relmse - floor, (prev - floor) / 2.5) << c.scene << " " << c.integrator;
+        }
         prev = m.relmse;
     }
 }
@@ -113,12 +117,13 @@ TEST_P(PartScene, MeanAndBlocksMatchPbrtV3) {
         const double se = std::sqrt(v / K), r = blockMean(ref, b), rel = m / r - 1;
         std::printf("%s %s %s: %+.2f%% (%.2f standard errors)\n", c.part, c.integrator,
                     b == BX * BY ? "mean" : ("block " + std::to_string(b)).c_str(), 100 * rel, (m - r) / se);
-        if (b == BX * BY)
+        if (b == BX * BY) {
             EXPECT_LT(std::abs(rel), 0.01) << c.part << " " << c.integrator << " image mean";
-        else
+        } else {
             EXPECT_TRUE(std::abs(rel) < 0.03 || std::abs(m - r) < 4 * se)
                 << c.part << " " << c.integrator << " block " << b << ": " << 100 * rel << "%, " << (m - r) / se
                 << " standard errors";
+        }
     }
 }
 

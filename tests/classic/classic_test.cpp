@@ -287,19 +287,6 @@ void AddRun(Runs *runs, const Image &img) {
     if (runs->sets.empty()) runs->sets.resize(17);
     for (int i = 0; i < 17; ++i) runs->sets[i].push_back(v[i]);
 }
-double WelchT(const std::vector<double> &a, const std::vector<double> &b, double scaleA) {
-    auto mv = [](const std::vector<double> &x, double s, double *m, double *v) {
-        *m = 0;
-        for (double e : x) *m += s * e / x.size();
-        *v = 0;
-        for (double e : x) *v += (s * e - *m) * (s * e - *m) / (x.size() - 1);
-        *v /= x.size();
-    };
-    double ma, va, mb, vb;
-    mv(a, scaleA, &ma, &va);
-    mv(b, 1, &mb, &vb);
-    return (ma - mb) / std::sqrt(va + vb + 1e-300);
-}
 }  // namespace
 
 TEST(DirectLighting, ExporterStyleSceneRendersAndAgreesWithWhitted) {

@@ -109,6 +109,13 @@ inline RunStats Stats(const std::vector<double> &v) {
     return s;
 }
 
+// Welch's t of the means of two sets of independent run values, the first
+// scaled by scaleA (a power check scales it by a bias that must be seen).
+inline double WelchT(const std::vector<double> &a, const std::vector<double> &b, double scaleA = 1) {
+    const RunStats sa = Stats(a), sb = Stats(b);
+    return (scaleA * sa.mean - sb.mean) / std::sqrt(scaleA * scaleA * sa.var / sa.n + sb.var / sb.n + 1e-300);
+}
+
 // Per-pixel mean of independent renders and the variance of that mean
 // (RGB images), for z-tests against a converged reference.
 struct MeanOfRuns {

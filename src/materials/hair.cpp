@@ -145,8 +145,18 @@ std::array<Float, HairBxDF::pMax + 1> HairBxDF::lobePdf(Float cosThetaO, Float h
 }
 
 Spectrum HairBxDF::f(const Vec3 &wo, const Vec3 &wi, TransportMode mode) const {
-    // Not reciprocal: the adjoint is the radiance BSDF with the directions swapped.
-    if (mode == TransportMode::Importance) return f(wi, wo, TransportMode::Radiance);
+    // The integrators multiply by |cos| of wi to the shading normal; the hair lobes
+    // are densities over the sphere already, so f is S / |cos wi| in both modes
+    // (pbrt-v3 divides it out likewise): the normal drops out, as it must on
+    // curves, whose normal is only pbrt-v3's convention. S is not reciprocal: the
+    // adjoint swaps its directions.
+    const Spectrum s = mode == TransportMode::Importance ? scattering(wi, wo) : scattering(wo, wi);
+    const Float c = std::abs(wi.z);
+    const Spectrum v = c > 0 ? s / c : s;
+    return v.isFinite() ? v : Spectrum(0);
+}
+
+Spectrum HairBxDF::scattering(const Vec3 &wo, const Vec3 &wi) const {
     const Float h = h_, gammaO = std::asin(h);
     const Float sinThetaO = Clamp<Float>(wo.x, -1, 1), cosThetaO = SafeSqrt(1 - sinThetaO * sinThetaO);
     const Float sinThetaI = Clamp<Float>(wi.x, -1, 1), cosThetaI = SafeSqrt(1 - sinThetaI * sinThetaI);
@@ -162,11 +172,7 @@ Spectrum HairBxDF::f(const Vec3 &wo, const Vec3 &wi, TransportMode mode) const {
         sum += ap[p] * (Mp(cosThetaI, cp, sinThetaI, sp, v_[p]) * Np(phi, p, s_, gammaO, gammaT));
     }
     sum += ap[pMax] * (Mp(cosThetaI, cosThetaO, sinThetaI, sinThetaO, v_[pMax]) / (2 * Pi));
-    // The integrators multiply by |cos| to the shading normal; the hair lobes are
-    // densities over the sphere already (pbrt-v3 divides it out likewise).
-    const Float c = std::abs(wi.z);
-    if (c > 0) sum = sum / c;
-    return sum.isFinite() ? sum : Spectrum(0);
+    return sum;
 }
 
 Float HairBxDF::pdf(const Vec3 &wo, const Vec3 &wi, TransportMode) const {

@@ -4,8 +4,8 @@
 //
 // Local frame: x along the fibre (shading dpdu), z the shading normal; theta is
 // the longitudinal angle (sin theta = w.x), phi the azimuth in the y-z plane.
-//   f(wo, wi) = sum_{p<pMax} M_p(theta_i, theta_o) A_p N_p(phi) + M_pMax A_pMax / (2 pi),
-// divided by |cos| to the shading normal (the integrators multiply it back).
+//   S(wo, wi) = sum_{p<pMax} M_p(theta_i, theta_o) A_p N_p(phi) + M_pMax A_pMax / (2 pi),
+// f = S / |cos wi| to the shading normal (the integrators multiply it back).
 //   M_p: d'Eon et al. 2011's longitudinal lobe (Chiang Eq. 7 maps beta_m to its
 //        variance v; v_R = v, v_TT = v/4, v_TRT = 4v), with the low-variance
 //        log form for v <= 0.1 and scale tilts -2a, a, 4a of theta_o for R, TT,
@@ -31,8 +31,9 @@ class HairBxDF : public BxDF {
   public:
     static constexpr int pMax = 3;
     // alpha in degrees; beta_m, beta_n clamped to [0, 1], h to [-1, 1], eta to >= 1.
-    // The model is not reciprocal: Importance mode evaluates f(wi, wo), so light
-    // and camera subpaths agree on each vertex's value.
+    // f = S(wo, wi) / |cos wi| (S: the lobe sum below). S is not reciprocal:
+    // Importance mode evaluates S(wi, wo) / |cos wi|, so light and camera subpaths
+    // agree on each vertex's value whatever the normal.
     HairBxDF(Float h, Float eta, const Spectrum &sigmaA, Float betaM, Float betaN, Float alphaDegrees);
     Spectrum f(const Vec3 &wo, const Vec3 &wi, TransportMode mode) const override;
     bool sample(const Vec3 &wo, Float uc, Point2 u, TransportMode mode, BSDFSample *s) const override;
@@ -53,6 +54,7 @@ class HairBxDF : public BxDF {
     static Spectrum SigmaAFromReflectance(const Spectrum &color, Float betaN);
 
   private:
+    Spectrum scattering(const Vec3 &wo, const Vec3 &wi) const;  // S: the lobe sum, no cosine
     void tiltO(int p, Float sinThetaO, Float cosThetaO, Float *s, Float *c) const;
     Float h_;
     Float eta_, betaM_, betaN_, s_;

@@ -221,8 +221,10 @@ TEST(Hair, ReflectionPeakAtPbrtV3sOffset) {
     }
 }
 
-// At a hit the material's BSDF is Chiang's with the hit's h; Importance mode is
-// the radiance value with the directions swapped (the same h).
+// At a hit the material's BSDF is Chiang's with the hit's h, S(wo, wi) / |cos wi|;
+// Importance mode swaps S's directions and still divides by |cos wi|: S(wi, wo)
+// = f(wi, wo) |cos wo| (the same h), so the normal (on curves only pbrt-v3's
+// convention) drops out of light subpaths too.
 TEST(Hair, AdjointSwapsTheDirections) {
     auto s = Build("Material \"hair\" \"float eumelanin\" 0.8\nShape \"curve\" \"string type\" \"cylinder\" "
                    "\"point P\" [-1 0 0 -0.3 0 0 0.3 0 0 1 0 0] \"float width\" 0.4");
@@ -241,7 +243,8 @@ TEST(Hair, AdjointSwapsTheDirections) {
         const Vec3 lo = bsdf.toLocal(si.wo), li = bsdf.toLocal(wi);
         const Spectrum f = bsdf.f(si.wo, wi, TransportMode::Radiance), expect = fixed.f(lo, li, TransportMode::Radiance);
         EXPECT_NEAR(f.g, expect.g, 1e-9 * (1 + expect.g));
-        const Spectrum fa = bsdf.f(si.wo, wi, TransportMode::Importance), ea = fixed.f(li, lo, TransportMode::Radiance);
+        const Spectrum fa = bsdf.f(si.wo, wi, TransportMode::Importance),
+                       ea = fixed.f(li, lo, TransportMode::Radiance) * (std::abs(lo.z) / std::abs(li.z));
         EXPECT_NEAR(fa.g, ea.g, 1e-9 * (1 + ea.g));
         ++checked;
         arena.reset();
@@ -260,7 +263,10 @@ std::unique_ptr<Scene> Build(const std::string &world) {
 // distant light from the side and a dim environment; 12 runs of each
 // integrator, Welch z per 8x8 quadrant and for the image: |z| > 5 by chance has
 // probability ~4e-4 per statistic (Student t, 11 dof), ~2e-3 for the test;
-// power: a 5% bias of the image must exceed the threshold.
+// power: a 5% bias of the image must exceed the threshold. pbrt-v3's curves are
+// not symmetric (rays leaving a fibre start 2 widths off it, rays arriving stop
+// at the first fibre), so light-subpath vertices on fibres see their neighbours
+// unlike path's: bdpt is 2% brighter in the densest quadrant (z = 3.7).
 TEST(Hair, BdptAgreesWithPath) {
     std::string text = test::TestSceneHeader("0 0.55 2.2  0 0.45 0  0 1 0", 30, 16, 16, "Integrator \"path\"");
     text += "WorldBegin\nLightSource \"infinite\" \"rgb L\" [0.2 0.2 0.2]\n"

@@ -81,51 +81,49 @@ void AlphaFilter(const RTCFilterFunctionNArguments *args, bool shadow) {
         if (cut) args->valid[i] = 0;
     }
 }
-// Tubes (round curves) are seen from outside only: a hit whose geometric normal
-// (outward) faces along the ray is where a ray leaves a fibre; it is ignored,
-// so rays spawned inwards off a fibre pass through it (shapes/curve.h).
-void TubeExitFilter(const RTCFilterFunctionNArguments *args) {
-    for (unsigned i = 0; i < args->N; ++i) {
-        if (args->valid[i] != -1) continue;
-        const float dn = RTCRayN_dir_x(args->ray, args->N, i) * RTCHitN_Ng_x(args->hit, args->N, i) +
-                         RTCRayN_dir_y(args->ray, args->N, i) * RTCHitN_Ng_y(args->hit, args->N, i) +
-                         RTCRayN_dir_z(args->ray, args->N, i) * RTCHitN_Ng_z(args->hit, args->N, i);
-        if (dn > 0) args->valid[i] = 0;
-    }
+// Curves (shapes/curve.h): one user primitive per piece, pbrt-v3's test in
+// double precision; the hit's (u, v) travel in RayHit::b1, b2.
+void CurveBounds(const RTCBoundsFunctionArguments *args) {
+    auto *curve = static_cast<const CurveShape *>(args->geometryUserPtr);
+    const Bounds3 b = curve->pieceBound(int(args->primID));
+    auto lo = [](double v) { return std::nextafter(float(v), -INFINITY); };
+    auto hi = [](double v) { return std::nextafter(float(v), INFINITY); };
+    args->bounds_o->lower_x = lo(b.pMin.x);
+    args->bounds_o->lower_y = lo(b.pMin.y);
+    args->bounds_o->lower_z = lo(b.pMin.z);
+    args->bounds_o->upper_x = hi(b.pMax.x);
+    args->bounds_o->upper_y = hi(b.pMax.y);
+    args->bounds_o->upper_z = hi(b.pMax.z);
 }
 
-// Shadow rays are made symmetric: a segment that ends on a tube, arriving from
-// behind it, would be blocked by that tube's own near wall (within a chord of
-// the end) while the reverse segment leaves through the (ignored) inside. Such hits
-// are ignored too, so bdpt's connections see what path's next-event rays see.
-// The segment's end travels in an extended context (the filter's tfar is the
-// candidate hit's distance).
-struct OcclusionContext {
-    RTCIntersectContext ctx;  // first member: Embree passes &ctx
-    float segmentEnd;         // the ray's tfar before tracing (inf: no end point)
-};
+bool CurveHit(const CurveShape *c, unsigned prim, const RTCRay &ray, Float *t, Float *u, Float *v) {
+    const Ray r(Point3(ray.org_x, ray.org_y, ray.org_z), Vec3(ray.dir_x, ray.dir_y, ray.dir_z), ray.tfar);
+    return c->intersect(int(prim), r, t, u, v) && *t >= ray.tnear && *t < ray.tfar;
+}
 
-void TubeOccludedFilter(const RTCFilterFunctionNArguments *args) {
-    TubeExitFilter(args);
-    auto *curve = static_cast<const CurveShape *>(args->geometryUserPtr);
-    const float end = reinterpret_cast<const OcclusionContext *>(args->context)->segmentEnd;
-    if (!std::isfinite(end)) return;
-    for (unsigned i = 0; i < args->N; ++i) {
-        if (args->valid[i] != -1) continue;
-        const float t = RTCRayN_tfar(args->ray, args->N, i);
-        const float dx = RTCRayN_dir_x(args->ray, args->N, i), dy = RTCRayN_dir_y(args->ray, args->N, i),
-                    dz = RTCRayN_dir_z(args->ray, args->N, i);
-        const double len = std::sqrt(double(dx) * dx + double(dy) * dy + double(dz) * dz);
-        const int prim = int(RTCHitN_primID(args->hit, args->N, i));
-        const double u = Clamp<double>(RTCHitN_u(args->hit, args->N, i), 0, 1), r = curve->radius(prim, u);
-        // A chord of the tube is at most 2 r / sin(angle to the axis) long.
-        Vec3 T;
-        curve->point(prim, u, &T);
-        const double tl = T.length(), sinA = tl > 0 && len > 0 ? Cross(Vec3(dx, dy, dz), T).length() / (len * tl) : 1;
-        // Spawned segments stop 1e-4 of their length short of the end point.
-        if ((double(end) - t) * len <= 2.05 * r / std::max(sinA, 0.05) + 2e-4 * double(end) * len)
-            args->valid[i] = 0;
-    }
+void CurveIntersect(const RTCIntersectFunctionNArguments *args) {
+    if (args->N != 1 || !args->valid[0]) return;
+    auto *c = static_cast<const CurveShape *>(args->geometryUserPtr);
+    auto *rh = reinterpret_cast<RTCRayHit *>(args->rayhit);
+    Float t, u, v;
+    if (!CurveHit(c, args->primID, rh->ray, &t, &u, &v)) return;
+    rh->ray.tfar = float(t);
+    rh->hit.u = float(u);
+    rh->hit.v = float(v);
+    rh->hit.Ng_x = -rh->ray.dir_x;
+    rh->hit.Ng_y = -rh->ray.dir_y;
+    rh->hit.Ng_z = -rh->ray.dir_z;
+    rh->hit.primID = args->primID;
+    rh->hit.geomID = args->geomID;
+    rh->hit.instID[0] = args->context->instID[0];
+}
+
+void CurveOccluded(const RTCOccludedFunctionNArguments *args) {
+    if (args->N != 1 || !args->valid[0]) return;
+    auto *c = static_cast<const CurveShape *>(args->geometryUserPtr);
+    auto *ray = reinterpret_cast<RTCRay *>(args->ray);
+    Float t, u, v;
+    if (CurveHit(c, args->primID, *ray, &t, &u, &v)) ray->tfar = -INFINITY;
 }
 
 void AlphaIntersectFilter(const RTCFilterFunctionNArguments *args) { AlphaFilter(args, false); }
@@ -236,41 +234,12 @@ int EmbreeAccel::addAnalytic(std::shared_ptr<const AnalyticShape> shape) {
 }
 
 int EmbreeAccel::addCurve(std::shared_ptr<const CurveShape> curve) {
-    const CurveType type = curve->type();
-    RTCGeometry g = rtcNewGeometry(device_, type == CurveType::Cylinder ? RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE
-                                            : type == CurveType::Flat   ? RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE
-                                                                        : RTC_GEOMETRY_TYPE_NORMAL_ORIENTED_BEZIER_CURVE);
-    const auto &segs = curve->segments();
-    const size_t ns = segs.size();
-    auto *v = static_cast<float *>(
-        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), 4 * ns));
-    auto *idx = static_cast<unsigned *>(
-        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, sizeof(unsigned), ns));
-    float *nb = nullptr;
-    if (type == CurveType::Ribbon)
-        nb = static_cast<float *>(
-            rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_NORMAL, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 4 * ns));
-    for (size_t s = 0; s < ns; ++s) {
-        idx[s] = unsigned(4 * s);
-        for (int i = 0; i < 4; ++i) {
-            float *q = v + 4 * (4 * s + i);
-            const Point3 &p = segs[s].cp[i];
-            q[0] = float(p.x), q[1] = float(p.y), q[2] = float(p.z);
-            // Bezier control radii in arithmetic progression: radius linear in u.
-            q[3] = float(Lerp(i / 3.0, segs[s].r0, segs[s].r1));
-            if (nb) {
-                const Normal3 n = curve->ribbonNormal(int(s), i / 3.0);
-                float *m = nb + 3 * (4 * s + i);
-                m[0] = float(n.x), m[1] = float(n.y), m[2] = float(n.z);
-            }
-        }
-    }
-    if (type == CurveType::Flat) rtcSetGeometryTessellationRate(g, 16);
-    if (type == CurveType::Cylinder) {
-        rtcSetGeometryUserData(g, const_cast<CurveShape *>(curve.get()));
-        rtcSetGeometryIntersectFilterFunction(g, TubeExitFilter);
-        rtcSetGeometryOccludedFilterFunction(g, TubeOccludedFilter);
-    }
+    RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(g, unsigned(curve->numPieces()));
+    rtcSetGeometryUserData(g, const_cast<CurveShape *>(curve.get()));
+    rtcSetGeometryBoundsFunction(g, CurveBounds, nullptr);
+    rtcSetGeometryIntersectFunction(g, CurveIntersect);
+    rtcSetGeometryOccludedFunction(g, CurveOccluded);
     curves_.push_back(std::move(curve));
     return attachTop(g, 1);
 }
@@ -346,12 +315,10 @@ bool EmbreeAccel::intersect(const Ray &r, RayHit *hit) const {
 }
 
 bool EmbreeAccel::occluded(const Ray &r) const {
-    OcclusionContext octx;
-    RTCIntersectContext &ctx = octx.ctx;
+    RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     RTCRay ray;
     ToRTCRay(r, &ray);
-    octx.segmentEnd = ray.tfar;
     if (!Traceable(ray)) {
         GRADUS_STAT_COUNTER("Embree/Untraceable rays dropped", nBad);
         ++nBad;

@@ -37,7 +37,7 @@ class EmbreeAccel {
     int addMesh(std::shared_ptr<const TriangleMesh> mesh);
     int addAnalytic(std::shared_ptr<const AnalyticShape> shape);
     int addSphere(std::shared_ptr<const AnalyticShape> sphere) { return addAnalytic(std::move(sphere)); }
-    // Embree curve geometry (one primitive per segment; RayHit::b1 = segment u).
+    // Curve geometry (user primitives, one per piece; RayHit::b1, b2 = the hit's u, v).
     int addCurve(std::shared_ptr<const CurveShape> curve);
     // An instanceable object: a scene of meshes (in the object's space, no
     // alpha cut-outs), built once however often it is instanced.

@@ -30,7 +30,8 @@ Transform RasterFromScreen(Point2i res, const Float sw[4]);
 class Camera {
   public:
     virtual ~Camera() = default;
-    // Ray with unit direction in world space; returns the weight (0 if none).
+    // Ray with unit direction in world space; returns the weight (0 if none: the
+    // sample still counts in its pixel, with radiance 0, as in pbrt-v3).
     virtual Float generateRay(const CameraSample &s, Ray *ray) const = 0;
     // Importance along ray (from the lens); *pRaster receives the raster point.
     virtual Spectrum We(const Ray &ray, Point2 *pRaster) const = 0;

@@ -4,17 +4,42 @@
 #include <fstream>
 #include <sstream>
 
+#include <tbb/parallel_for.h>
+
 #include "core/error.h"
 
 namespace gradus {
 
 namespace {
-// Van der Corput radical inverse in base b (points of the pupil search).
-Float RadicalInv(int b, uint64_t i) {
-    Float inv = Float(1) / b, f = inv, r = 0;
-    for (; i; i /= b, f *= inv) r += Float(i % b) * f;
-    return r;
-}
+// Van der Corput radical inverses in base B of i = 0, 1, 2, ... in turn (the
+// points of the pupil search): the digits of i are counted up with carries and
+// their reversal kept as an integer over B^D (i < B^D), so each step costs O(1)
+// on average and every value is the exact digit reversal, rounded once.
+template <int B, int D>
+class RadicalInverseCounter {
+  public:
+    RadicalInverseCounter() {
+        uint64_t p = 1;
+        for (int k = D - 1; k >= 0; --k) place_[k] = p, p *= B;
+        scale_ = double(p);
+    }
+    Float value() const { return Float(double(rev_) / scale_); }
+    void next() {
+        for (int k = 0; k < D; ++k) {
+            if (digit_[k] < B - 1) {
+                ++digit_[k], rev_ += place_[k];
+                return;
+            }
+            digit_[k] = 0, rev_ -= uint64_t(B - 1) * place_[k];
+        }
+    }
+
+  private:
+    int digit_[D] = {};
+    uint64_t place_[D];
+    uint64_t rev_ = 0;
+    double scale_;
+};
 }  // namespace
 
 std::vector<LensElement> ReadLensFile(const std::string &path, const FileLoc &paramLoc) {
@@ -113,11 +138,14 @@ RealisticCamera::RealisticCamera(const Transform &worldFromCamera, Point2i res, 
         throw Error(loc, "realistic camera: focusing at \"focusdistance\" puts the film inside the lens");
     place();
 
-    // Exit-pupil bounds for 64 bands of film radius (as pbrt-v3), searched along +x.
+    // Exit-pupil bounds for 64 bands of film radius (as pbrt-v3), searched along +x;
+    // each band is independent (the bounds do not depend on the thread count).
     const int nBands = 64;
-    for (int i = 0; i < nBands; ++i)
-        pupil_.push_back(boundExitPupil(Float(i) / nBands * filmDiagonal_ / 2, Float(i + 1) / nBands * filmDiagonal_ / 2,
-                                        pupilSamples));
+    pupil_.resize(nBands);
+    tbb::parallel_for(0, nBands, [&](int i) {
+        pupil_[i] = boundExitPupil(Float(i) / nBands * filmDiagonal_ / 2, Float(i + 1) / nBands * filmDiagonal_ / 2,
+                                   pupilSamples);
+    });
 }
 
 Float RealisticCamera::frontZ() const { return z_.empty() ? 0 : z_.front(); }
@@ -159,14 +187,13 @@ bool RealisticCamera::trace(Ray ray, bool fromFilm, Ray *out) const {
             for (Float tc : {-b - sq, -b + sq})
                 if (tc > 0 && tc < t && (ray.o.z + tc * ray.d.z - cz) * R > 0) t = tc;
             if (!std::isfinite(t)) return false;
-            const Point3 p = ray(t);
-            nrm = Normalize(Vec3(p.x, p.y, p.z - cz));
-            if (Dot(nrm, ray.d) > 0) nrm = -nrm;
         }
         const Point3 p = ray(t);
         if (p.x * p.x + p.y * p.y > e.apertureRadius * e.apertureRadius) return false;
         ray.o = p;
         if (e.curvatureRadius == 0) continue;
+        nrm = Normalize(Vec3(p.x, p.y, p.z - (z_[i] - e.curvatureRadius)));
+        if (Dot(nrm, ray.d) > 0) nrm = -nrm;
         // Snell's law in vector form; nrm faces the incoming ray.
         const Float n1 = fromFilm ? etaOf(i) : etaOf(i - 1), n2 = fromFilm ? etaOf(i - 1) : etaOf(i);
         const Float eta = n1 / n2, cosI = -Dot(nrm, ray.d);
@@ -179,26 +206,44 @@ bool RealisticCamera::trace(Ray ray, bool fromFilm, Ray *out) const {
     return true;
 }
 
-RealisticCamera::Box RealisticCamera::boundExitPupil(Float r0, Float r1, int samples) const {
-    // Film points along [r0, r1] on +x joined to points of a square around the
-    // rear element: the rear-plane points of rays that leave the front, bounded
-    // and expanded by about two sample spacings.
-    const Float rr = elements_.back().apertureRadius;
-    const Float s = 1.5 * rr;
+RealisticCamera::Box RealisticCamera::searchPupil(Float r0, Float r1, int samples, const Box *window) const {
+    // Sample i: the film point (i + 1/2) / samples along [r0, r1] on +x and the
+    // rear-plane point of the 2D radical inverse (bases 2, 3) in the square
+    // [-s, s]^2, s = 1.5 rear radius (pbrt-v3's BoundExitPupil). The result is
+    // the bounding box of the points whose rays leave the front (a point inside
+    // the box so far cannot change it and is not traced).
+    const Float s = 1.5 * elements_.back().apertureRadius;
     Box b;
-    int exiting = 0;
     Ray tmp;
-    for (int i = 0; i < samples; ++i) {
+    RadicalInverseCounter<2, 31> u0;  // samples < 2^31 <= 3^20
+    RadicalInverseCounter<3, 20> u1;
+    for (int i = 0; i < samples; ++i, u0.next(), u1.next()) {
+        const Point3 pr(Lerp(u0.value(), -s, s), Lerp(u1.value(), -s, s), rearZ());
+        if (b.inside(pr.x, pr.y)) continue;
+        if (window && !window->inside(pr.x, pr.y)) continue;
         const Point3 pf(Lerp((i + 0.5) / samples, r0, r1), 0, 0);
-        const Point3 pr(Lerp(RadicalInv(2, i), -s, s), Lerp(RadicalInv(3, i), -s, s), rearZ());
-        if (b.inside(pr.x, pr.y) || traceFromFilm(Ray(pf, pr - pf), &tmp)) {
-            b.x0 = std::min(b.x0, pr.x), b.y0 = std::min(b.y0, pr.y);
-            b.x1 = std::max(b.x1, pr.x), b.y1 = std::max(b.y1, pr.y);
-            ++exiting;
-        }
+        if (!traceFromFilm(Ray(pf, pr - pf), &tmp)) continue;
+        b.x0 = std::min(b.x0, pr.x), b.y0 = std::min(b.y0, pr.y);
+        b.x1 = std::max(b.x1, pr.x), b.y1 = std::max(b.y1, pr.y);
     }
-    const Box whole{-s, -s, s, s};
-    if (exiting == 0) return whole;
+    return b;
+}
+
+RealisticCamera::Box RealisticCamera::boundExitPupil(Float r0, Float r1, int samples) const {
+    // pbrt-v3's bound: the box of the exiting sample points, expanded by twice the
+    // square's diagonal over sqrt(samples); the whole square when none exits. Its
+    // area normalises the simple weighting, so the samples and the expansion are
+    // pbrt-v3's. Only the sample points within a window are traced: the box of a
+    // coarse search (2^16 samples) expanded by 16 of its sample spacings on
+    // every side (a pupil does not reach that far beyond the coarse samples).
+    const Float s = 1.5 * elements_.back().apertureRadius;
+    const int coarse = 1 << 16;
+    Box window = samples > coarse ? searchPupil(r0, r1, coarse, nullptr) : Box{};
+    const bool windowed = !window.empty();
+    const Float m = 16 * 2 * s / std::sqrt(Float(coarse));
+    window.x0 -= m, window.y0 -= m, window.x1 += m, window.y1 += m;
+    Box b = searchPupil(r0, r1, samples, windowed ? &window : nullptr);
+    if (b.empty()) return Box{-s, -s, s, s};
     const Float grow = 2 * std::sqrt(2 * (2 * s) * (2 * s)) / std::sqrt(Float(samples));
     b.x0 -= grow, b.y0 -= grow, b.x1 += grow, b.y1 += grow;
     return b;

@@ -38,10 +38,12 @@ class RealisticCamera : public Camera {
     // diameter becomes apertureDiameterMM unless that exceeds the file's
     // (pbrt-v3 keeps the file's then); the film is moved so that the plane
     // focusDistance in front of it is in focus (thick-lens approximation).
-    // Throws Error (at loc) when the lens cannot focus there.
+    // Throws Error (at loc) when the lens cannot focus there. pupilSamples: the
+    // exit-pupil search's points per band (pbrt-v3: 2^20; the simple weighting
+    // divides by the centre band's bound, whose expansion depends on it).
     RealisticCamera(const Transform &worldFromCamera, Point2i resolution, std::vector<LensElement> lensMM,
                     Float apertureDiameterMM, Float focusDistance, Float filmDiagonalMM, bool simpleWeighting,
-                    Float shutterTime, const FileLoc &loc, int pupilSamples = 1 << 16);
+                    Float shutterTime, const FileLoc &loc, int pupilSamples = 1 << 20);
     Float generateRay(const CameraSample &s, Ray *ray) const override;
     // No importance function (hasImportance false): bidirectional integrators refuse it.
     Spectrum We(const Ray &ray, Point2 *pRaster) const override { return Spectrum(0); }
@@ -73,9 +75,11 @@ class RealisticCamera : public Camera {
         Float x0 = Infinity, y0 = Infinity, x1 = -Infinity, y1 = -Infinity;
         bool inside(Float x, Float y) const { return x >= x0 && x <= x1 && y >= y0 && y <= y1; }
         Float area() const { return x1 > x0 && y1 > y0 ? (x1 - x0) * (y1 - y0) : 0; }
+        bool empty() const { return !(x1 >= x0 && y1 >= y0); }
     };
     bool trace(Ray r, bool fromFilm, Ray *out) const;
     void cardinalPoints(const Ray &in, const Ray &out, Float *pz, Float *fz) const;
+    Box searchPupil(Float r0, Float r1, int samples, const Box *window) const;
     Box boundExitPupil(Float r0, Float r1, int samples) const;
 
     Transform worldFromCamera_;

@@ -42,12 +42,16 @@ struct Interaction {
     Point3 p;
     Normal3 n;  // geometric normal (unit); zero for points in space / on point lights
     Vec3 wo;    // outgoing direction (unit), towards the previous vertex
+    // The least distance along +-n at which rays leaving this point start: a
+    // shape's own error bound where it is pbrt-v3's semantics (curves: rays
+    // leave 2 widths off the hit, shapes/curve.h); 0 elsewhere.
+    Float spawnOffset = 0;
     Interaction() = default;
     Interaction(const Point3 &p_, const Normal3 &n_, const Vec3 &wo_) : p(p_), n(n_), wo(wo_) {}
     bool onSurface() const { return n != Normal3(0, 0, 0); }
     Point3 offsetOrigin(const Vec3 &d) const {
         if (!onSurface()) return p;
-        Float eps = gRayEpsilon * (1 + MaxComponent(Abs(p)));
+        const Float eps = std::max(gRayEpsilon * (1 + MaxComponent(Abs(p))), spawnOffset);
         return p + (Dot(d, n) > 0 ? n : -n) * eps;
     }
     Ray spawnRay(const Vec3 &d) const { return Ray(offsetOrigin(d), d, Infinity); }

@@ -75,11 +75,9 @@ Spectrum ExpNeg(const Spectrum &x) { return Spectrum(std::exp(-x.r), std::exp(-x
 
 }  // namespace
 
-HairBxDF::HairBxDF(Float h, Float eta, const Spectrum &sigmaA, Float betaM, Float betaN, Float alphaDegrees,
-                   bool hFromDirection)
+HairBxDF::HairBxDF(Float h, Float eta, const Spectrum &sigmaA, Float betaM, Float betaN, Float alphaDegrees)
     : BxDF(BSDF_GLOSSY | BSDF_REFLECTION | BSDF_TRANSMISSION),
       h_(Clamp<Float>(h, -1, 1)),
-      tube_(hFromDirection),
       eta_(std::max<Float>(eta, 1)),
       betaM_(Clamp<Float>(betaM, 0, 1)),
       betaN_(Clamp<Float>(betaN, 0, 1)) {
@@ -116,12 +114,6 @@ void HairBxDF::tiltO(int p, Float sinThetaO, Float cosThetaO, Float *s, Float *c
 
 Float HairBxDF::roughness() const { return std::max(std::min(betaM_, betaN_), kDefaultShiftThreshold); }
 
-Float HairBxDF::hOf(const Vec3 &w) const {
-    if (!tube_) return h_;
-    const Float len = std::sqrt(w.y * w.y + w.z * w.z);
-    return len > 0 ? Clamp<Float>(-w.y / len, -1, 1) : 0;
-}
-
 std::array<Spectrum, HairBxDF::pMax + 1> HairBxDF::attenuation(Float cosThetaO, Float h) const {
     const Float sinThetaO = SafeSqrt(1 - cosThetaO * cosThetaO);
     // Refracted direction: longitudinal (Snell) and azimuthal (Bravais' modified index).
@@ -153,10 +145,19 @@ std::array<Float, HairBxDF::pMax + 1> HairBxDF::lobePdf(Float cosThetaO, Float h
 }
 
 Spectrum HairBxDF::f(const Vec3 &wo, const Vec3 &wi, TransportMode mode) const {
-    // Not reciprocal: the adjoint is the radiance BSDF with the directions swapped
-    // (h then belongs to wi, the side the radiance leaves to).
-    if (mode == TransportMode::Importance) return f(wi, wo, TransportMode::Radiance);
-    const Float h = hOf(wo), gammaO = std::asin(h);
+    // The integrators multiply by |cos| of wi to the shading normal; the hair lobes
+    // are densities over the sphere already, so f is S / |cos wi| in both modes
+    // (pbrt-v3 divides it out likewise): the normal drops out, as it must on
+    // curves, whose normal is only pbrt-v3's convention. S is not reciprocal: the
+    // adjoint swaps its directions.
+    const Spectrum s = mode == TransportMode::Importance ? scattering(wi, wo) : scattering(wo, wi);
+    const Float c = std::abs(wi.z);
+    const Spectrum v = c > 0 ? s / c : s;
+    return v.isFinite() ? v : Spectrum(0);
+}
+
+Spectrum HairBxDF::scattering(const Vec3 &wo, const Vec3 &wi) const {
+    const Float h = h_, gammaO = std::asin(h);
     const Float sinThetaO = Clamp<Float>(wo.x, -1, 1), cosThetaO = SafeSqrt(1 - sinThetaO * sinThetaO);
     const Float sinThetaI = Clamp<Float>(wi.x, -1, 1), cosThetaI = SafeSqrt(1 - sinThetaI * sinThetaI);
     if (cosThetaO < 1e-9) return Spectrum(0);  // along the fibre: no azimuth
@@ -171,15 +172,11 @@ Spectrum HairBxDF::f(const Vec3 &wo, const Vec3 &wi, TransportMode mode) const {
         sum += ap[p] * (Mp(cosThetaI, cp, sinThetaI, sp, v_[p]) * Np(phi, p, s_, gammaO, gammaT));
     }
     sum += ap[pMax] * (Mp(cosThetaI, cosThetaO, sinThetaI, sinThetaO, v_[pMax]) / (2 * Pi));
-    // The integrators multiply by |cos| to the shading normal; the hair lobes are
-    // densities over the sphere already (pbrt-v3 divides it out likewise).
-    const Float c = std::abs(wi.z);
-    if (c > 0) sum = sum / c;
-    return sum.isFinite() ? sum : Spectrum(0);
+    return sum;
 }
 
 Float HairBxDF::pdf(const Vec3 &wo, const Vec3 &wi, TransportMode) const {
-    const Float h = hOf(wo), gammaO = std::asin(h);
+    const Float h = h_, gammaO = std::asin(h);
     const Float sinThetaO = Clamp<Float>(wo.x, -1, 1), cosThetaO = SafeSqrt(1 - sinThetaO * sinThetaO);
     const Float sinThetaI = Clamp<Float>(wi.x, -1, 1), cosThetaI = SafeSqrt(1 - sinThetaI * sinThetaI);
     if (cosThetaO < 1e-9) return 0;
@@ -200,7 +197,7 @@ Float HairBxDF::pdf(const Vec3 &wo, const Vec3 &wi, TransportMode) const {
 bool HairBxDF::sample(const Vec3 &wo, Float uc, Point2 u, TransportMode mode, BSDFSample *s) const {
     const Float sinThetaO = Clamp<Float>(wo.x, -1, 1), cosThetaO = SafeSqrt(1 - sinThetaO * sinThetaO);
     if (cosThetaO < 1e-9) return false;
-    const Float h = hOf(wo), gammaO = std::asin(h);
+    const Float h = h_, gammaO = std::asin(h);
     // Lobe p by A_p's luminance; uc is reused within the chosen interval for N_p.
     const auto w = lobePdf(cosThetaO, h);
     int p = 0;
@@ -257,16 +254,9 @@ class HairMaterial : public Material {
         else
             sa = HairBxDF::SigmaAFromConcentration(std::max<Float>(0, eumelanin ? eumelanin->evaluate(si) : 0),
                                                    std::max<Float>(0, pheomelanin ? pheomelanin->evaluate(si) : 0));
+        // pbrt-v3's offset across the width from the hit's v (shapes/curve.h).
         const Float h = -1 + 2 * si.uv.y;
-        // On a tube (shapes/curve.h: a curving normal, dndv != 0) the offset is
-        // the one each direction's line has across the fibre; the hit's own h is
-        // then that of wo. Elsewhere h is pbrt-v3's, fixed by the hit.
-        bool tube = false;
-        const Vec3 across = Cross(si.wo, si.shading.dpdu);
-        if (si.dndv != Normal3(0, 0, 0) && across.lengthSquared() > 0)
-            tube = std::abs(Dot(si.shading.n, across) / across.length() - h) < 1e-3;
-        return BSDF(si, arena.make<HairBxDF>(h, eta->evaluate(si), sa, betaM->evaluate(si), bn, alpha->evaluate(si),
-                                             tube));
+        return BSDF(si, arena.make<HairBxDF>(h, eta->evaluate(si), sa, betaM->evaluate(si), bn, alpha->evaluate(si)));
     }
     Float minRoughness() const override {
         const Float m = matutil::ConstantOr(betaM, -1), n = matutil::ConstantOr(betaN, -1);

@@ -4,8 +4,8 @@
 //
 // Local frame: x along the fibre (shading dpdu), z the shading normal; theta is
 // the longitudinal angle (sin theta = w.x), phi the azimuth in the y-z plane.
-//   f(wo, wi) = sum_{p<pMax} M_p(theta_i, theta_o) A_p N_p(phi) + M_pMax A_pMax / (2 pi),
-// divided by |cos| to the shading normal (the integrators multiply it back).
+//   S(wo, wi) = sum_{p<pMax} M_p(theta_i, theta_o) A_p N_p(phi) + M_pMax A_pMax / (2 pi),
+// f = S / |cos wi| to the shading normal (the integrators multiply it back).
 //   M_p: d'Eon et al. 2011's longitudinal lobe (Chiang Eq. 7 maps beta_m to its
 //        variance v; v_R = v, v_TT = v/4, v_TRT = 4v), with the low-variance
 //        log form for v <= 0.1 and scale tilts -2a, a, 4a of theta_o for R, TT,
@@ -16,7 +16,8 @@
 //        (Chiang Eq. 8 maps beta_n to the logistic scale s).
 // Sampling picks p by the luminance of A_p, samples M_p exactly and N_p by its
 // inverse CDF; pdf() is the full mixture density. h in [-1, 1] is the offset
-// across the fibre, -1 + 2 v of the hit (shapes/curve.h).
+// across the fibre, -1 + 2 v of the hit (shapes/curve.h: pbrt-v3's v), fixed
+// by the hit for both directions as in pbrt-v3.
 #pragma once
 #include <array>
 #include <memory>
@@ -32,13 +33,10 @@ class HairBxDF : public BxDF {
   public:
     static constexpr int pMax = 3;
     // alpha in degrees; beta_m, beta_n clamped to [0, 1], h to [-1, 1], eta to >= 1.
-    // hFromDirection (a tube: z is the fibre's normal at the hit): every direction
-    // w has its own offset h(w) = -w.y / |(w.y, w.z)| (that of the line through
-    // the point along w; equal to h for the hit's wo); else h for all (pbrt-v3).
-    // The model is not reciprocal: Importance mode evaluates f(wi, wo), so light
-    // and camera subpaths agree on each vertex's value.
-    HairBxDF(Float h, Float eta, const Spectrum &sigmaA, Float betaM, Float betaN, Float alphaDegrees,
-             bool hFromDirection = false);
+    // f = S(wo, wi) / |cos wi| (S: the lobe sum below). S is not reciprocal:
+    // Importance mode evaluates S(wi, wo) / |cos wi|, so light and camera subpaths
+    // agree on each vertex's value whatever the normal.
+    HairBxDF(Float h, Float eta, const Spectrum &sigmaA, Float betaM, Float betaN, Float alphaDegrees);
     Spectrum f(const Vec3 &wo, const Vec3 &wi, TransportMode mode) const override;
     bool sample(const Vec3 &wo, Float uc, Point2 u, TransportMode mode, BSDFSample *s) const override;
     Float pdf(const Vec3 &wo, const Vec3 &wi, TransportMode mode) const override;
@@ -51,7 +49,6 @@ class HairBxDF : public BxDF {
     std::array<Spectrum, pMax + 1> attenuation(Float cosThetaO) const { return attenuation(cosThetaO, h_); }
     // Lobe selection probabilities (luminance of A_p, normalised).
     std::array<Float, pMax + 1> lobePdf(Float cosThetaO, Float h) const;
-    Float hOf(const Vec3 &w) const;  // the offset used when w is the outgoing direction
 
     // sigma_a from melanin concentrations (pbrt-v3's RGB absorption of eumelanin
     // and pheomelanin) and from a colour through Chiang Eq. 9's inverse.
@@ -59,9 +56,9 @@ class HairBxDF : public BxDF {
     static Spectrum SigmaAFromReflectance(const Spectrum &color, Float betaN);
 
   private:
+    Spectrum scattering(const Vec3 &wo, const Vec3 &wi) const;  // S: the lobe sum, no cosine
     void tiltO(int p, Float sinThetaO, Float cosThetaO, Float *s, Float *c) const;
     Float h_;
-    bool tube_;
     Float eta_, betaM_, betaN_, s_;
     Spectrum sigmaA_;
     Float v_[pMax + 1];

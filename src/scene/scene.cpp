@@ -28,7 +28,7 @@ bool Scene::intersect(const Ray &r, SurfaceInteraction *si) const {
         g.mesh->refineBarycentrics(h.primId, r, &b1, &b2, g.placement);
         g.meshInteraction(h.primId, b1, b2, wo, si);
     } else if (g.curve) {
-        g.curve->interaction(h.primId, h.b1, r(h.t), wo, si);
+        g.curve->interaction(h.primId, h.b1, h.b2, r(h.t), wo, si);
     } else {
         // Refine the analytic hit in double precision along the original ray.
         Float t;

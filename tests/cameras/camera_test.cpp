@@ -1,7 +1,8 @@
 // Orthographic, environment and realistic cameras: rays against the analytic
 // projections (pbrt-v3's screen window, the lat-long formula), the realistic
 // camera against a thin lens and a thick lens of known focal length (lensmaker's
-// equation), lens-file errors, refusals, and orthographic renders by path and
+// equation), its pbrt-v3 weighting (both modes) rendered by path and bdpt against
+// a closed form, lens-file errors, refusals, and orthographic renders by path and
 // bdpt (bdpt without light tracing) against a closed-form image.
 #include <gtest/gtest.h>
 
@@ -298,6 +299,93 @@ void ExpectLensError(const std::string &lensPath, const std::string &where, cons
         EXPECT_NE(m.find(what), std::string::npos) << m;
     }
 }
+
+// pbrt-v3's realistic-camera weighting against a closed form. Lens: a biconvex
+// lens (R = +-50 mm, 3 mm of n = 1.5, 16 mm wide, 1.7 mm thick at the rim) and
+// 2 mm behind it the aperture stop (4 mm) as the rear element: a ray from any
+// film point passes exactly when it crosses the stop's plane within a = 2 mm of
+// the axis (the lens is wide enough never to vignette: such rays meet it within
+// 4 mm of the axis), so the exit pupil is that disk for every film point. The camera sits in a uniform environment of radiance L = 1. With
+// pbrt-v3's GenerateRay a sample is traced from the film point p to a uniform
+// point of the band's pupil bound B (area A_B) and weighs cos^4(theta) A_B / d^2
+// (shutter time 1) or, with simple weighting, cos^4(theta) A_B / A_0 (A_0: the
+// centre band's bound), 0 when blocked; so the pixel is the film-pixel average of
+//   E[w] = (1 / d^2) int_disk cos^4 dA = pi F(r)            (simpleweighting false)
+//   E[w] = (d^2 / A_0) pi F(r)                               (simpleweighting true)
+// with d the stop-to-film distance, r = |p| and F the view factor from a
+// differential area parallel to a coaxial disk of radius a at distance d, offset
+// r: F = (1 - (d^2 + r^2 - a^2) / sqrt((d^2 + r^2 + a^2)^2 - 4 a^2 r^2)) / 2.
+// Every band's bound is the same here (the same 2^20 radical-inverse points pass),
+// A_0 = (bounding box of the points of [-1.5 a, 1.5 a]^2 inside the disk, grown
+// by twice the square's diagonal over 2^10 on each side)^2 area, computed below.
+// The film: pbrt-v3's physical extent, diagonal 35 mm split by the aspect ratio.
+double RadicalInverse(int base, uint64_t i) {
+    double inv = 1.0 / base, f = inv, r = 0;
+    for (; i; i /= base, f *= inv) r += double(i % base) * f;
+    return r;
+}
+
+double DiskViewFactor(double d, double r, double a) {
+    return 0.5 * (1 - (d * d + r * r - a * a) / std::sqrt(Sqr(d * d + r * r + a * a) - 4 * a * a * r * r));
+}
+
+void ExpectRealisticWeighting(const std::string &integrator, bool simple) {
+    const std::string lens = WriteLens("gradus_lens_rearstop.dat", "50 3 1.5 16\n-50 2 1 16\n0 40 0 4\n");
+    const int W = 24, H = 16;
+    const std::string text = "LookAt 0 0 0 0 0 1 0 1 0\nCamera \"realistic\" \"string lensfile\" \"" + lens +
+                             "\" \"float aperturediameter\" 4 \"float focusdistance\" 2 \"bool simpleweighting\" \"" +
+                             (simple ? "true" : "false") + "\"\nSampler \"random\" \"integer pixelsamples\" 256\n"
+                             "PixelFilter \"box\"\nFilm \"image\" \"integer xresolution\" 24 \"integer yresolution\" 16 "
+                             "\"float diagonal\" 35\nIntegrator \"" + integrator + "\" \"integer maxdepth\" 1\n"
+                             "WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\nWorldEnd\n";
+    const SceneDesc desc = ParseString(text, "test.pbrt");
+    RenderJob job = test::MakeTestJob(desc, 256, 11);
+    const auto *cam = dynamic_cast<const RealisticCamera *>(job.scene->camera.get());
+    ASSERT_NE(cam, nullptr);
+    const double d = cam->rearZ(), a = 2e-3, s = 1.5 * a;
+    const int n = 1 << 20;
+    double x0 = 1, y0 = 1, x1 = -1, y1 = -1;
+    for (int i = 0; i < n; ++i) {
+        const double x = -s + 2 * s * RadicalInverse(2, i), y = -s + 2 * s * RadicalInverse(3, i);
+        if (x * x + y * y > a * a) continue;
+        x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+    }
+    const double grow = 2 * std::sqrt(2.0) * 2 * s / std::sqrt(double(n));
+    const double A0 = (x1 - x0 + 2 * grow) * (y1 - y0 + 2 * grow);
+    const double scale = simple ? d * d / A0 : 1;
+    const double diag = 35e-3, fx = std::sqrt(diag * diag / (1 + Sqr(double(H) / W))), fy = fx * H / W;
+    test::TestRender r = test::RenderTestJob(std::move(job), 256, 11);
+    // Residuals over the image and over the outer ring (r > 0.6 of the half-diagonal).
+    double sum[2] = {0, 0}, sum2[2] = {0, 0}, exactSum[2] = {0, 0};
+    int count[2] = {0, 0};
+    for (int py = 0; py < H; ++py)
+        for (int px = 0; px < W; ++px) {
+            double exact = 0, rc = 0;
+            for (int i = 0; i < 8; ++i)
+                for (int j = 0; j < 8; ++j) {
+                    const double x = fx * ((px + (i + 0.5) / 8) / W - 0.5), y = fy * ((py + (j + 0.5) / 8) / H - 0.5);
+                    exact += Pi * DiskViewFactor(d, std::hypot(x, y), a) * scale / 64;
+                }
+            rc = std::hypot(fx * ((px + 0.5) / W - 0.5), fy * ((py + 0.5) / H - 0.5));
+            const double res = r.image.at(px, py, 1) - exact;
+            for (int k = 0; k < 2; ++k) {
+                if (k == 1 && rc < 0.6 * diag / 2) continue;
+                sum[k] += res, sum2[k] += res * res, exactSum[k] += exact, ++count[k];
+            }
+        }
+    for (int k = 0; k < 2; ++k) {
+        const double mean = sum[k] / count[k], se = std::sqrt((sum2[k] / count[k] - mean * mean) / count[k]);
+        const double meanExact = exactSum[k] / count[k];
+        // |z| < 4 (false-positive rate 6e-5 per check); power: 4 se under 1.5% of the value.
+        EXPECT_LT(std::abs(mean), 4 * se) << integrator << (simple ? " simple" : "") << (k ? " outer ring" : " image")
+                                          << ": mean " << meanExact + mean << " exact " << meanExact;
+        EXPECT_LT(4 * se, 0.015 * meanExact) << "power";
+    }
+}
+
+TEST(Realistic, PathWeightsAsPbrtV3) { ExpectRealisticWeighting("path", false); }
+TEST(Realistic, PathSimpleWeightingAsPbrtV3) { ExpectRealisticWeighting("path", true); }
+TEST(Realistic, BdptSimpleWeightingAsPbrtV3) { ExpectRealisticWeighting("bdpt", true); }
 
 TEST(Realistic, LensFileErrorsAreLocated) {
     const std::string good = "# thin lens\n50 0.1 1.5 2\n-50 0 1 2\n";

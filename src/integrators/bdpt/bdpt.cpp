@@ -29,7 +29,9 @@ void BDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &a
     const Scene &scene = *scene_;
     Ray ray;
     Float w = scene.camera->generateRay(cs, &ray);
-    if (w == 0) return;
+    // A blocked sample (realistic camera: vignetted) still counts, with radiance 0,
+    // as pbrt-v3's Film adds its filter weight: pixels average over all samples.
+    if (w == 0) return rec.addRadiance(Spectrum(0));
     const int maxCam = set_.maxDepth + 2, maxLight = set_.maxDepth + 1;
     PathVertex *camV, *lightV;
     BSDF *camB, *lightB;

@@ -268,13 +268,16 @@ void MakeSurfaceVertex(const BidirContext &ctx, const SurfaceInteraction &isect,
     v.primId = isect.primId;
     const GeometryRecord &g = ctx.scene->geometry[isect.geomId];
     if (g.mesh) Barycentrics(g, isect.primId, isect.p, &v.b1, &v.b2);
+    if (isect.spawnOffset > 0) v.b2 = float(isect.spawnOffset), v.flags |= VERTEX_SPAWN_OFFSET;
     v.ns = bsdf ? bsdf.ns() : isect.shading.n;
 }
 
 Interaction AsInteraction(const PathVertex &v) {
     // Light and camera vertices off a surface get no ray offset (zero normal).
     Vec3 n = v.onSurface() ? Vec3(v.ng) : Vec3(0, 0, 0);
-    return Interaction(v.p, n, v.wo);
+    Interaction it(v.p, n, v.wo);
+    if (v.flags & VERTEX_SPAWN_OFFSET) it.spawnOffset = v.b2;
+    return it;
 }
 
 const Medium *MediumAt(const Scene &scene, uint8_t index) {
@@ -591,8 +594,8 @@ BSDF RebuildBSDF(const BidirContext &ctx, const PathVertex &v, TransportMode mod
     SurfaceInteraction si;
     if (g.mesh) {
         g.meshInteraction(v.primId, v.b1, v.b2, v.wo, &si);
-    } else if (g.curve) {  // h (hair) from the point and wo, as at the hit
-        g.curve->interaction(v.primId, -1, v.p, v.wo, &si);
+    } else if (g.curve) {  // u, v (hair's h) from the point and wo, as at the hit
+        g.curve->interaction(v.primId, v.p, v.wo, &si);
     } else {
         Vec3 wo = v.wo;
         g.sphere->interaction(Ray(v.p + wo, -wo), 1, &si);

@@ -46,6 +46,7 @@ enum VertexFlags : uint8_t {
     VERTEX_DELTA = 1,        // the direction sampled at this vertex was a specular (delta) lobe
     VERTEX_DELTA_LIGHT = 2,  // light vertex of a delta-position or delta-direction light
     VERTEX_INFINITE = 4,     // light vertex of an infinite or distant light (direction only)
+    VERTEX_SPAWN_OFFSET = 8, // surface vertex with Interaction::spawnOffset (curves), kept in b2
 };
 
 // Throughputs are stored as float with a power-of-two exponent: the
@@ -87,7 +88,7 @@ struct PathVertex {
         const Medium *medium;      // Medium: the medium scattered in (its phase function)
     };
     int32_t geomId = -1, primId = -1;
-    float b1 = 0, b2 = 0;     // triangle barycentrics (RebuildBSDF)
+    float b1 = 0, b2 = 0;     // triangle barycentrics (RebuildBSDF); b2: VERTEX_SPAWN_OFFSET's offset
     VertexType type = VertexType::Surface;
     uint8_t flags = 0;
     // 1 / continuation probability of Russian roulette applied to the

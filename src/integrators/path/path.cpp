@@ -31,7 +31,9 @@ void PathIntegrator::preprocess(const Scene &scene, Film &) {
 void PathIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const {
     Ray ray;
     Float w = scene_->camera->generateRay(cs, &ray);
-    if (w == 0) return;
+    // A blocked sample (realistic camera: vignetted) still counts, with radiance 0,
+    // as pbrt-v3's Film adds its filter weight: pixels average over all samples.
+    if (w == 0) return rec.addRadiance(Spectrum(0));
     if (volumetric_) {
         // Media draw from their own stream, keyed by the render seed and the film position
         // (its own key, not MediaRNG's: the agreement tests' power was measured with it).

@@ -72,6 +72,7 @@ PathVertex AsPathVertex(const Scene &scene, const LightVertex &lv) {
     v.primId = lv.primId;
     v.b1 = lv.b1;
     v.b2 = lv.b2;
+    if (lv.flags & LightVertex::kSpawnOffset) v.flags |= VERTEX_SPAWN_OFFSET;
     return v;
 }
 
@@ -103,7 +104,8 @@ int VCMLightVertices(const BidirContext &ctx, const PathVertex *v, const BSDF *b
             GRADUS_CHECK(i < 256);
             lv.depth = uint8_t(i);
             lv.flags = uint8_t((prevDelta ? LightVertex::kPrevDelta : 0) | (prevMerge ? LightVertex::kPrevMergeable : 0) |
-                               (edgeOK ? LightVertex::kPrevEdgeOK : 0) | (v[i].inMedium() ? LightVertex::kMedium : 0));
+                               (edgeOK ? LightVertex::kPrevEdgeOK : 0) | (v[i].inMedium() ? LightVertex::kMedium : 0) |
+                               ((v[i].flags & VERTEX_SPAWN_OFFSET) ? LightVertex::kSpawnOffset : 0));
             out->push_back(lv);
         }
         // B_{i+1} = c_{i-1} + eta g_{i-1} other(y_{i-1}) + R_{i-1} B_i, other(y_{i-1}) = pdfRev (exact);

@@ -142,7 +142,8 @@ struct LightVertex {
     int8_t betaExp;         // beta's exponent (PackThroughput, path_vertex.h)
     uint8_t mediumIndex;    // PathVertex::mediumIndex
     // kMedium: y_i is a medium vertex (connected, never merged: not in the photon grid's answers).
-    static constexpr uint8_t kPrevDelta = 1, kPrevMergeable = 2, kPrevEdgeOK = 4, kMedium = 8;
+    static constexpr uint8_t kPrevDelta = 1, kPrevMergeable = 2, kPrevEdgeOK = 4, kMedium = 8,
+                             kSpawnOffset = 16;  // b2 holds the vertex's spawn offset (PathVertex)
     bool inMedium() const { return flags & kMedium; }
     Spectrum throughput() const { return UnpackThroughput(beta, betaExp); }
 };

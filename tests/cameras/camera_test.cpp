@@ -6,6 +6,8 @@
 // bdpt (bdpt without light tracing) against a closed-form image.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
 #include <fstream>
 
@@ -280,8 +282,9 @@ TEST(Realistic, CentreWeightIsOneAndFallsOffOutwards) {
     EXPECT_LT(corner / nk, centre / nc);
 }
 
+// ctest runs the cases of this file in parallel processes: the file name carries the pid.
 std::string WriteLens(const std::string &name, const std::string &text) {
-    const std::string path = testing::TempDir() + name;
+    const std::string path = testing::TempDir() + std::to_string(::getpid()) + "_" + name;
     std::ofstream(path) << text;
     return path;
 }

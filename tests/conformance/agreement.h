@@ -34,15 +34,20 @@ struct AgreementConfig {
     int spp;             // S per run
     int seedX, seedRef;  // run k uses seed seedX + k (X) and seedRef + k (bdpt); disjoint ranges
     std::vector<std::string> extraX = {};  // further gradus arguments of X's runs (e.g. --param mode=vm)
-    std::vector<std::string> extraRef = {};  // further gradus arguments of bdpt's runs
+    std::vector<std::string> extraRef = {};  // further gradus arguments of the reference's runs
+    std::string reference = "bdpt";          // the reference integrator
 };
 
 // X's config for a scene: its transport must equal bdpt's (perhaps with
 // extraRef). Returns false, with the reason, where no bdpt setting computes X's
 // quantity: ambientocclusion is no light transport (its closed-form tests are
 // tests/classic); whitted and directlighting count emission and direct light
-// (bdpt with maxdepth 1) plus paths through specular chains from the camera,
-// which no bdpt setting isolates, so the scene with mirror and glass is left out.
+// plus paths through specular chains from the camera, which no bdpt setting
+// isolates, so the scene with mirror and glass is left out. Their reference is
+// path with maxdepth 1: bdpt with maxdepth 1 is 0.25-0.5% brighter than path,
+// directlighting and whitted (which agree) along the outdoor scene's horizon
+// band (16384 spp, two seeds each; slow tier: t -5.2), a discrepancy of bdpt's
+// depth-1 configuration left open (path and bdpt agree at full depth).
 inline bool AgreementSetup(const std::string &x, const std::string &scene, AgreementConfig *cfg, std::string *why) {
     if (x == "ambientocclusion") {
         *why = "ambient occlusion is not light transport (closed forms in tests/classic)";
@@ -53,6 +58,7 @@ inline bool AgreementSetup(const std::string &x, const std::string &scene, Agree
             *why = x + " adds specular chains from the camera that no bdpt setting isolates (tests/classic)";
             return false;
         }
+        cfg->reference = "path";
         cfg->extraRef = {"--param", "maxdepth=1"};
     }
     return true;
@@ -168,7 +174,7 @@ inline void CheckAgreement(const std::string &integrator, const std::string &sce
         Output x = Render(dir.path(), scene, integrator, xOpts, "x.exr");
         std::vector<std::string> refOpts = opts(cfg.seedRef + k);
         refOpts.insert(refOpts.end(), cfg.extraRef.begin(), cfg.extraRef.end());
-        Output b = Render(dir.path(), scene, "bdpt", refOpts, "b.exr");
+        Output b = Render(dir.path(), scene, cfg.reference, refOpts, "b.exr");
         ASSERT_TRUE(x.ok && b.ok) << "run " << k;
         if (k == 0) layers = ComparedLayers(x.image);
         for (const auto &l : layers) xRuns[l].push_back(Reduce(x.image, l));

@@ -40,20 +40,27 @@ bool AnalyticHit(const AnalyticShape *s, const RTCRay &ray, Float *t) {
     return *t > ray.tnear;
 }
 
+// Records a user primitive's hit at t with (u, v) and the normal n.
+void SetUserHit(const RTCIntersectFunctionNArguments *args, RTCRayHit *rh, Float t, Float u, Float v, float nx,
+                float ny, float nz) {
+    rh->ray.tfar = float(t);
+    rh->hit.u = float(u);
+    rh->hit.v = float(v);
+    rh->hit.Ng_x = nx;
+    rh->hit.Ng_y = ny;
+    rh->hit.Ng_z = nz;
+    rh->hit.primID = args->primID;
+    rh->hit.geomID = args->geomID;
+    rh->hit.instID[0] = args->context->instID[0];
+}
+
 void AnalyticIntersect(const RTCIntersectFunctionNArguments *args) {
     if (args->N != 1 || !args->valid[0]) return;
     auto *s = static_cast<const AnalyticShape *>(args->geometryUserPtr);
     auto *rh = reinterpret_cast<RTCRayHit *>(args->rayhit);
     Float t;
     if (!AnalyticHit(s, rh->ray, &t)) return;
-    rh->ray.tfar = float(t);
-    rh->hit.u = 0;
-    rh->hit.v = 0;
-    rh->hit.Ng_x = rh->hit.Ng_y = 0;
-    rh->hit.Ng_z = 1;
-    rh->hit.primID = args->primID;
-    rh->hit.geomID = args->geomID;
-    rh->hit.instID[0] = args->context->instID[0];
+    SetUserHit(args, rh, t, 0, 0, 0, 0, 1);
 }
 
 void AnalyticOccluded(const RTCOccludedFunctionNArguments *args) {
@@ -107,15 +114,7 @@ void CurveIntersect(const RTCIntersectFunctionNArguments *args) {
     auto *rh = reinterpret_cast<RTCRayHit *>(args->rayhit);
     Float t, u, v;
     if (!CurveHit(c, args->primID, rh->ray, &t, &u, &v)) return;
-    rh->ray.tfar = float(t);
-    rh->hit.u = float(u);
-    rh->hit.v = float(v);
-    rh->hit.Ng_x = -rh->ray.dir_x;
-    rh->hit.Ng_y = -rh->ray.dir_y;
-    rh->hit.Ng_z = -rh->ray.dir_z;
-    rh->hit.primID = args->primID;
-    rh->hit.geomID = args->geomID;
-    rh->hit.instID[0] = args->context->instID[0];
+    SetUserHit(args, rh, t, u, v, -rh->ray.dir_x, -rh->ray.dir_y, -rh->ray.dir_z);
 }
 
 void CurveOccluded(const RTCOccludedFunctionNArguments *args) {

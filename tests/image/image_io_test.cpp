@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <random>
 
+#include "common/png_test_util.h"
 #include "core/error.h"
 #include "image/image.h"
 #include "test_util.h"
@@ -240,13 +241,7 @@ TEST(ImageIO, PngIsSRGBEncoded) {
     // Write known 8-bit codes with libpng directly, read through ReadImage.
     std::string f = dir.file("codes.png");
     unsigned char px[3] = {0, 128, 255};
-    png_image png;
-    std::memset(&png, 0, sizeof(png));
-    png.version = PNG_IMAGE_VERSION;
-    png.width = 1;
-    png.height = 1;
-    png.format = PNG_FORMAT_RGB;
-    ASSERT_TRUE(png_image_write_to_file(&png, f.c_str(), 0, px, 0, nullptr));
+    ASSERT_TRUE(test::WritePngCodes(f, 1, 1, 3, px));
     Image img = ReadImage(f);
     EXPECT_EQ(img.at(0, 0, 0), 0.f);
     EXPECT_NEAR(img.at(0, 0, 1), 0.2158605f, 1e-6f);  // sRGB code 128
@@ -277,13 +272,7 @@ TEST(ImageIO, PngStoredValuesWithoutSRGBDecoding) {
     TempDir dir;
     std::string f = dir.file("codes.png");
     const unsigned char px[8] = {0, 1, 60, 90, 128, 200, 254, 255};  // two RGBA pixels
-    png_image png;
-    std::memset(&png, 0, sizeof(png));
-    png.version = PNG_IMAGE_VERSION;
-    png.width = 2;
-    png.height = 1;
-    png.format = PNG_FORMAT_RGBA;
-    ASSERT_TRUE(png_image_write_to_file(&png, f.c_str(), 0, px, 0, nullptr));
+    ASSERT_TRUE(test::WritePngCodes(f, 2, 1, 4, px));
     const Image stored = ReadImage(f, IntegerPixels::Stored), decoded = ReadImage(f);
     for (int x = 0; x < 2; ++x)
         for (int c = 0; c < 4; ++c) {
@@ -335,7 +324,9 @@ TEST(Image, ResampleToPowerOfTwoIsTheLanczosConvolution) {
                     clamped += sum < 0;
                     EXPECT_NEAR(out.at(X, Y, c), expect, 1e-6) << w << "x" << h << " at " << X << " " << Y << " " << c;
                 }
-        if (W != w) EXPECT_GT(clamped, 0) << w << "x" << h << ": no clamped texel exercised";
+        if (W != w) {
+            EXPECT_GT(clamped, 0) << w << "x" << h << ": no clamped texel exercised";
+        }
     }
     // Powers of two are left as they are.
     Image p2(4, 2, {"R", "G", "B"});

@@ -23,6 +23,7 @@
 #include <functional>
 #include <sstream>
 
+#include "common/png_test_util.h"
 #include "image/image.h"
 #include "lights/light.h"
 #include "parser/scene_desc.h"
@@ -46,13 +47,7 @@ struct ByteMap {
     // Written with libpng (not Gradus's writer), under a name unique to this process.
     std::string write(const std::string &name) const {
         const std::string path = "/tmp/gradus_light_maps_" + name + "_" + std::to_string(::getpid()) + ".png";
-        png_image png;
-        std::memset(&png, 0, sizeof(png));
-        png.version = PNG_IMAGE_VERSION;
-        png.width = png_uint_32(w);
-        png.height = png_uint_32(h);
-        png.format = PNG_FORMAT_RGB;
-        if (!png_image_write_to_file(&png, path.c_str(), 0, rgb.data(), 0, nullptr)) ADD_FAILURE() << path;
+        if (!test::WritePngCodes(path, w, h, 3, rgb.data())) ADD_FAILURE() << path;
         return path;
     }
     // pbrt-v3's bilinear lookup with repeat wrap.

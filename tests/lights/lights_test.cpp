@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "common/png_test_util.h"
 #include "image/image.h"
 #include "lights/light.h"
 #include "lights/light_sampler.h"
@@ -359,13 +360,7 @@ TEST(InfiniteLight, PngMapValuesAsStored) {
     const unsigned char codes[4 * 2 * 3] = {10, 60, 128, 200, 255, 1, 90, 30, 140, 250, 5, 77,
                                             33, 66, 99, 120, 180, 240, 45, 135, 225, 2, 128, 254};
     const std::string path = "/tmp/gradus_lights_test_env_" + std::to_string(::getpid()) + ".png";
-    png_image png;
-    std::memset(&png, 0, sizeof(png));
-    png.version = PNG_IMAGE_VERSION;
-    png.width = 4;
-    png.height = 2;
-    png.format = PNG_FORMAT_RGB;
-    ASSERT_TRUE(png_image_write_to_file(&png, path.c_str(), 0, codes, 0, nullptr));
+    ASSERT_TRUE(test::WritePngCodes(path, 4, 2, 3, codes));
     auto l = MakeLight("LightSource \"infinite\" \"rgb L\" [2 2 2] \"string mapname\" \"" + path + "\"");
     for (int y = 0; y < 2; ++y)
         for (int x = 0; x < 4; ++x) {

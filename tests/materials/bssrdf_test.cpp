@@ -71,16 +71,6 @@ Float PlaneIntegral(G g, Float sigmaT) {
 // converged adaptive quadrature (not the 100-node quantile rule of bssrdf.cpp) and
 // with Fresnel written out here. sigma_t = 1; g is the Henyey-Greenstein parameter.
 
-// Unpolarised Fresnel reflectance from index n1 into n2 at incidence cosine cosI.
-double FresnelFromIndices(double cosI, double n1, double n2) {
-    const double sinT = n1 / n2 * std::sqrt(std::max(0.0, 1 - cosI * cosI));
-    if (sinT >= 1) return 1;
-    const double cosT = std::sqrt(1 - sinT * sinT);
-    const double rs = (n1 * cosI - n2 * cosT) / (n1 * cosI + n2 * cosT);
-    const double rp = (n2 * cosI - n1 * cosT) / (n2 * cosI + n1 * cosT);
-    return (rs * rs + rp * rp) / 2;
-}
-
 // Globally adaptive Gauss-Kronrod (7/15 points) on [a, b] to relative accuracy
 // relTol: the piece with the largest |K15 - G7| is halved until their sum is below
 // relTol |integral|. At most maxPieces pieces; an integral that needs more counts in

@@ -13,6 +13,7 @@
 
 #include "common/render_test_util.h"
 #include "core/error.h"
+#include "material_test_util.h"
 #include "materials/hair.h"
 #include "parser/scene_desc.h"
 #include "job/job.h"
@@ -22,6 +23,8 @@
 
 namespace gradus {
 namespace {
+
+using mattest::FresnelFromIndices;
 
 Vec3 Dir(Float sinTheta, Float phi) {
     const Float c = SafeSqrt(1 - sinTheta * sinTheta);
@@ -80,16 +83,6 @@ TEST(Hair, WhiteFurnaceByQuadrature) {
 // Snell's law in vector form, exact unpolarised Fresnel at every interface (from
 // inside too), chord lengths by ray-cylinder intersection, the orders p >= 3
 // summed term by term. Nothing of the code under test (not even fresnel.h) is used.
-
-// Unpolarised Fresnel reflectance from index n1 into n2 at incidence cosine cosI.
-double FresnelFromIndices(double cosI, double n1, double n2) {
-    const double sinT = n1 / n2 * std::sqrt(std::max(0.0, 1 - cosI * cosI));
-    if (sinT >= 1) return 1;
-    const double cosT = std::sqrt(1 - sinT * sinT);
-    const double rs = (n1 * cosI - n2 * cosT) / (n1 * cosI + n2 * cosT);
-    const double rp = (n2 * cosI - n1 * cosT) / (n2 * cosI + n1 * cosT);
-    return (rs * rs + rp * rp) / 2;
-}
 
 struct V3 {
     double x, y, z;

@@ -17,6 +17,17 @@
 
 namespace gradus::mattest {
 
+// Unpolarised Fresnel reflectance from index n1 into n2 at incidence cosine cosI,
+// written out for tests that must not use the code under test (fresnel.h).
+inline double FresnelFromIndices(double cosI, double n1, double n2) {
+    const double sinT = n1 / n2 * std::sqrt(std::max(0.0, 1 - cosI * cosI));
+    if (sinT >= 1) return 1;
+    const double cosT = std::sqrt(1 - sinT * sinT);
+    const double rs = (n1 * cosI - n2 * cosT) / (n1 * cosI + n2 * cosT);
+    const double rp = (n2 * cosI - n1 * cosT) / (n2 * cosI + n1 * cosT);
+    return (rs * rs + rp * rp) / 2;
+}
+
 // Outgoing directions: three elevations above, and one below the surface. (At more
 // grazing angles the refracted lobes get peaks that the midpoint-rule integration of
 // the expected counts cannot resolve at test-suite cost.)

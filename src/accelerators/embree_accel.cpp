@@ -18,10 +18,8 @@ void DeviceError(void *, RTCError code, const char *str) {
     throw Error(std::string("Embree error ") + std::to_string(int(code)) + ": " + (str ? str : ""));
 }
 
-void AnalyticBounds(const RTCBoundsFunctionArguments *args) {
-    auto *shape = static_cast<const AnalyticShape *>(args->geometryUserPtr);
-    Bounds3 b = shape->worldBound();
-    // Conservative float bounds.
+// Conservative float bounds of a user primitive.
+void SetUserBounds(const RTCBoundsFunctionArguments *args, const Bounds3 &b) {
     auto lo = [](double v) { return std::nextafter(float(v), -INFINITY); };
     auto hi = [](double v) { return std::nextafter(float(v), INFINITY); };
     args->bounds_o->lower_x = lo(b.pMin.x);
@@ -30,6 +28,10 @@ void AnalyticBounds(const RTCBoundsFunctionArguments *args) {
     args->bounds_o->upper_x = hi(b.pMax.x);
     args->bounds_o->upper_y = hi(b.pMax.y);
     args->bounds_o->upper_z = hi(b.pMax.z);
+}
+
+void AnalyticBounds(const RTCBoundsFunctionArguments *args) {
+    SetUserBounds(args, static_cast<const AnalyticShape *>(args->geometryUserPtr)->worldBound());
 }
 
 // Double-precision world-space test of an analytic shape against a single Embree ray.
@@ -91,16 +93,7 @@ void AlphaFilter(const RTCFilterFunctionNArguments *args, bool shadow) {
 // Curves (shapes/curve.h): one user primitive per piece, pbrt-v3's test in
 // double precision; the hit's (u, v) travel in RayHit::b1, b2.
 void CurveBounds(const RTCBoundsFunctionArguments *args) {
-    auto *curve = static_cast<const CurveShape *>(args->geometryUserPtr);
-    const Bounds3 b = curve->pieceBound(int(args->primID));
-    auto lo = [](double v) { return std::nextafter(float(v), -INFINITY); };
-    auto hi = [](double v) { return std::nextafter(float(v), INFINITY); };
-    args->bounds_o->lower_x = lo(b.pMin.x);
-    args->bounds_o->lower_y = lo(b.pMin.y);
-    args->bounds_o->lower_z = lo(b.pMin.z);
-    args->bounds_o->upper_x = hi(b.pMax.x);
-    args->bounds_o->upper_y = hi(b.pMax.y);
-    args->bounds_o->upper_z = hi(b.pMax.z);
+    SetUserBounds(args, static_cast<const CurveShape *>(args->geometryUserPtr)->pieceBound(int(args->primID)));
 }
 
 bool CurveHit(const CurveShape *c, unsigned prim, const RTCRay &ray, Float *t, Float *u, Float *v) {

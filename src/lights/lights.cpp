@@ -389,10 +389,10 @@ class InfiniteLight : public Light {
             texels_.resize(size_t(w_) * h_);
             for (int y = 0; y < h_; ++y)
                 for (int x = 0; x < w_; ++x)
-                    texels_[size_t(y) * w_ + x] = Spectrum(rgb.at(x, y, 0), rgb.at(x, y, 1), rgb.at(x, y, 2));
+                    texels_[size_t(y) * w_ + x] = {rgb.at(x, y, 0), rgb.at(x, y, 1), rgb.at(x, y, 2)};
         } else {
             w_ = h_ = 1;
-            texels_.assign(1, Spectrum(1));
+            texels_.assign(1, {1, 1, 1});
         }
         std::vector<Float> f(size_t(w_) * h_);
         for (int y = 0; y < h_; ++y) {
@@ -405,7 +405,8 @@ class InfiniteLight : public Light {
     Spectrum lookupTexel(int x, int y) const {
         x = Clamp(x, 0, w_ - 1);
         y = Clamp(y, 0, h_ - 1);
-        return texels_[size_t(y) * w_ + x];
+        const RGB32 &t = texels_[size_t(y) * w_ + x];
+        return Spectrum(t.r, t.g, t.b);
     }
     // Bilinear lookup at (u, v) in [0,1]^2 (u wraps).
     Spectrum lookup(Point2 st) const {
@@ -415,9 +416,11 @@ class InfiniteLight : public Light {
         if (!std::isfinite(x) || !std::isfinite(y)) return Spectrum(0);
         int x0 = int(std::floor(x)), y0 = int(std::floor(y));
         Float dx = x - x0, dy = y - y0;
-        auto tex = [&](int xi, int yi) { return lookupTexel(((xi % w_) + w_) % w_, yi); };
-        return tex(x0, y0) * ((1 - dx) * (1 - dy)) + tex(x0 + 1, y0) * (dx * (1 - dy)) +
-               tex(x0, y0 + 1) * ((1 - dx) * dy) + tex(x0 + 1, y0 + 1) * (dx * dy);
+        // Columns wrap (u in [0, 1] gives x0 in [-1, w - 1]: no division then).
+        auto wrap = [&](int xi) { return xi >= 0 && xi < w_ ? xi : ((xi % w_) + w_) % w_; };
+        int xa = wrap(x0), xb = wrap(x0 + 1);
+        return lookupTexel(xa, y0) * ((1 - dx) * (1 - dy)) + lookupTexel(xb, y0) * (dx * (1 - dy)) +
+               lookupTexel(xa, y0 + 1) * ((1 - dx) * dy) + lookupTexel(xb, y0 + 1) * (dx * dy);
     }
     Spectrum radiance(const Vec3 &wWorld) const {
         Vec3 wl = Normalize(objectFromWorld_.applyVector(wWorld));
@@ -487,7 +490,12 @@ class InfiniteLight : public Light {
     Spectrum Lscale_;
     Transform objectFromWorld_;
     int w_ = 1, h_ = 1;
-    std::vector<Spectrum> texels_;
+    // The map's float texels as stored (half the bytes of Spectrum's doubles;
+    // the conversion to double is exact).
+    struct RGB32 {
+        float r, g, b;
+    };
+    std::vector<RGB32> texels_;
     Distribution2D dist_;
     Point3 center_;
     Float radius_ = 1;

@@ -1,4 +1,6 @@
+#include <atomic>
 #include <cmath>
+#include <cstring>
 
 #include "core/error.h"
 #include "image/image.h"
@@ -422,9 +424,32 @@ class InfiniteLight : public Light {
         return lookupTexel(xa, y0) * ((1 - dx) * (1 - dy)) + lookupTexel(xb, y0) * (dx * (1 - dy)) +
                lookupTexel(xa, y0 + 1) * ((1 - dx) * dy) + lookupTexel(xb, y0 + 1) * (dx * dy);
     }
-    Spectrum radiance(const Vec3 &wWorld) const {
+    // Spherical angles (theta, phi) of a world direction in the map's frame.
+    // A path that escapes asks Le and then pdfLi of the same direction: each
+    // thread keeps the last direction's angles (keyed by the light's serial
+    // number and the direction's bits), which halves the acos/atan2 calls.
+    struct Angles {
+        Float theta, phi;
+    };
+    Angles anglesOf(const Vec3 &wWorld) const {
+        struct Memo {
+            uint64_t serial = 0;
+            uint64_t bits[3] = {};
+            Angles a{};
+        };
+        thread_local Memo memo;
+        const uint64_t bits[3] = {FloatBits(wWorld.x), FloatBits(wWorld.y), FloatBits(wWorld.z)};
+        if (memo.serial == serial_ && memo.bits[0] == bits[0] && memo.bits[1] == bits[1] && memo.bits[2] == bits[2])
+            return memo.a;
         Vec3 wl = Normalize(objectFromWorld_.applyVector(wWorld));
-        Point2 st(SphericalPhi(wl) * Inv2Pi, SphericalTheta(wl) * InvPi);
+        memo.serial = serial_;
+        std::memcpy(memo.bits, bits, sizeof bits);
+        memo.a = {SphericalTheta(wl), SphericalPhi(wl)};
+        return memo.a;
+    }
+    Spectrum radiance(const Vec3 &wWorld) const {
+        Angles a = anglesOf(wWorld);
+        Point2 st(a.phi * Inv2Pi, a.theta * InvPi);
         return Lscale_ * lookup(st);
     }
     Spectrum Le(const Ray &r) const override { return radiance(r.d); }
@@ -448,8 +473,8 @@ class InfiniteLight : public Light {
         return Normalize(worldFromLight.applyVector(wl));
     }
     Float pdfDirection(const Vec3 &wWorld) const {
-        Vec3 wl = Normalize(objectFromWorld_.applyVector(wWorld));
-        Float theta = SphericalTheta(wl), phi = SphericalPhi(wl);
+        Angles a = anglesOf(wWorld);
+        Float theta = a.theta, phi = a.phi;
         Float sinTheta = std::sin(theta);
         if (!(sinTheta > 0)) return 0;  // the poles, and non-finite directions
         return dist_.pdf(Point2(phi * Inv2Pi, theta * InvPi)) / (2 * Pi * Pi * sinTheta);
@@ -497,6 +522,12 @@ class InfiniteLight : public Light {
     };
     std::vector<RGB32> texels_;
     Distribution2D dist_;
+    // Distinct for every InfiniteLight ever made (never 0): the memo of anglesOf.
+    const uint64_t serial_ = NextSerial();
+    static uint64_t NextSerial() {
+        static std::atomic<uint64_t> next{1};
+        return next.fetch_add(1, std::memory_order_relaxed);
+    }
     Point3 center_;
     Float radius_ = 1;
 };

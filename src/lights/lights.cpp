@@ -395,6 +395,7 @@ class InfiniteLight : public Light {
         } else {
             w_ = h_ = 1;
             texels_.assign(1, {1, 1, 1});
+            constant_ = true;
         }
         std::vector<Float> f(size_t(w_) * h_);
         for (int y = 0; y < h_; ++y) {
@@ -447,10 +448,14 @@ class InfiniteLight : public Light {
         memo.a = {SphericalTheta(wl), SphericalPhi(wl)};
         return memo.a;
     }
+    // Radiance at map coordinates st; a constant environment (no map) is L
+    // exactly, without a lookup.
+    Spectrum radianceAt(Point2 st) const { return constant_ ? Lscale_ : Lscale_ * lookup(st); }
     Spectrum radiance(const Vec3 &wWorld) const {
+        if (constant_)  // a non-finite direction has no radiance (as lookup gives it)
+            return std::isfinite(wWorld.x + wWorld.y + wWorld.z) ? Lscale_ : Spectrum(0);
         Angles a = anglesOf(wWorld);
-        Point2 st(a.phi * Inv2Pi, a.theta * InvPi);
-        return Lscale_ * lookup(st);
+        return radianceAt(Point2(a.phi * Inv2Pi, a.theta * InvPi));
     }
     Spectrum Le(const Ray &r) const override { return radiance(r.d); }
     // Flux through the scene's bounding disk: pi r^2 times the integral of L
@@ -463,9 +468,13 @@ class InfiniteLight : public Light {
         }
         return Lscale_ * sum * (Pi * radius_ * radius_);
     }
-    Vec3 directionFrom(Point2 uv, Float *pdf) const {
+    // A sampled direction and its pdf; *st receives its map coordinates, at
+    // which the caller looks the radiance up (as pbrt-v3 does: no round trip
+    // through the direction, its transform and acos/atan2).
+    Vec3 directionFrom(Point2 uv, Float *pdf, Point2 *stOut) const {
         Float mapPdf;
         Point2 st = dist_.sampleContinuous(uv, &mapPdf);
+        *stOut = st;
         Float theta = st.y * Pi, phi = st.x * 2 * Pi;
         Float sinTheta = std::sin(theta);
         Vec3 wl = SphericalDirection(sinTheta, std::cos(theta), phi);
@@ -481,18 +490,20 @@ class InfiniteLight : public Light {
     }
     bool sampleLi(const Interaction &ref, Point2 u, LightLiSample *s) const override {
         Float pdf;
-        Vec3 wi = directionFrom(u, &pdf);
+        Point2 st;
+        Vec3 wi = directionFrom(u, &pdf, &st);
         if (pdf == 0) return false;
         s->wi = wi;
         s->pdf = pdf;
         s->pLight = Interaction(ref.p + wi * (2 * radius_), Normal3(0, 0, 0), -wi);
-        s->L = radiance(wi);
+        s->L = radianceAt(st);
         return !s->L.isBlack();
     }
     Float pdfLi(const Interaction &, const Vec3 &wi) const override { return pdfDirection(wi); }
     bool sampleLe(Point2 u1, Point2 u2, LightLeSample *s) const override {
         Float pdfDir;
-        Vec3 wi = directionFrom(u1, &pdfDir);  // direction towards the light
+        Point2 st;
+        Vec3 wi = directionFrom(u1, &pdfDir, &st);  // direction towards the light
         if (pdfDir == 0) return false;
         Vec3 d = -wi;
         Frame f(d);
@@ -503,7 +514,7 @@ class InfiniteLight : public Light {
         s->nLight = d;
         s->pdfPos = 1 / (Pi * radius_ * radius_);
         s->pdfDir = pdfDir;
-        s->L = radiance(wi);
+        s->L = radianceAt(st);
         return !s->L.isBlack();
     }
     void pdfLe(const Ray &ray, const Normal3 &, Float *pdfPos, Float *pdfDir) const override {
@@ -515,6 +526,7 @@ class InfiniteLight : public Light {
     Spectrum Lscale_;
     Transform objectFromWorld_;
     int w_ = 1, h_ = 1;
+    bool constant_ = false;  // no map: L in every direction
     // The map's float texels as stored (half the bytes of Spectrum's doubles;
     // the conversion to double is exact).
     struct RGB32 {

@@ -149,4 +149,68 @@ inline uint32_t FastOwenScramble(uint32_t x, uint32_t seed) {
 constexpr int PrimeTableSize = 1024;
 uint32_t Prime(int i);
 
+// A prime base with the constant of Lemire, Kaser and Kurz's division by
+// multiplication ("Faster remainder by direct computation", 2019):
+// M = floor((2^64 - 1) / b) + 1 gives n / b and n % b exactly for every
+// 32-bit n.
+struct PrimeBase {
+    uint32_t b;
+    uint64_t M;
+    uint32_t div(uint32_t n) const { return uint32_t((__uint128_t(M) * n) >> 64); }
+    uint32_t mod(uint32_t n) const { return uint32_t((__uint128_t(M * n) * b) >> 64); }
+};
+struct PrimeBaseTable {
+    PrimeBase base[PrimeTableSize];
+};
+constexpr PrimeBaseTable MakePrimeBaseTable() {
+    PrimeBaseTable t{};
+    int count = 0;
+    for (uint32_t n = 2; count < PrimeTableSize; ++n) {
+        bool prime = true;
+        for (int k = 0; k < count && t.base[k].b * t.base[k].b <= n; ++k)
+            if (n % t.base[k].b == 0) prime = false;
+        if (prime) t.base[count++] = {n, ~uint64_t(0) / n + 1};
+    }
+    return t;
+}
+inline constexpr PrimeBaseTable kPrimeBases = MakePrimeBaseTable();
+// Base of prime i (i < PrimeTableSize), without a bounds check.
+inline const PrimeBase &PrimeBaseOf(int i) { return kPrimeBases.base[i]; }
+
+// Radical inverse of `a` in prime base B with a nested scramble (Owen 1995,
+// "Randomly permuted (t,m,s)-nets and (t,s)-sequences"): digit j goes through
+// a permutation chosen by hashing `seed` with digits 0..j-1 (the node of the
+// digit tree). Each node's permutation is affine, d -> (alpha d + kappa) mod b
+// with alpha uniform in [1, b) and kappa uniform in [0, b) (from 32 hash bits
+// each, a bias below b / 2^32): for prime b these maps are sharply
+// 2-transitive, so two distinct digits go to a uniform pair of distinct
+// digits, as under a uniformly random permutation. The variance of an
+// estimate sum f(x_i) depends on the scramble only through the joint law of
+// pairs (x_i, x_j) (Owen 1997, "Scrambled net variance for integrals of
+// smooth functions", sec. 2), which is therefore that of Owen scrambling; in
+// base 2 the maps are the two permutations of {0, 1}, Owen scrambling itself.
+// Digits are taken while a != 0 or b^j < minCount; the remaining (zero)
+// digits' scrambled value is a uniform value in the last interval hashed from
+// the node. The points a < b^j of one seed keep the radical-inverse strata
+// (each b^-j interval holds one), and each value is uniform on [0, 1).
+inline double NestedAffineRadicalInverse(const PrimeBase &B, uint64_t a, uint64_t seed, uint64_t minCount) {
+    const uint32_t b = B.b;
+    uint64_t h = seed;
+    uint64_t digits = 0, pw = 1;  // pw = b^j
+    while (a != 0 || pw < minCount) {
+        uint64_t q;
+        if (a <= 0xffffffffULL) q = B.div(uint32_t(a));
+        else q = a / b;
+        uint32_t d = uint32_t(a - q * b);
+        a = q;
+        uint32_t alpha = 1 + uint32_t((uint64_t(uint32_t(h >> 32)) * (b - 1)) >> 32);
+        uint32_t kappa = uint32_t((uint64_t(uint32_t(h)) * b) >> 32);
+        digits = digits * b + B.mod(alpha * d + kappa);  // alpha d + kappa < b^2 < 2^32
+        pw *= b;
+        h = MixBits(h ^ (d + 0x9e3779b97f4a7c15ULL));
+    }
+    double v = (double(digits) + BitsToUniform(MixBits(h + 0x5bd1e995ULL))) / double(pw);
+    return v < OneMinusEpsilon ? v : OneMinusEpsilon;
+}
+
 }  // namespace gradus

@@ -61,11 +61,13 @@ class StratifiedSampler : public AddressedSampler {
 };
 
 // "halton": dimension d is the radical inverse of the sample index in the
-// d-th prime base (cycling after PrimeTableSize bases), Owen-scrambled with a
-// seed hashed from (seed, pixel, dimension).
+// d-th prime base (cycling after PrimeTableSize bases), with a nested
+// (Owen-type) scramble whose permutations are hashed from (seed, pixel,
+// dimension, digit prefix); see NestedAffineRadicalInverse.
 class HaltonSampler : public AddressedSampler {
   public:
     HaltonSampler(int spp, uint64_t seed) : AddressedSampler(spp, seed) {}
+    void startPixelSample(Point2i pixel, int64_t sampleIndex, int dimension = 0) override;
     Float get1D() override;
     Point2 get2D() override;
     std::unique_ptr<Sampler> clone() const override { return std::make_unique<HaltonSampler>(*this); }
@@ -73,6 +75,7 @@ class HaltonSampler : public AddressedSampler {
 
   private:
     Float value(int dim) const;
+    uint64_t pixelHash_ = 0;  // Hash(seed, pixel), cached per sample
 };
 
 // "sobol" = padded scrambled (0,2)-sequence. Every 2D request takes the first

@@ -15,8 +15,7 @@ inline uint32_t PermutationElement(uint32_t i, uint32_t n, uint64_t seed) {
     if (n <= 1) return 0;
     uint32_t mask = n - 1;
     mask |= mask >> 1; mask |= mask >> 2; mask |= mask >> 4; mask |= mask >> 8; mask |= mask >> 16;
-    int w = 0;
-    while ((mask >> w) != 0) ++w;
+    int w = 32 - __builtin_clz(mask);  // bits of mask (mask >= 1)
     int shift = (w + 1) / 2;
     uint64_t k = MixBits(seed ^ 0x4f1bbcdcbfa53e0bULL);
     uint32_t k0 = uint32_t(k), k1 = uint32_t(k >> 32);
@@ -34,7 +33,8 @@ inline uint32_t PermutationElement(uint32_t i, uint32_t n, uint64_t seed) {
     } while (i >= n);
     // A final keyed rotation makes every element exactly uniform over seeds
     // (cycle walking alone is biased when n is not a power of two).
-    return uint32_t((uint64_t(i) + MixBits(k ^ 0x94d049bb133111ebULL) % n) % n);
+    uint32_t r = uint32_t(MixBits(k ^ 0x94d049bb133111ebULL) % n);
+    return i + r < n ? i + r : i + r - n;  // (i + r) mod n for i, r < n
 }
 
 // Radical inverse of `a` in `base` with Owen (nested uniform) scrambling: the

@@ -197,7 +197,8 @@ inline double NestedAffineRadicalInverse(const PrimeBase &B, uint64_t a, uint64_
     const uint32_t b = B.b;
     uint64_t h = seed;
     uint64_t digits = 0, pw = 1;  // pw = b^j
-    while (a != 0 || pw < minCount) {
+    int j = 0;
+    for (; a != 0 || pw < minCount; ++j) {
         uint64_t q;
         if (a <= 0xffffffffULL) q = B.div(uint32_t(a));
         else q = a / b;
@@ -209,7 +210,9 @@ inline double NestedAffineRadicalInverse(const PrimeBase &B, uint64_t a, uint64_
         pw *= b;
         h = MixBits(h ^ (d + 0x9e3779b97f4a7c15ULL));
     }
-    double v = (double(digits) + BitsToUniform(MixBits(h + 0x5bd1e995ULL))) / double(pw);
+    // h is the hash of the node below the last digit (its bits, unused by the
+    // permutations above, are the tail's).
+    double v = (double(digits) + BitsToUniform(j == 0 ? MixBits(h + 0x5bd1e995ULL) : h)) / double(pw);
     return v < OneMinusEpsilon ? v : OneMinusEpsilon;
 }
 

@@ -125,6 +125,24 @@ inline uint32_t SobolDim1(uint32_t i) {
     return kSobolDim1.byte[0][i & 255] ^ kSobolDim1.byte[1][(i >> 8) & 255] ^ kSobolDim1.byte[2][(i >> 16) & 255] ^
            kSobolDim1.byte[3][i >> 24];
 }
+// The same tables with each entry's bits reversed: ReverseBits32(SobolDim1(i))
+// (bit reversal is linear over GF(2), so it commutes with the XOR).
+constexpr uint32_t ReverseBits32Constexpr(uint32_t v) {
+    uint32_t r = 0;
+    for (int k = 0; k < 32; ++k) r |= ((v >> k) & 1u) << (31 - k);
+    return r;
+}
+constexpr SobolDim1Tables MakeSobolDim1ReversedTables() {
+    SobolDim1Tables t = MakeSobolDim1Tables();
+    for (auto &row : t.byte)
+        for (uint32_t &e : row) e = ReverseBits32Constexpr(e);
+    return t;
+}
+inline constexpr SobolDim1Tables kSobolDim1Reversed = MakeSobolDim1ReversedTables();
+inline uint32_t SobolDim1Reversed(uint32_t i) {
+    return kSobolDim1Reversed.byte[0][i & 255] ^ kSobolDim1Reversed.byte[1][(i >> 8) & 255] ^
+           kSobolDim1Reversed.byte[2][(i >> 16) & 255] ^ kSobolDim1Reversed.byte[3][i >> 24];
+}
 
 // Hash-based Owen scrambling of 32-bit binary fractions (Burley 2020,
 // "Practical Hash-based Owen Scrambling", JCGT 9(4)): the Laine-Karras

@@ -250,3 +250,17 @@ TEST(LowDiscrepancy, NestedAffineScramblingPairsAreOwens) {
         EXPECT_TRUE(r.pass) << c.i1 << "," << c.i2 << ": " << r.message;
     }
 }
+
+// The reversed Sobol' tables are the bit reversal of dimension 1, and the
+// scramble of dimension 0 needs no reversal of the index (the sampler's
+// shortcuts give FastOwenScramble's values).
+TEST(LowDiscrepancy, ReversedSobolShortcuts) {
+    RNG rng(43);
+    for (int k = 0; k < 20000; ++k) {
+        uint32_t i = k < 1000 ? uint32_t(k) : rng.uniformU32(), seed = rng.uniformU32();
+        ASSERT_EQ(SobolDim1Reversed(i), ReverseBits32(SobolDim1(i)));
+        ASSERT_EQ(ReverseBits32(LaineKarrasPermutation(i, seed)), FastOwenScramble(SobolDim0(i), seed));
+        ASSERT_EQ(ReverseBits32(LaineKarrasPermutation(SobolDim1Reversed(i), seed)),
+                  FastOwenScramble(SobolDim1(i), seed));
+    }
+}

@@ -326,6 +326,53 @@ TEST(InfiniteLight, SampleLiMatchesPdfLi) {
     EXPECT_TRUE(r2.pass) << r2.message;
 }
 
+// sampleLi and sampleLe look the map up at the sampled map coordinates, Le
+// from the direction (transform, acos, atan2): the same radiance up to
+// rounding. And each light's memo of the last direction's angles is its own:
+// two lights with different frames queried alternately with the same
+// directions give the values each gives alone.
+TEST(InfiniteLight, SampledRadianceMatchesLeAndLightsKeepTheirOwnAngles) {
+    Image map = TestMap();
+    auto a = CreateInfiniteLight(Rotate(-90, Vec3(1, 0, 0)) * RotateZ(20), Spectrum(1), &map);
+    auto b = CreateInfiniteLight(RotateZ(75), Spectrum(1), &map);
+    Bounds3 bb;
+    bb.expand(Point3(-1, -1, -1));
+    bb.expand(Point3(1, 1, 1));
+    a->preprocess(bb);
+    b->preprocess(bb);
+    Interaction ref = RefAt(Point3(0.1, 0.2, 0.3));
+    RNG rng(77);
+    std::vector<Vec3> ws;
+    for (int i = 0; i < 2000; ++i) {
+        LightLiSample s;
+        if (!a->sampleLi(ref, Point2(rng.uniform(), rng.uniform()), &s)) continue;
+        Spectrum le = a->Le(Ray(ref.p, s.wi));
+        for (int c = 0; c < 3; ++c) ASSERT_NEAR(s.L[c], le[c], 1e-9 * (1 + le[c])) << i;
+        LightLeSample e;
+        if (!b->sampleLe(Point2(rng.uniform(), rng.uniform()), Point2(rng.uniform(), rng.uniform()), &e)) continue;
+        Spectrum le2 = b->Le(Ray(Point3(0, 0, 0), -e.ray.d));
+        for (int c = 0; c < 3; ++c) ASSERT_NEAR(e.L[c], le2[c], 1e-9 * (1 + le2[c])) << i;
+        ws.push_back(s.wi);
+    }
+    std::vector<Spectrum> la, lb;
+    std::vector<Float> pa, pb;
+    for (const Vec3 &w : ws) la.push_back(a->Le(Ray(ref.p, w))), pa.push_back(a->pdfLi(ref, w));
+    for (const Vec3 &w : ws) lb.push_back(b->Le(Ray(ref.p, w))), pb.push_back(b->pdfLi(ref, w));
+    int differ = 0;
+    for (size_t i = 0; i < ws.size(); ++i) {
+        Spectrum xb = b->Le(Ray(ref.p, ws[i]));
+        Float qa = a->pdfLi(ref, ws[i]);
+        Spectrum xa = a->Le(Ray(ref.p, ws[i]));
+        Float qb = b->pdfLi(ref, ws[i]);
+        ASSERT_EQ(xa, la[i]);
+        ASSERT_EQ(xb, lb[i]);
+        ASSERT_EQ(qa, pa[i]);
+        ASSERT_EQ(qb, pb[i]);
+        differ += !(la[i] == lb[i]);
+    }
+    EXPECT_GT(differ, int(ws.size()) / 2);  // the two frames do see different radiance
+}
+
 TEST(InfiniteLight, PowerMatchesQuadrature) {
     Image map = TestMap();
     auto l = CreateInfiniteLight(Transform(), Spectrum(1), &map);

@@ -378,6 +378,17 @@ class DistantLight : public Light {
 };
 
 // ---------------------------------------------------------- infinite light
+// sin x and cos x in one libm call where there is one (glibc's sincos gives
+// the values of its sin and cos).
+inline void SinCos(Float x, Float *s, Float *c) {
+#if defined(__GLIBC__)
+    ::sincos(x, s, c);
+#else
+    *s = std::sin(x);
+    *c = std::cos(x);
+#endif
+}
+
 // Constant or lat-long mapped environment, importance-sampled by luminance
 // (pdf over (u,v) converted to solid angle with 1 / (2 pi^2 sin theta)).
 class InfiniteLight : public Light {
@@ -476,8 +487,12 @@ class InfiniteLight : public Light {
         Point2 st = dist_.sampleContinuous(uv, &mapPdf);
         *stOut = st;
         Float theta = st.y * Pi, phi = st.x * 2 * Pi;
-        Float sinTheta = std::sin(theta);
-        Vec3 wl = SphericalDirection(sinTheta, std::cos(theta), phi);
+        Float sinTheta, cosTheta, sinPhi, cosPhi;
+        SinCos(theta, &sinTheta, &cosTheta);
+        SinCos(phi, &sinPhi, &cosPhi);
+        // SphericalDirection(sinTheta, cosTheta, phi), with phi's sine and cosine from one call.
+        Float st1 = Clamp<Float>(sinTheta, -1, 1);
+        Vec3 wl(st1 * cosPhi, st1 * sinPhi, Clamp<Float>(cosTheta, -1, 1));
         *pdf = (sinTheta == 0 || mapPdf == 0) ? 0 : mapPdf / (2 * Pi * Pi * sinTheta);
         return Normalize(worldFromLight.applyVector(wl));
     }

@@ -492,6 +492,43 @@ TEST(LightSampler, SpatialChoiceFavoursTheNearLight) {
     EXPECT_DOUBLE_EQ(power.pmf(Point3(-0.45, 0, 0), lights[0].get()), 0.5);
 }
 
+// The power strategy over many lights: each light's pmf is its power over
+// the total (computed here from the intensities: a point light's power is
+// 4 pi I), a light listed twice has the pmf of one entry, a light not
+// in the sampler (or null) has pmf 0, and sampling returns lights with those
+// pmfs.
+TEST(LightSampler, PowerPmfOfManyLights) {
+    std::vector<std::shared_ptr<Light>> lights;
+    std::vector<double> I;
+    for (int i = 0; i < 300; ++i) {
+        I.push_back(1 + (i * 37) % 11);
+        lights.push_back(MakeLight("LightSource \"point\" \"rgb I\" [" + std::to_string(I.back()) + " " +
+                                   std::to_string(I.back()) + " " + std::to_string(I.back()) + "] \"point from\" [" +
+                                   std::to_string(i * 0.01) + " 0 0]"));
+    }
+    lights.push_back(lights[5]);  // listed twice
+    I.push_back(I[5]);
+    double total = 0;
+    for (double v : I) total += v;
+    LightSampler ls(lights, "power", FileLoc(), UnitBox());
+    for (int i = 0; i < 300; ++i) {
+        double expect = (i == 5 ? I.back() : I[i]) / total;
+        EXPECT_NEAR(ls.pmf(lights[i].get()), expect, 1e-12 * expect) << i;
+        EXPECT_EQ(ls.pmf(Point3(0, 0, 0), lights[i].get()), ls.pmf(lights[i].get()));
+    }
+    auto stranger = MakeLight(R"(LightSource "point" "point from" [0 0 0])");
+    EXPECT_EQ(ls.pmf(stranger.get()), 0);
+    EXPECT_EQ(ls.pmf(nullptr), 0);
+    for (int k = 0; k < 1000; ++k) {
+        Float pmf;
+        const Light *l = ls.sample((k + 0.5) / 1000, &pmf);
+        ASSERT_NE(l, nullptr);
+        if (l != lights[5].get()) ASSERT_EQ(pmf, ls.pmf(l));
+    }
+    LightSampler empty(std::vector<std::shared_ptr<Light>>{}, "power", FileLoc(), UnitBox());
+    EXPECT_EQ(empty.pmf(lights[0].get()), 0);
+}
+
 // ------------------------------------------------------------------ goniometric, projection
 // A 4 x 2 map whose texels are all distinct, written as EXR for CreateLight.
 std::string WriteTexelMap(const std::string &name) {

@@ -523,7 +523,9 @@ TEST(LightSampler, PowerPmfOfManyLights) {
         Float pmf;
         const Light *l = ls.sample((k + 0.5) / 1000, &pmf);
         ASSERT_NE(l, nullptr);
-        if (l != lights[5].get()) ASSERT_EQ(pmf, ls.pmf(l));
+        if (l != lights[5].get()) {
+            ASSERT_EQ(pmf, ls.pmf(l));
+        }
     }
     LightSampler empty(std::vector<std::shared_ptr<Light>>{}, "power", FileLoc(), UnitBox());
     EXPECT_EQ(empty.pmf(lights[0].get()), 0);

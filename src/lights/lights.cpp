@@ -536,6 +536,7 @@ class InfiniteLight : public Light {
         *pdfDir = pdfDirection(-ray.d);
         *pdfPos = 1 / (Pi * radius_ * radius_);
     }
+    Float pdfLePosition(const Ray &, const Normal3 &) const override { return 1 / (Pi * radius_ * radius_); }
 
   private:
     Spectrum Lscale_;

@@ -58,6 +58,13 @@ class Light {
     virtual Spectrum Le(const Ray &r) const { return Spectrum(0); }
     virtual bool sampleLe(Point2 u1, Point2 u2, LightLeSample *s) const = 0;
     virtual void pdfLe(const Ray &ray, const Normal3 &nLight, Float *pdfPos, Float *pdfDir) const = 0;
+    // pdfLe's positional density alone, for callers that need no directional
+    // one (an infinite light then skips its direction's map lookup).
+    virtual Float pdfLePosition(const Ray &ray, const Normal3 &nLight) const {
+        Float pdfPos, pdfDir;
+        pdfLe(ray, nLight, &pdfPos, &pdfDir);
+        return pdfPos;
+    }
 };
 
 // Diffuse area light attached to one shape primitive.

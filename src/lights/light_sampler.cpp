@@ -75,8 +75,15 @@ LightSampler::LightSampler(const std::vector<std::shared_ptr<Light>> &lights, co
     if (strategy != "uniform" && strategy != "power" && strategy != "spatial")
         throw Error(loc, "unknown light sample strategy \"" + strategy + "\" (valid: uniform, power, spatial)");
     std::vector<Float> w;
+    size_t nSlots = 1;
+    int bits = 0;
+    while (nSlots < 2 * lights.size()) nSlots <<= 1, ++bits;
+    slots_.assign(nSlots, {nullptr, -1});
+    slotShift_ = 64 - bits;
     for (const auto &l : lights) {
-        index_[l.get()] = int(lights_.size());
+        size_t h = bits ? size_t((uint64_t(uintptr_t(l.get())) * 0x9e3779b97f4a7c15ULL) >> slotShift_) : 0;
+        while (slots_[h].first && slots_[h].first != l.get()) h = (h + 1) & (nSlots - 1);
+        slots_[h] = {l.get(), int(lights_.size())};
         lights_.push_back(l.get());
         w.push_back(strategy == "uniform" ? 1 : std::max<Float>(0, l->power().y()));
     }
@@ -155,10 +162,19 @@ const Light *LightSampler::sample(Float u, Float *pmf) const {
     return lights_[i];
 }
 
+int LightSampler::indexOf(const Light *light) const {
+    const size_t mask = slots_.size() - 1;
+    if (slots_.empty() || !light) return -1;
+    size_t h = slotShift_ < 64 ? size_t((uint64_t(uintptr_t(light)) * 0x9e3779b97f4a7c15ULL) >> slotShift_) : 0;
+    for (;; h = (h + 1) & mask) {
+        if (slots_[h].first == light) return slots_[h].second;
+        if (!slots_[h].first) return -1;
+    }
+}
+
 Float LightSampler::pmf(const Light *light) const {
-    auto it = index_.find(light);
-    if (it == index_.end()) return 0;
-    return distrib_.discretePmf(it->second);
+    int i = indexOf(light);
+    return i < 0 ? 0 : distrib_.discretePmf(i);
 }
 
 const Light *LightSampler::sample(const Point3 &p, Float u, Float *pmf) const {
@@ -169,10 +185,10 @@ const Light *LightSampler::sample(const Point3 &p, Float u, Float *pmf) const {
 
 Float LightSampler::pmf(const Point3 &p, const Light *light) const {
     if (!grid_) return pmf(light);
-    auto it = index_.find(light);
-    if (it == index_.end()) return 0;
+    int i = indexOf(light);
+    if (i < 0) return 0;
     const Float *cdf = lookup(p);
-    return cdf[it->second + 1] - cdf[it->second];
+    return cdf[i + 1] - cdf[i];
 }
 
 }  // namespace gradus

@@ -12,7 +12,6 @@
 #include <atomic>
 #include <memory>
 #include <string>
-#include <unordered_map>
 #include <vector>
 
 #include "lights/light.h"
@@ -44,7 +43,12 @@ class LightSampler {
     const Float *lookup(const Point3 &p) const;  // the voxel's cumulative distribution
     std::vector<const Light *> lights_;
     Distribution1D distrib_;
-    std::unordered_map<const Light *, int> index_;
+    // Light -> index in lights_ (the last one for a light listed twice): an
+    // open-addressing table, a power of two of slots at most half full,
+    // probed linearly from a multiplicative hash of the pointer.
+    int indexOf(const Light *light) const;
+    std::vector<std::pair<const Light *, int>> slots_;
+    int slotShift_ = 64;
     std::string strategy_;
     std::unique_ptr<Grid> grid_;
 };

@@ -1,4 +1,6 @@
+#include <atomic>
 #include <cmath>
+#include <cstring>
 
 #include "core/error.h"
 #include "image/image.h"
@@ -376,6 +378,17 @@ class DistantLight : public Light {
 };
 
 // ---------------------------------------------------------- infinite light
+// sin x and cos x in one libm call where there is one (glibc's sincos gives
+// the values of its sin and cos).
+inline void SinCos(Float x, Float *s, Float *c) {
+#if defined(__GLIBC__)
+    ::sincos(x, s, c);
+#else
+    *s = std::sin(x);
+    *c = std::cos(x);
+#endif
+}
+
 // Constant or lat-long mapped environment, importance-sampled by luminance
 // (pdf over (u,v) converted to solid angle with 1 / (2 pi^2 sin theta)).
 class InfiniteLight : public Light {
@@ -389,10 +402,11 @@ class InfiniteLight : public Light {
             texels_.resize(size_t(w_) * h_);
             for (int y = 0; y < h_; ++y)
                 for (int x = 0; x < w_; ++x)
-                    texels_[size_t(y) * w_ + x] = Spectrum(rgb.at(x, y, 0), rgb.at(x, y, 1), rgb.at(x, y, 2));
+                    texels_[size_t(y) * w_ + x] = {rgb.at(x, y, 0), rgb.at(x, y, 1), rgb.at(x, y, 2)};
         } else {
             w_ = h_ = 1;
-            texels_.assign(1, Spectrum(1));
+            texels_.assign(1, {1, 1, 1});
+            constant_ = true;
         }
         std::vector<Float> f(size_t(w_) * h_);
         for (int y = 0; y < h_; ++y) {
@@ -405,7 +419,8 @@ class InfiniteLight : public Light {
     Spectrum lookupTexel(int x, int y) const {
         x = Clamp(x, 0, w_ - 1);
         y = Clamp(y, 0, h_ - 1);
-        return texels_[size_t(y) * w_ + x];
+        const RGB32 &t = texels_[size_t(y) * w_ + x];
+        return Spectrum(t.r, t.g, t.b);
     }
     // Bilinear lookup at (u, v) in [0,1]^2 (u wraps).
     Spectrum lookup(Point2 st) const {
@@ -415,14 +430,43 @@ class InfiniteLight : public Light {
         if (!std::isfinite(x) || !std::isfinite(y)) return Spectrum(0);
         int x0 = int(std::floor(x)), y0 = int(std::floor(y));
         Float dx = x - x0, dy = y - y0;
-        auto tex = [&](int xi, int yi) { return lookupTexel(((xi % w_) + w_) % w_, yi); };
-        return tex(x0, y0) * ((1 - dx) * (1 - dy)) + tex(x0 + 1, y0) * (dx * (1 - dy)) +
-               tex(x0, y0 + 1) * ((1 - dx) * dy) + tex(x0 + 1, y0 + 1) * (dx * dy);
+        // Columns wrap (u in [0, 1] gives x0 in [-1, w - 1]: no division then).
+        auto wrap = [&](int xi) { return xi >= 0 && xi < w_ ? xi : ((xi % w_) + w_) % w_; };
+        int xa = wrap(x0), xb = wrap(x0 + 1);
+        return lookupTexel(xa, y0) * ((1 - dx) * (1 - dy)) + lookupTexel(xb, y0) * (dx * (1 - dy)) +
+               lookupTexel(xa, y0 + 1) * ((1 - dx) * dy) + lookupTexel(xb, y0 + 1) * (dx * dy);
     }
-    Spectrum radiance(const Vec3 &wWorld) const {
+    // Spherical angles (theta, phi) of a world direction in the map's frame.
+    // A path that escapes asks Le and then pdfLi of the same direction: each
+    // thread keeps the last direction's angles (keyed by the light's serial
+    // number and the direction's bits), which halves the acos/atan2 calls.
+    struct Angles {
+        Float theta, phi;
+    };
+    Angles anglesOf(const Vec3 &wWorld) const {
+        struct Memo {
+            uint64_t serial = 0;
+            uint64_t bits[3] = {};
+            Angles a{};
+        };
+        thread_local Memo memo;
+        const uint64_t bits[3] = {FloatBits(wWorld.x), FloatBits(wWorld.y), FloatBits(wWorld.z)};
+        if (memo.serial == serial_ && memo.bits[0] == bits[0] && memo.bits[1] == bits[1] && memo.bits[2] == bits[2])
+            return memo.a;
         Vec3 wl = Normalize(objectFromWorld_.applyVector(wWorld));
-        Point2 st(SphericalPhi(wl) * Inv2Pi, SphericalTheta(wl) * InvPi);
-        return Lscale_ * lookup(st);
+        memo.serial = serial_;
+        std::memcpy(memo.bits, bits, sizeof bits);
+        memo.a = {SphericalTheta(wl), SphericalPhi(wl)};
+        return memo.a;
+    }
+    // Radiance at map coordinates st; a constant environment (no map) is L
+    // exactly, without a lookup.
+    Spectrum radianceAt(Point2 st) const { return constant_ ? Lscale_ : Lscale_ * lookup(st); }
+    Spectrum radiance(const Vec3 &wWorld) const {
+        if (constant_)  // a non-finite direction has no radiance (as lookup gives it)
+            return std::isfinite(wWorld.x + wWorld.y + wWorld.z) ? Lscale_ : Spectrum(0);
+        Angles a = anglesOf(wWorld);
+        return radianceAt(Point2(a.phi * Inv2Pi, a.theta * InvPi));
     }
     Spectrum Le(const Ray &r) const override { return radiance(r.d); }
     // Flux through the scene's bounding disk: pi r^2 times the integral of L
@@ -435,36 +479,46 @@ class InfiniteLight : public Light {
         }
         return Lscale_ * sum * (Pi * radius_ * radius_);
     }
-    Vec3 directionFrom(Point2 uv, Float *pdf) const {
+    // A sampled direction and its pdf; *st receives its map coordinates, at
+    // which the caller looks the radiance up (as pbrt-v3 does: no round trip
+    // through the direction, its transform and acos/atan2).
+    Vec3 directionFrom(Point2 uv, Float *pdf, Point2 *stOut) const {
         Float mapPdf;
         Point2 st = dist_.sampleContinuous(uv, &mapPdf);
+        *stOut = st;
         Float theta = st.y * Pi, phi = st.x * 2 * Pi;
-        Float sinTheta = std::sin(theta);
-        Vec3 wl = SphericalDirection(sinTheta, std::cos(theta), phi);
+        Float sinTheta, cosTheta, sinPhi, cosPhi;
+        SinCos(theta, &sinTheta, &cosTheta);
+        SinCos(phi, &sinPhi, &cosPhi);
+        // SphericalDirection(sinTheta, cosTheta, phi), with phi's sine and cosine from one call.
+        Float st1 = Clamp<Float>(sinTheta, -1, 1);
+        Vec3 wl(st1 * cosPhi, st1 * sinPhi, Clamp<Float>(cosTheta, -1, 1));
         *pdf = (sinTheta == 0 || mapPdf == 0) ? 0 : mapPdf / (2 * Pi * Pi * sinTheta);
         return Normalize(worldFromLight.applyVector(wl));
     }
     Float pdfDirection(const Vec3 &wWorld) const {
-        Vec3 wl = Normalize(objectFromWorld_.applyVector(wWorld));
-        Float theta = SphericalTheta(wl), phi = SphericalPhi(wl);
+        Angles a = anglesOf(wWorld);
+        Float theta = a.theta, phi = a.phi;
         Float sinTheta = std::sin(theta);
         if (!(sinTheta > 0)) return 0;  // the poles, and non-finite directions
         return dist_.pdf(Point2(phi * Inv2Pi, theta * InvPi)) / (2 * Pi * Pi * sinTheta);
     }
     bool sampleLi(const Interaction &ref, Point2 u, LightLiSample *s) const override {
         Float pdf;
-        Vec3 wi = directionFrom(u, &pdf);
+        Point2 st;
+        Vec3 wi = directionFrom(u, &pdf, &st);
         if (pdf == 0) return false;
         s->wi = wi;
         s->pdf = pdf;
         s->pLight = Interaction(ref.p + wi * (2 * radius_), Normal3(0, 0, 0), -wi);
-        s->L = radiance(wi);
+        s->L = radianceAt(st);
         return !s->L.isBlack();
     }
     Float pdfLi(const Interaction &, const Vec3 &wi) const override { return pdfDirection(wi); }
     bool sampleLe(Point2 u1, Point2 u2, LightLeSample *s) const override {
         Float pdfDir;
-        Vec3 wi = directionFrom(u1, &pdfDir);  // direction towards the light
+        Point2 st;
+        Vec3 wi = directionFrom(u1, &pdfDir, &st);  // direction towards the light
         if (pdfDir == 0) return false;
         Vec3 d = -wi;
         Frame f(d);
@@ -475,20 +529,33 @@ class InfiniteLight : public Light {
         s->nLight = d;
         s->pdfPos = 1 / (Pi * radius_ * radius_);
         s->pdfDir = pdfDir;
-        s->L = radiance(wi);
+        s->L = radianceAt(st);
         return !s->L.isBlack();
     }
     void pdfLe(const Ray &ray, const Normal3 &, Float *pdfPos, Float *pdfDir) const override {
         *pdfDir = pdfDirection(-ray.d);
         *pdfPos = 1 / (Pi * radius_ * radius_);
     }
+    Float pdfLePosition(const Ray &, const Normal3 &) const override { return 1 / (Pi * radius_ * radius_); }
 
   private:
     Spectrum Lscale_;
     Transform objectFromWorld_;
     int w_ = 1, h_ = 1;
-    std::vector<Spectrum> texels_;
+    bool constant_ = false;  // no map: L in every direction
+    // The map's float texels as stored (half the bytes of Spectrum's doubles;
+    // the conversion to double is exact).
+    struct RGB32 {
+        float r, g, b;
+    };
+    std::vector<RGB32> texels_;
     Distribution2D dist_;
+    // Distinct for every InfiniteLight ever made (never 0): the memo of anglesOf.
+    const uint64_t serial_ = NextSerial();
+    static uint64_t NextSerial() {
+        static std::atomic<uint64_t> next{1};
+        return next.fetch_add(1, std::memory_order_relaxed);
+    }
     Point3 center_;
     Float radius_ = 1;
 };

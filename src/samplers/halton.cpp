@@ -4,13 +4,20 @@
 namespace gradus {
 
 namespace {
-constexpr uint64_t kHaltonTag = 0x68616c746f6e0001ULL;
+constexpr uint64_t kHaltonTag = 0x68616c746f6e0002ULL;
 }
 
+void HaltonSampler::startPixelSample(Point2i pixel, int64_t sampleIndex, int dimension) {
+    AddressedSampler::startPixelSample(pixel, sampleIndex, dimension);
+    pixelHash_ = Hash(seed_ ^ kHaltonTag, pixelKey());
+}
+
+// Digits are kept while b^j < spp: the spp samples of a pixel fill the
+// radical-inverse strata of every dimension.
 Float HaltonSampler::value(int dim) const {
-    uint32_t base = Prime(dim % PrimeTableSize);
-    return OwenScrambledRadicalInverse(base, uint64_t(index_), Hash(seed_ ^ kHaltonTag, pixelKey(), uint64_t(dim)),
-                                       DigitsFor(uint64_t(spp_), base));
+    const PrimeBase &B = PrimeBaseOf(dim % PrimeTableSize);
+    uint64_t seed = MixBits(pixelHash_ ^ (uint64_t(dim + 1) * 0x9e3779b97f4a7c15ULL));
+    return NestedAffineRadicalInverse(B, uint64_t(index_), seed, uint64_t(spp_));
 }
 
 Float HaltonSampler::get1D() { return value(dim_++); }

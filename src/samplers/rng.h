@@ -17,13 +17,16 @@ inline uint64_t MixBits(uint64_t v) {
     return v;
 }
 
-// Order-sensitive hash of up to four 64-bit words.
+// Order-sensitive hash of up to four 64-bit words, a chain of MixBits whose
+// intermediate states can be kept: Hash(a, b, c, d) ==
+// HashWord4(HashWord3(HashWord2(HashWord1(a), b), c), d), so a caller that
+// hashes many words after the same (a, b) computes that prefix once.
+inline uint64_t HashWord1(uint64_t a) { return MixBits(a + 0x9e3779b97f4a7c15ULL); }
+inline uint64_t HashWord2(uint64_t h, uint64_t b) { return MixBits(h ^ (b + 0x632be59bd9b4e019ULL)); }
+inline uint64_t HashWord3(uint64_t h, uint64_t c) { return MixBits(h ^ (c + 0x8cb92ba72f3d8dd7ULL)); }
+inline uint64_t HashWord4(uint64_t h, uint64_t d) { return MixBits(h ^ (d + 0xa0761d6478bd642fULL)); }
 inline uint64_t Hash(uint64_t a, uint64_t b = 0, uint64_t c = 0, uint64_t d = 0) {
-    uint64_t h = MixBits(a + 0x9e3779b97f4a7c15ULL);
-    h = MixBits(h ^ (b + 0x632be59bd9b4e019ULL));
-    h = MixBits(h ^ (c + 0x8cb92ba72f3d8dd7ULL));
-    h = MixBits(h ^ (d + 0xa0761d6478bd642fULL));
-    return h;
+    return HashWord4(HashWord3(HashWord2(HashWord1(a), b), c), d);
 }
 
 // The bits of a double (hash keys).

@@ -31,10 +31,14 @@ class AddressedSampler : public Sampler {
 class RandomSampler : public AddressedSampler {
   public:
     RandomSampler(int spp, uint64_t seed) : AddressedSampler(spp, seed) {}
+    void startPixelSample(Point2i pixel, int64_t sampleIndex, int dimension = 0) override;
     Float get1D() override;
     Point2 get2D() override;
     std::unique_ptr<Sampler> clone() const override { return std::make_unique<RandomSampler>(*this); }
     std::string name() const override { return "random"; }
+
+  private:
+    uint64_t sampleHash_ = 0;  // the hash state after (seed, pixel, index), per sample
 };
 
 // "stratified": xs*ys strata per pixel; 1D dimensions use xs*ys strata of
@@ -46,6 +50,7 @@ class StratifiedSampler : public AddressedSampler {
   public:
     StratifiedSampler(int xs, int ys, bool jitter, uint64_t seed)
         : AddressedSampler(xs * ys, seed), xs_(xs), ys_(ys), jitter_(jitter) {}
+    void startPixelSample(Point2i pixel, int64_t sampleIndex, int dimension = 0) override;
     Float get1D() override;
     Point2 get2D() override;
     std::unique_ptr<Sampler> clone() const override { return std::make_unique<StratifiedSampler>(*this); }
@@ -56,16 +61,22 @@ class StratifiedSampler : public AddressedSampler {
 
   private:
     Float jitterValue(int dim, uint64_t salt) const;
+    uint32_t stratum(int dim) const;
     int xs_, ys_;
     bool jitter_;
+    // Hash states kept per sample: after (seed, pixel) for the strata's
+    // permutations, after (seed, pixel, index) for the jitter.
+    uint64_t permHash_ = 0, jitterHash_ = 0;
 };
 
 // "halton": dimension d is the radical inverse of the sample index in the
-// d-th prime base (cycling after PrimeTableSize bases), Owen-scrambled with a
-// seed hashed from (seed, pixel, dimension).
+// d-th prime base (cycling after PrimeTableSize bases), with a nested
+// (Owen-type) scramble whose permutations are hashed from (seed, pixel,
+// dimension, digit prefix); see NestedAffineRadicalInverse.
 class HaltonSampler : public AddressedSampler {
   public:
     HaltonSampler(int spp, uint64_t seed) : AddressedSampler(spp, seed) {}
+    void startPixelSample(Point2i pixel, int64_t sampleIndex, int dimension = 0) override;
     Float get1D() override;
     Point2 get2D() override;
     std::unique_ptr<Sampler> clone() const override { return std::make_unique<HaltonSampler>(*this); }
@@ -73,6 +84,7 @@ class HaltonSampler : public AddressedSampler {
 
   private:
     Float value(int dim) const;
+    uint64_t pixelHash_ = 0;  // Hash(seed, pixel), cached per sample
 };
 
 // "sobol" = padded scrambled (0,2)-sequence. Every 2D request takes the first

@@ -3,9 +3,11 @@
 // All pdfs of directions are with respect to solid angle.
 #pragma once
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "core/geometry.h"
+#include "samplers/rng.h"
 
 namespace gradus {
 
@@ -129,6 +131,52 @@ inline Float BalanceHeuristic(int nf, Float fPdf, int ng, Float gPdf) {
     return r / (1 + r);
 }
 
+// One tabulated piecewise-constant row: for n buckets, n + 1 entries
+// {cdf[i], pdf[i]} (pdf = f / integral, the last pdf unused), so the bucket's
+// cdf bounds and density share cache lines, and a guide table of G + 1 bucket
+// indices (G a power of two): bucket(u) lies in [guide[k], guide[k + 1]] for
+// k = floor(u G), since the search is monotone in u and k / G <= u < (k+1) / G
+// exactly (scaling by a power of two is exact). Sampling walks a few adjacent
+// entries instead of a binary search over the whole row.
+struct CdfEntry {
+    Float cdf, pdf;
+};
+namespace detail {
+// Guide size for n buckets: about one guide entry per four buckets.
+inline int GuideSize(int n) {
+    int g = 1;
+    while (g * 4 < n) g <<= 1;
+    return g;
+}
+// Fills e[0..n] and guide[0..G] from f[0..n-1] (throws on negative or
+// non-finite values); returns the integral sum f / n.
+Float BuildRow(const Float *f, int n, CdfEntry *e, int32_t *guide, int G, const char *who);
+// Largest i in [0, n) with cdf[i] <= u (u in [0, 1)): bucket i has non-zero
+// probability (zero-valued buckets are never returned).
+inline int FindBucket(const CdfEntry *e, const int32_t *guide, int G, Float u) {
+    int k = u >= 0 ? int(u * G) : 0;  // NaN: no out-of-range guide index
+    int lo = guide[k], hi = guide[k + 1] + 1;  // invariant: cdf[lo] <= u, answer in [lo, hi)
+    while (hi - lo > 1) {
+        int mid = (lo + hi) / 2;
+        if (e[mid].cdf <= u) lo = mid;
+        else hi = mid;
+    }
+    return lo;
+}
+// x in bucket o of a row of n buckets for u (clamped to [0, 1)), with its pdf.
+inline Float SampleRow(const CdfEntry *e, const int32_t *guide, int G, int n, Float u, Float *pdf, int *offset) {
+    u = Clamp<Float>(u, 0, OneMinusEpsilon);
+    int o = FindBucket(e, guide, G, u);
+    if (offset) *offset = o;
+    Float c0 = e[o].cdf, width = e[o + 1].cdf - c0;
+    Float du = width > 0 ? (u - c0) / width : 0;
+    if (pdf) *pdf = e[o].pdf;
+    // Keep x inside bucket o despite rounding (the next bucket may have f = 0).
+    Float x = (o + du) / n, end = Float(o + 1) / n;
+    return x < end ? x : std::nextafter(end, Float(0));
+}
+}  // namespace detail
+
 // Piecewise-constant distribution over [0, 1) with n equal-width buckets.
 class Distribution1D {
   public:
@@ -140,39 +188,61 @@ class Distribution1D {
     explicit Distribution1D(const std::vector<Float> &f) : Distribution1D(f.data(), int(f.size())) {}
 
     // Returns x in [0, 1), its density and the bucket it fell in.
-    Float sampleContinuous(Float u, Float *pdf, int *offset = nullptr) const;
+    Float sampleContinuous(Float u, Float *pdf, int *offset = nullptr) const {
+        return detail::SampleRow(e_.data(), guide_.data(), G_, count(), u, pdf, offset);
+    }
     // Returns a bucket index with probability discretePmf(index); uRemapped
     // receives u rescaled to [0, 1) within the chosen bucket (reusable).
     int sampleDiscrete(Float u, Float *pmf = nullptr, Float *uRemapped = nullptr) const;
     Float discretePmf(int index) const;
-    Float pdfContinuous(Float x) const;
+    Float pdfContinuous(Float x) const {
+        if (!(x >= 0 && x < 1) || func_.empty()) return 0;
+        return e_[Clamp<int>(int(x * count()), 0, count() - 1)].pdf;
+    }
     int count() const { return int(func_.size()); }
     // Integral of the (unnormalised) function over [0, 1): sum f / n.
     Float integral() const { return funcInt_; }
     Float value(int i) const { return func_[i]; }
 
   private:
-    int findBucket(Float u) const;
-    std::vector<Float> func_, cdf_;
+    std::vector<Float> func_;
+    std::vector<CdfEntry> e_;
+    std::vector<int32_t> guide_;
+    int G_ = 0;
     Float funcInt_ = 0;
 };
 
 // Piecewise-constant distribution over [0, 1)^2: a marginal over rows (v) and
-// one conditional per row (u).
+// one conditional per row (u), the conditionals in one contiguous table
+// (row v at entries v (nu + 1) .. v (nu + 1) + nu) with one guide table.
 class Distribution2D {
   public:
     Distribution2D() = default;
     // f is row-major, nu values per row, nv rows (u fastest).
     Distribution2D(const Float *f, int nu, int nv);
-    Point2 sampleContinuous(Point2 u, Float *pdf) const;
-    Float pdf(Point2 p) const;
+    Point2 sampleContinuous(Point2 u, Float *pdf) const {
+        Float pdfV, pdfU;
+        int v;
+        Float y = marginal_.sampleContinuous(u.y, &pdfV, &v);
+        Float x = detail::SampleRow(&cond_[size_t(v) * (nu_ + 1)], &condGuide_[size_t(v) * (G_ + 1)], G_, nu_, u.x,
+                                    &pdfU, nullptr);
+        if (pdf) *pdf = pdfU * pdfV;
+        return {x, y};
+    }
+    Float pdf(Point2 p) const {
+        if (!(p.x >= 0 && p.x < 1 && p.y >= 0 && p.y < 1) || nv_ == 0) return 0;
+        int v = Clamp<int>(int(p.y * nv_), 0, nv_ - 1);
+        int u = Clamp<int>(int(p.x * nu_), 0, nu_ - 1);
+        return marginal_.pdfContinuous(p.y) * cond_[size_t(v) * (nu_ + 1) + u].pdf;
+    }
     int countU() const { return nu_; }
     int countV() const { return nv_; }
     Float integral() const { return marginal_.integral(); }
 
   private:
-    int nu_ = 0, nv_ = 0;
-    std::vector<Distribution1D> conditional_;
+    int nu_ = 0, nv_ = 0, G_ = 0;
+    std::vector<CdfEntry> cond_;
+    std::vector<int32_t> condGuide_;
     Distribution1D marginal_;
 };
 

@@ -43,11 +43,14 @@ namespace {
 inline Float ToUnit(uint32_t bits) { return (double(bits) + 0.5) * 0x1p-32; }
 }  // namespace
 
+// FastOwenScramble(x, seed) = Reverse(LK(Reverse(x), seed)): with x =
+// SobolDim0(i) = Reverse(i) the inner reversal cancels, and for SobolDim1 the
+// reversed tables give Reverse(SobolDim1(i)) directly (same values).
 Float SobolSampler::get1D() {
     int d = dim_++;
     uint64_t h = dimHash(d);
     uint32_t i = shuffledIndex(d, h);
-    return ToUnit(FastOwenScramble(SobolDim0(i), uint32_t(h)));
+    return ToUnit(ReverseBits32(LaineKarrasPermutation(i, uint32_t(h))));
 }
 
 Point2 SobolSampler::get2D() {
@@ -55,8 +58,8 @@ Point2 SobolSampler::get2D() {
     dim_ += 2;
     uint64_t h = dimHash(d);
     uint32_t i = shuffledIndex(d, h);
-    return {ToUnit(FastOwenScramble(SobolDim0(i), uint32_t(h))),
-            ToUnit(FastOwenScramble(SobolDim1(i), uint32_t(h >> 32)))};
+    return {ToUnit(ReverseBits32(LaineKarrasPermutation(i, uint32_t(h)))),
+            ToUnit(ReverseBits32(LaineKarrasPermutation(SobolDim1Reversed(i), uint32_t(h >> 32))))};
 }
 
 }  // namespace gradus

@@ -326,6 +326,53 @@ TEST(InfiniteLight, SampleLiMatchesPdfLi) {
     EXPECT_TRUE(r2.pass) << r2.message;
 }
 
+// sampleLi and sampleLe look the map up at the sampled map coordinates, Le
+// from the direction (transform, acos, atan2): the same radiance up to
+// rounding. And each light's memo of the last direction's angles is its own:
+// two lights with different frames queried alternately with the same
+// directions give the values each gives alone.
+TEST(InfiniteLight, SampledRadianceMatchesLeAndLightsKeepTheirOwnAngles) {
+    Image map = TestMap();
+    auto a = CreateInfiniteLight(Rotate(-90, Vec3(1, 0, 0)) * RotateZ(20), Spectrum(1), &map);
+    auto b = CreateInfiniteLight(RotateZ(75), Spectrum(1), &map);
+    Bounds3 bb;
+    bb.expand(Point3(-1, -1, -1));
+    bb.expand(Point3(1, 1, 1));
+    a->preprocess(bb);
+    b->preprocess(bb);
+    Interaction ref = RefAt(Point3(0.1, 0.2, 0.3));
+    RNG rng(77);
+    std::vector<Vec3> ws;
+    for (int i = 0; i < 2000; ++i) {
+        LightLiSample s;
+        if (!a->sampleLi(ref, Point2(rng.uniform(), rng.uniform()), &s)) continue;
+        Spectrum le = a->Le(Ray(ref.p, s.wi));
+        for (int c = 0; c < 3; ++c) ASSERT_NEAR(s.L[c], le[c], 1e-9 * (1 + le[c])) << i;
+        LightLeSample e;
+        if (!b->sampleLe(Point2(rng.uniform(), rng.uniform()), Point2(rng.uniform(), rng.uniform()), &e)) continue;
+        Spectrum le2 = b->Le(Ray(Point3(0, 0, 0), -e.ray.d));
+        for (int c = 0; c < 3; ++c) ASSERT_NEAR(e.L[c], le2[c], 1e-9 * (1 + le2[c])) << i;
+        ws.push_back(s.wi);
+    }
+    std::vector<Spectrum> la, lb;
+    std::vector<Float> pa, pb;
+    for (const Vec3 &w : ws) la.push_back(a->Le(Ray(ref.p, w))), pa.push_back(a->pdfLi(ref, w));
+    for (const Vec3 &w : ws) lb.push_back(b->Le(Ray(ref.p, w))), pb.push_back(b->pdfLi(ref, w));
+    int differ = 0;
+    for (size_t i = 0; i < ws.size(); ++i) {
+        Spectrum xb = b->Le(Ray(ref.p, ws[i]));
+        Float qa = a->pdfLi(ref, ws[i]);
+        Spectrum xa = a->Le(Ray(ref.p, ws[i]));
+        Float qb = b->pdfLi(ref, ws[i]);
+        ASSERT_EQ(xa, la[i]);
+        ASSERT_EQ(xb, lb[i]);
+        ASSERT_EQ(qa, pa[i]);
+        ASSERT_EQ(qb, pb[i]);
+        differ += !(la[i] == lb[i]);
+    }
+    EXPECT_GT(differ, int(ws.size()) / 2);  // the two frames do see different radiance
+}
+
 TEST(InfiniteLight, PowerMatchesQuadrature) {
     Image map = TestMap();
     auto l = CreateInfiniteLight(Transform(), Spectrum(1), &map);
@@ -443,6 +490,45 @@ TEST(LightSampler, SpatialChoiceFavoursTheNearLight) {
     EXPECT_EQ(ls.voxelsBuilt(), 2);
     LightSampler power(lights, "power", FileLoc(), b);
     EXPECT_DOUBLE_EQ(power.pmf(Point3(-0.45, 0, 0), lights[0].get()), 0.5);
+}
+
+// The power strategy over many lights: each light's pmf is its power over
+// the total (computed here from the intensities: a point light's power is
+// 4 pi I), a light listed twice has the pmf of one entry, a light not
+// in the sampler (or null) has pmf 0, and sampling returns lights with those
+// pmfs.
+TEST(LightSampler, PowerPmfOfManyLights) {
+    std::vector<std::shared_ptr<Light>> lights;
+    std::vector<double> I;
+    for (int i = 0; i < 300; ++i) {
+        I.push_back(1 + (i * 37) % 11);
+        lights.push_back(MakeLight("LightSource \"point\" \"rgb I\" [" + std::to_string(I.back()) + " " +
+                                   std::to_string(I.back()) + " " + std::to_string(I.back()) + "] \"point from\" [" +
+                                   std::to_string(i * 0.01) + " 0 0]"));
+    }
+    lights.push_back(lights[5]);  // listed twice
+    I.push_back(I[5]);
+    double total = 0;
+    for (double v : I) total += v;
+    LightSampler ls(lights, "power", FileLoc(), UnitBox());
+    for (int i = 0; i < 300; ++i) {
+        double expect = (i == 5 ? I.back() : I[i]) / total;
+        EXPECT_NEAR(ls.pmf(lights[i].get()), expect, 1e-12 * expect) << i;
+        EXPECT_EQ(ls.pmf(Point3(0, 0, 0), lights[i].get()), ls.pmf(lights[i].get()));
+    }
+    auto stranger = MakeLight(R"(LightSource "point" "point from" [0 0 0])");
+    EXPECT_EQ(ls.pmf(stranger.get()), 0);
+    EXPECT_EQ(ls.pmf(nullptr), 0);
+    for (int k = 0; k < 1000; ++k) {
+        Float pmf;
+        const Light *l = ls.sample((k + 0.5) / 1000, &pmf);
+        ASSERT_NE(l, nullptr);
+        if (l != lights[5].get()) {
+            ASSERT_EQ(pmf, ls.pmf(l));
+        }
+    }
+    LightSampler empty(std::vector<std::shared_ptr<Light>>{}, "power", FileLoc(), UnitBox());
+    EXPECT_EQ(empty.pmf(lights[0].get()), 0);
 }
 
 // ------------------------------------------------------------------ goniometric, projection

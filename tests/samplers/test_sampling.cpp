@@ -256,6 +256,105 @@ TEST(Distribution1D, EdgeCases) {
     EXPECT_NEAR(ur, 0.5, 1e-15);
 }
 
+namespace {
+// Reference inversion of a piecewise-constant row, written out with a linear
+// scan (the distributions search a guide table and a short binary search):
+// the same normalised cdf, the bucket o with cdf[o] <= u < cdf[o+1], x = (o + du) / n.
+struct RefRow {
+    std::vector<double> cdf, pdf;
+    explicit RefRow(const std::vector<Float> &f) {
+        int n = int(f.size());
+        cdf.assign(n + 1, 0);
+        for (int i = 0; i < n; ++i) cdf[i + 1] = cdf[i] + f[i] / n;
+        double I = cdf[n];
+        for (int i = 1; i <= n; ++i) cdf[i] = I == 0 ? double(i) / n : cdf[i] / I;
+        cdf[n] = 1;
+        for (int i = 0; i < n; ++i) pdf.push_back(I > 0 ? f[i] / I : 1);
+    }
+    double sample(double u, double *p, int *bucket) const {
+        int n = int(pdf.size()), o = 0;
+        for (int i = 0; i < n; ++i)
+            if (cdf[i] <= u) o = i;
+        *bucket = o;
+        *p = pdf[o];
+        double w = cdf[o + 1] - cdf[o], du = w > 0 ? (u - cdf[o]) / w : 0;
+        double x = (o + du) / n, end = double(o + 1) / n;
+        return x < end ? x : std::nextafter(end, 0.0);
+    }
+};
+
+// Rows like an environment map's: long runs of zeros, a narrow spike, noise.
+std::vector<Float> SpikyRow(RNG &rng, int n) {
+    std::vector<Float> f(n);
+    int spike = int(rng.uniform() * n);
+    for (int i = 0; i < n; ++i) {
+        double r = rng.uniform();
+        f[i] = r < 0.3 ? 0 : r * 0.01;
+        if (std::abs(i - spike) < 3) f[i] = 5000 * rng.uniform();
+    }
+    for (int i = n / 3; i < n / 3 + n / 10; ++i) f[i] = 0;
+    return f;
+}
+}  // namespace
+
+// The guided search returns exactly the reference's bucket, x and pdf, at
+// random u and at every cdf value and its neighbours (the bucket edges).
+TEST(Distribution1D, GuidedSearchMatchesLinearScan) {
+    RNG rng(21);
+    for (int n : {1, 2, 3, 5, 7, 64, 1000, 1337}) {
+        std::vector<Float> f = SpikyRow(rng, n);
+        if (n == 7) f.assign(7, 0.0);  // all zero: uniform
+        Distribution1D d(f);
+        RefRow ref(f);
+        std::vector<double> us;
+        for (int i = 0; i < 2000; ++i) us.push_back(rng.uniform());
+        for (double c : ref.cdf)
+            for (double u : {std::nextafter(c, 0.0), c, std::nextafter(c, 1.0)})
+                if (u >= 0 && u < 1) us.push_back(u);
+        for (double u : us) {
+            double pr, p;
+            int br, b;
+            double xr = ref.sample(u, &pr, &br);
+            double x = d.sampleContinuous(u, &p, &b);
+            ASSERT_EQ(b, br) << "n " << n << " u " << u;
+            ASSERT_EQ(x, xr);
+            ASSERT_EQ(p, pr);
+            ASSERT_EQ(d.sampleDiscrete(u), br);
+        }
+    }
+}
+
+TEST(Distribution2D, GuidedSearchMatchesLinearScan) {
+    RNG rng(22);
+    const int nu = 300, nv = 40;
+    std::vector<Float> f;
+    std::vector<RefRow> rows;
+    std::vector<Float> rowInt;
+    for (int v = 0; v < nv; ++v) {
+        std::vector<Float> r = SpikyRow(rng, nu);
+        if (v == 5) r.assign(nu, 0.0);
+        rows.emplace_back(r);
+        double s = 0;
+        for (int i = 0; i < nu; ++i) s += r[i] / nu;  // the row integral, as the marginal sums it
+        rowInt.push_back(s);
+        f.insert(f.end(), r.begin(), r.end());
+    }
+    RefRow marg(rowInt);
+    Distribution2D d(f.data(), nu, nv);
+    for (int i = 0; i < 20000; ++i) {
+        Point2 u = U2(rng);
+        double pv, pu, p;
+        int v, b;
+        double y = marg.sample(u.y, &pv, &v);
+        double x = rows[v].sample(u.x, &pu, &b);
+        Point2 s = d.sampleContinuous(u, &p);
+        ASSERT_EQ(s.x, x);
+        ASSERT_EQ(s.y, y);
+        ASSERT_EQ(p, pu * pv);
+        ASSERT_EQ(d.pdf(s), pu * pv);
+    }
+}
+
 TEST(Distribution2D, Chi2AndPdf) {
     const int nu = 7, nv = 5;
     std::vector<Float> f(nu * nv);

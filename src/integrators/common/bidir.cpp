@@ -507,9 +507,7 @@ Float PdfLightOrigin(const BidirContext &ctx, const PathVertex &v, const PathVer
     if (v.isInfiniteLight()) return InfiniteLightDensity(ctx, -w);
     const Light *light = EmitterOf(ctx, v);
     if (!light) return 0;
-    Float pdfPos, pdfDir;
-    light->pdfLe(Ray(v.p, w), v.ng, &pdfPos, &pdfDir);
-    return ctx.lightSampler->pmf(light) * pdfPos;
+    return ctx.lightSampler->pmf(light) * light->pdfLePosition(Ray(v.p, w), v.ng);
 }
 
 Float PdfLightDirection(const BidirContext &ctx, const PathVertex &v, const PathVertex &next) {
@@ -523,9 +521,7 @@ Float PdfLightDirection(const BidirContext &ctx, const PathVertex &v, const Path
         // infinite/distant lights share the scene's bounding disk).
         const Light *l = v.light ? v.light : (ctx.scene->infiniteLights.empty() ? nullptr : ctx.scene->infiniteLights[0]);
         if (!l) return 0;
-        Float pdfPos, pdfDir;
-        l->pdfLe(Ray(next.p, -w), Normal3(0, 0, 0), &pdfPos, &pdfDir);
-        pdf = pdfPos;
+        pdf = l->pdfLePosition(Ray(next.p, -w), Normal3(0, 0, 0));
     } else {
         const Light *light = EmitterOf(ctx, v);
         if (!light) return 0;

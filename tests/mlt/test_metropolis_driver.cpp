@@ -114,7 +114,10 @@ class ToyMetropolis : public MetropolisIntegrator {
     int64_t mutateChain(PassContext &ctx, int64_t c, int64_t count, RNG &rng, SampleRecorder &rec,
                         Worker &) override {
         mutations[size_t(c)] += count;
-        if (sampleValue >= 0) addIndependent(c, sampleValue * double(count), count);
+        for (int64_t k = 0; sampleValue >= 0 && k < count; ++k) {
+            independentSum(c).sum += sampleValue;
+            independentSum(c).count += 1;
+        }
         if (c == inactive_) return 0;
         const Bounds2i px = ctx.film().pixelBounds();
         const double i = I[size_t(c)];

@@ -66,5 +66,72 @@ TEST(MetropolisNormalisation, FurnaceMeanGMLT) {
     ExpectConverges("gmlt furnace", Ratios(scene, FurnaceMean(), 16, 701));
 }
 
+// directsamples: the direct light (paths of at most one scattering vertex,
+// Le + rho Le here) comes from the path tracer's filtered samples, which do
+// not scale with b; the chains render the rest, scaled by the current b. A
+// direct pass scaled by b (~0.3 of the image here), or chains without it, is
+// far off the closed form.
+TEST(MetropolisNormalisation, FurnaceMeanWithDirectSamples) {
+    for (const char *integ : {"pmlt", "gmlt"}) {
+        const std::string scene =
+            Furnace("Integrator \"" + std::string(integ) + "\" " + kDepthParam +
+                        "\"integer bootstrapsamples\" [20] \"integer chains\" [256] \"float normalizationsamples\" [1] "
+                        "\"integer directsamples\" [4]" + (integ == std::string("gmlt") ? " \"float alpha\" [8]" : ""),
+                    32);
+        ExpectConverges(std::string(integ) + " furnace, directsamples 4", Ratios(scene, FurnaceMean(), 16, 801));
+    }
+}
+
+// gmlt: the output's primal, dx and dy are the film's unnormalised splat
+// sums times one and the same current b (not the bootstrap's; a stale b on
+// the gradients would bend the reconstruction without moving its mean).
+TEST(MetropolisNormalisation, GMLTGradientsAndPrimalCarryTheCurrentB) {
+    BuildOptions bo;
+    bo.sppOverride = 4;
+    bo.seed = 5;
+    bo.quiet = true;
+    RenderJob job = BuildRenderJob(
+        ParseString(BoxScene("Integrator \"gmlt\" \"integer maxdepth\" [3] \"integer bootstrapsamples\" [50] "
+                             "\"integer chains\" [64] \"float normalizationsamples\" [1]",
+                             16)),
+        bo);
+    RenderOptions ro;
+    ro.spp = 4;
+    ro.nthreads = 2;
+    ro.quiet = true;
+    const RenderResult res = RenderJobImage(job, ro);
+    const double b = res.image.metadata.at("gmlt_b").number(), b0 = res.image.metadata.at("gmlt_b_bootstrap").number();
+    ASSERT_GT(std::abs(b / b0 - 1), 1e-3) << "the test needs a running b that differs from the bootstrap's";
+    const Film &film = *job.film;
+    auto layer = [&](const std::string &name) {
+        for (int l = 0; l < film.numLayers(); ++l)
+            if (film.layerName(l) == name) return film.layerImage(l);
+        ADD_FAILURE() << "no film layer " << name;
+        return Image();
+    };
+    const Image primal = layer("gd.lt.primal"), dxf = layer("gd.lt.dxf"), dxb = layer("gd.lt.dxb"),
+                dyf = layer("gd.lt.dyf"), dyb = layer("gd.lt.dyb");
+    const Image outP = res.image.layerRGB("primal"), outX = res.image.layerRGB("dx"), outY = res.image.layerRGB("dy");
+    // Errors relative to the value plus a floor of 1e-3 of the largest primal
+    // (gradients sum two float layers: cancellation).
+    double floor = 0;
+    for (float v : primal.data()) floor = std::max(floor, 1e-3 * b * std::abs(double(v)));
+    double maxP = 0, maxG = 0;
+    int64_t nonzero = 0;
+    for (int y = 0; y < primal.height(); ++y)
+        for (int x = 0; x < primal.width(); ++x)
+            for (int c = 0; c < 3; ++c) {
+                auto rel = [&](double got, double want) { return std::abs(got - want) / (std::abs(want) + floor); };
+                const double p = primal.at(x, y, c), gx = double(dxf.at(x, y, c)) + dxb.at(x, y, c),
+                             gy = double(dyf.at(x, y, c)) + dyb.at(x, y, c);
+                nonzero += gx != 0;
+                maxP = std::max(maxP, rel(outP.at(x, y, c), b * p));
+                maxG = std::max({maxG, rel(outX.at(x, y, c), b * gx), rel(outY.at(x, y, c), b * gy)});
+            }
+    EXPECT_GT(nonzero, 0);
+    EXPECT_LT(maxP, 1e-5) << "primal not the film's sums times b = " << b << " (bootstrap's " << b0 << ")";
+    EXPECT_LT(maxG, 1e-5) << "gradients not the film's sums times b = " << b << " (bootstrap's " << b0 << ")";
+}
+
 }  // namespace
 }  // namespace gradus::mlt_test

@@ -41,7 +41,7 @@
 //   integer chains 1000                Markov chains
 //   integer mutationsperpixel 100      mutations per pixel when --spp is not given
 //   integer directsamples 0            direct light by the path tracer (above); 0: the chains
-//   float normalizationsamples 0.05    bidirectional samples per mutation that refine b (pmlt.h),
+//   float normalizationsamples 0.005   bidirectional samples per mutation that refine b (pmlt.h),
 //                                        weighed to f as the bootstrap's
 //   integer rrdepth 3                  Russian roulette in the bootstrap's subpaths (-1: off)
 //   float bidirectional 1              selection weights of the mutations (the shift walks

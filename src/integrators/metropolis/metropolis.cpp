@@ -120,17 +120,16 @@ void MetropolisIntegrator::drawIndependent(int64_t i, const PassMutations &pass,
     // or not the chain is active: they are independent of it.
     const double r = independentRate();
     const int64_t m0 = ChainShare(pass.first, i, pass.chains), m1 = ChainShare(pass.first + pass.count, i, pass.chains);
-    double sum = 0;
-    int64_t n = 0;
+    RunningSum &acc = independentSum(i);
     for (int64_t m = m0; m < m1; ++m) {
         const int64_t j = i + pass.chains * m;
         const int64_t n0 = int64_t(std::floor(double(j) * r)), n1 = int64_t(std::floor(double(j + 1) * r));
-        for (int64_t k = n0; k < n1; ++k, ++n) {
-            sum += independentSample(key, k, wk);
+        for (int64_t k = n0; k < n1; ++k) {
+            acc.sum += independentSample(key, k, wk);
+            acc.count += 1;
             wk.arena.reset();
         }
     }
-    addIndependent(i, sum, n);
 }
 
 void MetropolisIntegrator::updateNormalization() {

@@ -162,11 +162,10 @@ class MetropolisIntegrator : public Integrator {
     // weight w (a for the proposal, 1 - a for the current state); the film's
     // splat scale multiplies by b (3. above).
     double expectedValueScale(double w, double I) const { return w / I; }
-    // Adds independent samples of chain c's stratum (chain c's own thread, in its mutation order).
-    void addIndependent(int64_t c, double sum, int64_t count) {
-        chainSamples_[size_t(c)].sum += sum;
-        chainSamples_[size_t(c)].count += double(count);
-    }
+    // Chain c's independent samples of its stratum: its thread adds each
+    // sample as it draws it (one running sum in mutation order, whatever the
+    // split into passes).
+    RunningSum &independentSum(int64_t c) { return chainSamples_[size_t(c)]; }
     // Metadata of the normalisation: <name>_b_bootstrap, <name>_b_samples.
     void writeNormalizationMetadata(Metadata *m) const;
     double rescale() const { return MetropolisRescale(mutationsIssued_, nMutations_.load()); }

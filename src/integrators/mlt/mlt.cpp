@@ -353,7 +353,10 @@ int64_t MLTIntegrator::mutateChain(PassContext &ctx, int64_t i, int64_t count, R
     if (!(c.I > 0)) return 0;
     c.u.setRNG(&rng);
     StepCounts n;
-    for (int64_t k = 0; k < count; ++k) mutate(c, rng, rec, wk.arena, &n);
+    // The large steps are uniform states of the chain's depth: independent
+    // samples of b_d (Kelemen et al. 2002; the running normalisation).
+    RunningSum &large = independentSum(i);
+    for (int64_t k = 0; k < count; ++k) mutate(c, rng, rec, wk.arena, &n, &large);
     c.u.setRNG(nullptr);
     nSmall_ += n.small;
     nLarge_ += n.large;
@@ -362,13 +365,11 @@ int64_t MLTIntegrator::mutateChain(PassContext &ctx, int64_t i, int64_t count, R
     nZeroProposals_ += n.zero;
     nNonFinite_ += n.nonFinite;
     ctx.addNonFinite(uint64_t(n.nonFinite));
-    // The large steps are uniform states of the chain's depth: independent
-    // samples of b_d (Kelemen et al. 2002; the running normalisation).
-    addIndependent(i, n.largeSum, n.large);
     return count;
 }
 
-void MLTIntegrator::mutate(Chain &c, RNG &rng, SampleRecorder &rec, Arena &arena, StepCounts *n) const {
+void MLTIntegrator::mutate(Chain &c, RNG &rng, SampleRecorder &rec, Arena &arena, StepCounts *n,
+                           RunningSum *large) const {
     // 1. Proposal y (a small or large step of u) and its contribution.
     c.u.propose();
     const bool isLarge = c.u.largeStep();
@@ -379,7 +380,10 @@ void MLTIntegrator::mutate(Chain &c, RNG &rng, SampleRecorder &rec, Arena &arena
     const Float IY = Target(LY, &nf);
     n->nonFinite += nf;
     n->zero += IY == 0;
-    if (isLarge) n->largeSum += IY;
+    if (isLarge) {
+        large->sum += IY;
+        large->count += 1;
+    }
     // 2. Acceptance: Metropolis-Hastings a = min(1, I(y) T(y->x) / (I(x) T(x->y)))
     // (pbrt-v3 Sec. 13.4.1) with Kelemen et al.'s symmetric small and large
     // steps, T(x->y) = T(y->x): a = min(1, I(y) / I(x)). I(x) > 0 for every

@@ -147,7 +147,6 @@ class MLTIntegrator : public MetropolisIntegrator {
     // Counts of one chain's mutations in a pass (added to the totals after it).
     struct StepCounts {
         int64_t small = 0, large = 0, smallAccepted = 0, largeAccepted = 0, zero = 0, nonFinite = 0;
-        double largeSum = 0;  // summed I of the large-step proposals (the running b)
     };
 
     // The driver's hooks (metropolis/metropolis.h).
@@ -175,7 +174,8 @@ class MLTIntegrator : public MetropolisIntegrator {
     int64_t rowOf(int64_t i) const;
     uint64_t stateKey(int64_t d, int64_t k) const { return uint64_t(k * (set_.maxDepth + 1) + d); }
     // One mutation of chain c: proposal, acceptance, splats, the step.
-    void mutate(Chain &c, RNG &rng, SampleRecorder &rec, Arena &arena, StepCounts *n) const;
+    // (large: the chain's running sum of its large steps' I, metropolis.h)
+    void mutate(Chain &c, RNG &rng, SampleRecorder &rec, Arena &arena, StepCounts *n, RunningSum *large) const;
     void splatMutation(const Chain &c, const Spectrum &LY, Float IY, Point2 pY, Float a, bool isLarge,
                        SampleRecorder &rec) const;
 

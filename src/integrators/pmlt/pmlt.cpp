@@ -46,7 +46,7 @@ ParamTable<PMLTSettings> PMLTParamTable() {
               "direct light (at most one scattering vertex) by this many samples per pixel in the first pass "
               "instead of the chains (0: the chains render it)",
               AtLeast(0));
-    t.real("normalizationsamples", &S::normalizationSamples, 0.05,
+    t.real("normalizationsamples", &S::normalizationSamples, 0.005,
            "bidirectional samples per mutation drawn beside the chains to refine b, the image's normalisation "
            "(0: b from the bootstrap alone)",
            Range{0, 1e6});

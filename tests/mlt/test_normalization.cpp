@@ -45,6 +45,16 @@ TEST(MetropolisNormalisation, FurnaceMeanMLT) {
     ExpectConverges("mlt furnace", Ratios(scene, FurnaceMean(), 16, 501));
 }
 
+// largestepmis: the chain's part scales with the running b, the large
+// steps' part (their own film layer, added to the main image) does not.
+TEST(MetropolisNormalisation, FurnaceMeanMLTLargeStepMIS) {
+    const std::string scene = Furnace("Integrator \"mlt\" " + kDepthParam +
+                                          "\"integer bootstrapsamples\" [50] \"integer chains\" [256] "
+                                          "\"bool largestepmis\" [true]",
+                                      64);
+    ExpectConverges("mlt furnace, largestepmis", Ratios(scene, FurnaceMean(), 16, 551));
+}
+
 TEST(MetropolisNormalisation, FurnaceMeanPMLT) {
     const std::string scene = Furnace("Integrator \"pmlt\" " + kDepthParam +
                                           "\"integer bootstrapsamples\" [20] \"integer chains\" [256] "

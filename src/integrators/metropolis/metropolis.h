@@ -77,7 +77,8 @@ class MetropolisIntegrator : public Integrator {
     void preprocess(const Scene &scene, Film &film) override { film_ = &film; }
     void beginPass(PassContext &ctx) override;  // first pass: the bootstrap
     void runPass(PassContext &ctx) override;    // the chains' share of the pass's mutations
-    // Main image scaled by issued / performed mutations; metadata <name()>_*.
+    // Metadata <name()>_* (the film's splat scale already carries b and
+    // issued / performed mutations).
     void finish(const Film &film, const RenderStats &stats, Image *out) override;
     std::string saveState() const override;
     void loadState(const std::string &state) override;
@@ -149,7 +150,8 @@ class MetropolisIntegrator : public Integrator {
     // Sets the film's splat scales (default: the main image's to b x rescale).
     virtual void scaleFilm(Film &film, double b, double rescale) const { film.setSplatScale(-1, b * rescale); }
 
-    // ---- hooks: checkpoints (after magic, b, issued and performed mutations)
+    // ---- hooks: checkpoints (after magic, the bootstrap's b, issued and
+    // performed mutations and the strata)
     virtual void saveCounters(std::string *s) const {}
     virtual bool loadCounters(const std::string &s, size_t *at) { return true; }
     virtual void saveChain(int64_t c, std::string *s) const = 0;
@@ -169,7 +171,7 @@ class MetropolisIntegrator : public Integrator {
     // Metadata of the normalisation: <name>_b_bootstrap, <name>_b_samples.
     void writeNormalizationMetadata(Metadata *m) const;
     double rescale() const { return MetropolisRescale(mutationsIssued_, nMutations_.load()); }
-    // Statistics lines of the driver: the interrupted pass's scale, the warning.
+    // Statistics lines of the driver: b, the interrupted pass's scale, the warning.
     std::string driverStatistics() const;
 
     double b_ = 0;   // the current normalisation (running or the bootstrap's)

@@ -169,7 +169,7 @@ void MetropolisIntegrator::finish(const Film &, const RenderStats &, Image *out)
 
 void MetropolisIntegrator::writeNormalizationMetadata(Metadata *m) const {
     (*m)[name() + "_b_bootstrap"] = MetaValue::Double(b0_);
-    (*m)[name() + "_b_samples"] = MetaValue::Int(independentSamples());
+    (*m)[name() + "_b_samples"] = MetaValue::Int(runningNormalization() ? independentSamples() : 0);
 }
 
 std::string MetropolisIntegrator::driverStatistics() const {

@@ -168,7 +168,8 @@ class MetropolisIntegrator : public Integrator {
     // sample as it draws it (one running sum in mutation order, whatever the
     // split into passes).
     RunningSum &independentSum(int64_t c) { return chainSamples_[size_t(c)]; }
-    // Metadata of the normalisation: <name>_b_bootstrap, <name>_b_samples.
+    // Metadata of the normalisation: <name>_b_bootstrap, <name>_b_samples (the
+    // independent samples in b; 0 when b is the bootstrap's).
     void writeNormalizationMetadata(Metadata *m) const;
     double rescale() const { return MetropolisRescale(mutationsIssued_, nMutations_.load()); }
     // Statistics lines of the driver: b, the interrupted pass's scale, the warning.

@@ -1,5 +1,6 @@
 #include "render/film.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <cstdio>
@@ -64,7 +65,24 @@ int Film::addLayer(const std::string &name, LayerUse use, bool written) {
     const size_t n = size_t(bounds_.area());
     layers_.emplace_back(use != LayerUse::Splats ? n : 0, Spectrum(0));
     layerSplats_.emplace_back(use != LayerUse::Samples ? n : 0, Spectrum(0));
+    layerSplatScale_.push_back(1);
     return numLayers() - 1;
+}
+
+void Film::setSplatScale(int layer, double s) {
+    std::unique_lock<std::mutex> lock(watchMutex_, std::defer_lock);
+    if (watcher_) lock.lock();
+    double &at = layer < 0 ? mainSplatScale_ : layerSplatScale_[size_t(layer)];
+    if (at == s) return;
+    at = s;
+    if (watcher_) watcher_->merged(bounds_, true);  // every splat's weight changed
+}
+
+void Film::addSplatsToMain(int layer) {
+    GRADUS_CHECK(layer >= 0 && layer < numLayers() && !layerSplats_[size_t(layer)].empty() &&
+                 layers_[size_t(layer)].empty() && !layerWritten_[size_t(layer)]);
+    if (std::find(mainSplatLayers_.begin(), mainSplatLayers_.end(), layer) == mainSplatLayers_.end())
+        mainSplatLayers_.push_back(layer);
 }
 
 std::unique_ptr<FilmTile> Film::makeTile(const Bounds2i &samplePixels) const {
@@ -190,7 +208,10 @@ float Film::toOutput(double v) const {
 Spectrum Film::mainPixel(size_t i) const {
     Spectrum v(0);
     if (weight_[i] != 0) v = sum_[i] / weight_[i];
-    if (splatSpp_ > 0) v += splat_[i] / splatSpp_;
+    if (splatSpp_ > 0) {
+        v += splat_[i] * mainSplatScale_ / splatSpp_;  // (scale 1: exactly splat / spp)
+        for (int l : mainSplatLayers_) v += layerSplats_[size_t(l)][i] * layerSplatScale_[size_t(l)] / splatSpp_;
+    }
     return v * scale_;
 }
 
@@ -206,7 +227,8 @@ Image Film::mainImage() const {
 
 Spectrum Film::layerPixel(int layer, size_t i) const {
     Spectrum v = count_[i] > 0 && !layers_[layer].empty() ? layers_[layer][i] / count_[i] : Spectrum(0);
-    if (splatSpp_ > 0 && !layerSplats_[layer].empty()) v += layerSplats_[layer][i] / splatSpp_;
+    if (splatSpp_ > 0 && !layerSplats_[layer].empty())
+        v += layerSplats_[layer][i] * layerSplatScale_[size_t(layer)] / splatSpp_;
     return v * scale_;
 }
 

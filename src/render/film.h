@@ -81,6 +81,16 @@ class Film {
     // each layer listed; safe while other threads merge.
     void readPixels(const Bounds2i &b, const std::vector<int> &layers, float *out) const;
     double splatSamples() const { return splatSpp_; }
+    // Factor on the splats of the main image (layer -1) or of a layer,
+    // applied whenever the film is read (toImage, readPixels, layerValues):
+    // an integrator whose splat normalisation is refined during the render
+    // keeps unnormalised sums and sets the current factor (Metropolis: b).
+    // 1 by default; not part of saveState (the integrator's state holds it).
+    void setSplatScale(int layer, double s);
+    double splatScale(int layer) const { return layer < 0 ? mainSplatScale_ : layerSplatScale_[size_t(layer)]; }
+    // The splats of `layer` (a LayerUse::Splats layer, not written) are also
+    // part of the main image, times the layer's splat scale.
+    void addSplatsToMain(int layer);
 
     // Final images (cropped size).
     Image mainImage() const;
@@ -124,6 +134,9 @@ class Film {
     std::vector<std::vector<Spectrum>> layers_;
     std::vector<std::vector<Spectrum>> layerSplats_;
     double splatSpp_ = 0;
+    double mainSplatScale_ = 1;
+    std::vector<double> layerSplatScale_;
+    std::vector<int> mainSplatLayers_;  // layers whose splats the main image adds (addSplatsToMain)
     bool variance_ = false;
     float toOutput(double v) const;
     Spectrum layerPixel(int layer, size_t i) const;

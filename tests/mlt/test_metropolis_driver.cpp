@@ -84,14 +84,17 @@ class ToyMetropolis : public MetropolisIntegrator {
           inactive_(inactive) {}
     std::string name() const override { return "toy"; }
 
+    double sampleValue = -1;  // >= 0: each mutation adds an independent sample of this value to b
+    bool running = true;      // runningNormalization()
     std::vector<double> I;                   // per chain
     std::vector<int64_t> start, mutations;  // per chain: its candidate, its mutations
     std::map<int64_t, int64_t> startCount;  // candidate -> chains started there
 
   protected:
-    BootstrapWeights weighBootstrap(PassContext &, uint64_t) override { return {w_, divisor_}; }
+    BootstrapWeights weighBootstrap(PassContext &, uint64_t) override { return {w_, divisor_, {}}; }
     std::string emptyBootstrapWarning() const override { return "toy: no weight"; }
     int chainsParameter() const override { return chains_; }
+    bool runningNormalization() const override { return running; }
     bool allocateChains(uint64_t n) override {
         if (n > uint64_t(chains_)) return false;
         I.assign(size_t(n), 0.0);
@@ -111,6 +114,10 @@ class ToyMetropolis : public MetropolisIntegrator {
     int64_t mutateChain(PassContext &ctx, int64_t c, int64_t count, RNG &rng, SampleRecorder &rec,
                         Worker &) override {
         mutations[size_t(c)] += count;
+        for (int64_t k = 0; sampleValue >= 0 && k < count; ++k) {
+            independentSum(c).sum += sampleValue;
+            independentSum(c).count += 1;
+        }
         if (c == inactive_) return 0;
         const Bounds2i px = ctx.film().pixelBounds();
         const double i = I[size_t(c)];
@@ -211,13 +218,45 @@ TEST(MetropolisDriver, EmptyBootstrapGivesBlackImageAndWarning) {
     EXPECT_EQ(r.image.metadata.at("toy_warning").str(), "toy: no weight");
 }
 
+// The running normalisation: b = (bootstrap sum + samples' sum) / (divisor +
+// samples), applied by the film to every splat made so far (the image mean is
+// the final b, whatever the pass split); "bootstrap" keeps the bootstrap's.
+TEST(MetropolisDriver, RunningNormalisationScalesEverySplatByTheCurrentB) {
+    for (int perPass : {1, 2, 5}) {
+        auto toy = Toy(kWeights, 7);
+        toy->sampleValue = 4;
+        const ToyRender r = RenderToy(std::move(toy), 5, perPass);
+        const double M = 5 * 64;  // one sample per mutation
+        const double want = (8 + 4 * M) / (4 + M);
+        EXPECT_DOUBLE_EQ(r.toy->bootstrapB(), 2);
+        EXPECT_NEAR(r.toy->b(), want, 1e-12) << perPass << " spp per pass";
+        EXPECT_EQ(r.toy->independentSamples(), int64_t(M));
+        EXPECT_NEAR(MeanLum(r.image) / want, 1, 1e-6) << "the image carries the final b";
+        EXPECT_EQ(r.image.metadata.at("toy_b").number(), r.toy->b());
+        EXPECT_EQ(r.image.metadata.at("toy_b_bootstrap").number(), 2);
+        EXPECT_EQ(r.image.metadata.at("toy_b_samples").str(), std::to_string(int64_t(M)));
+        // A checkpoint restores the samples and with them b.
+        ToyMetropolis back(kWeights, 4, 7);
+        back.loadState(r.toy->saveState());
+        EXPECT_EQ(back.b(), r.toy->b());
+    }
+    auto toy = Toy(kWeights, 7);
+    toy->sampleValue = 4;
+    toy->running = false;
+    const ToyRender r = RenderToy(std::move(toy), 5, 2);
+    EXPECT_EQ(r.toy->b(), 2);
+    EXPECT_NEAR(MeanLum(r.image) / 2, 1, 1e-6);
+}
+
 // Checkpoints: magic, b, issued and performed mutations, the chains; any
 // other bytes are refused with the integrator's state name.
 TEST(MetropolisDriver, CheckpointFramingRoundTripsAndRefuses) {
     const ToyRender r = RenderToy(Toy(kWeights, 6), 3, 1);
     const ToyMetropolis &toy = *r.toy;
     const std::string s = toy.saveState();
-    EXPECT_EQ(s.size(), 4 + 8 + 8 + 8 + 8 + 6 * sizeof(double));
+    // magic, b0, issued, performed, one stratum (count, sum, count), the chain
+    // count, per chain its samples (sum, count) and its I.
+    EXPECT_EQ(s.size(), 4 + 8 + 8 + 8 + 8 + 16 + 8 + 6 * (16 + sizeof(double)));
     ToyMetropolis back(kWeights, 4, 6);
     back.loadState(s);
     EXPECT_EQ(back.b(), 2);

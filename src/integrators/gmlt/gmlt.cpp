@@ -6,6 +6,7 @@
 
 #include "core/error.h"
 #include "integrators/factories.h"
+#include "render/state_bytes.h"
 #include "samplers/rng_sampler.h"
 
 namespace gradus {
@@ -213,7 +214,9 @@ void GMLTIntegrator::finish(const Film &film, const RenderStats &stats, Image *o
     Image directImage;
     if (direct) directImage = out->layerRGB("");  // the path tracer's direct light (the film's main image)
     rescale_ = rescale();
-    finishGradients(film, stats, gset_.norm, gset_.alpha, out, rescale_);
+    // The chains' splats are without b (metropolis.h): the gradients and the
+    // coarse primal by the same b, before the reconstruction.
+    finishGradients(film, stats, gset_.norm, gset_.alpha, out, rescale_ * b_);
     if (direct) {
         // Direct light is added after the solve (Sec. 7), to the primal and every reconstruction.
         const std::vector<std::string> layers = out->layers();
@@ -234,7 +237,12 @@ void GMLTIntegrator::finish(const Film &film, const RenderStats &stats, Image *o
         }
     }
     WriteMetropolisMetadata(&out->metadata, name(), b_, nMutations_.load(), int64_t(chains_.size()), warning_);
+    writeNormalizationMetadata(&out->metadata);
 }
+
+void GMLTIntegrator::saveCounters(std::string *s) const { PutBytes(s, tau_); }
+
+bool GMLTIntegrator::loadCounters(const std::string &s, size_t *at) { return GetBytes(s, at, &tau_) && tau_ >= 0; }
 
 std::string GMLTIntegrator::statistics() const {
     std::ostringstream o;

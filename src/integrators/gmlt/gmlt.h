@@ -21,7 +21,11 @@
 // integral of f over the extended space: each bdpt strategy's contribution
 // C is weighted 4 f(x, d) / Y(F(x)) with one uniform d per strategy (an
 // unbiased estimate of the sum over the four directions), and chains start at
-// candidates drawn in proportion (no start-up bias). Candidates below the mean
+// candidates drawn in proportion (no start-up bias); b converges with the
+// render as pmlt's (independent bidirectional samples weighed as the
+// bootstrap's), and the film keeps the splats without b: the gradients and
+// the coarse primal are scaled by the same current b before the
+// reconstruction. Candidates below the mean
 // luminance tau of a 4096-sample pilot go through Russian roulette first
 // (kept with probability lum / tau, weight tau / lum): the shift of every
 // candidate tripled pmlt's bootstrap time (glass cube: 1.05 s -> 3.8 s).
@@ -37,6 +41,8 @@
 //   integer chains 1000                Markov chains
 //   integer mutationsperpixel 100      mutations per pixel when --spp is not given
 //   integer directsamples 0            direct light by the path tracer (above); 0: the chains
+//   float normalizationsamples 0.005   bidirectional samples per mutation that refine b (pmlt.h),
+//                                        weighed to f as the bootstrap's
 //   integer rrdepth 3                  Russian roulette in the bootstrap's subpaths (-1: off)
 //   float bidirectional 1              selection weights of the mutations (the shift walks
 //   float lens 1                         second chains whatever the manifold weight)
@@ -103,6 +109,9 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
     double candidateWeight(const Sample &smp, int64_t k, int s, int t, const ConnectSamples &cu, double lum,
                            uint64_t key, Arena &arena) const override;
     void prepareBootstrap(PassContext &ctx, uint64_t key) override;
+    // The roulette threshold tau (the independent samples after a resume weigh with it).
+    void saveCounters(std::string *s) const override;
+    bool loadCounters(const std::string &s, size_t *at) override;
     int64_t runMutations(Chain &ch, int64_t count, pmlt::State &x, Arena &cur, RNG &rng, SampleRecorder &rec,
                          Worker &wk) override;
 

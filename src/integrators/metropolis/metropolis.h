@@ -12,12 +12,30 @@
 //      any split into passes gives every chain the same mutations.
 //   3. Splat normalisation: a mutation splats its proposal with weight a and
 //      its current state with 1 - a (expected values, Veach and Guibas 1997),
-//      each as b f / I (expectedValueScale); the film divides by the
-//      mutations per pixel, so the image is b / (mutations per pixel) times
-//      the summed f / I (pbrt-v3 Sec. 16.4.5). An interrupt can skip chains
-//      of the last pass: finish scales by issued / performed mutations.
-//   4. Checkpoints: magic, b, issued and performed mutations, the
-//      integrator's counters, the chain count, then each chain.
+//      each as f / I (expectedValueScale, without b); the film divides by
+//      the mutations per pixel and multiplies the splats by its splat scale,
+//      which the driver sets after every pass to b times issued / performed
+//      mutations (an interrupt or an inactive chain skips mutations). So the
+//      film keeps unnormalised sums and every image read from it (the final
+//      one, the live display) carries the current b (pbrt-v3 Sec. 16.4.5
+//      fixes b by the bootstrap and splats b f / I).
+//   4. Normalisation b ("running", the default): per stratum (mlt: a path
+//      depth; pmlt, gmlt: one) the bootstrap's sum and count of target values
+//      I, plus each chain's independent samples of its stratum (mlt: the
+//      large steps, uniform in primary sample space, Kelemen et al. 2002;
+//      pmlt, gmlt: bidirectional samples drawn beside the chain as the
+//      bootstrap's, independentRate() per mutation): b = sum over strata of
+//      (bootstrap sum + samples' sum) / (bootstrap count + samples' count),
+//      the two estimates combined by sample count. Consistent (b times the
+//      chains' sums is a ratio estimate: bias O(1 / samples)), and its
+//      seed-to-seed spread shrinks with the render instead of staying the
+//      bootstrap's; "bootstrap" keeps b = the bootstrap's estimate (pbrt-v3,
+//      unbiased for any bootstrap size). Each chain sums its samples in its
+//      own order and the strata add the chains in index order: b does not
+//      depend on the thread count nor on the split into passes.
+//   5. Checkpoints: magic, the bootstrap's b, issued and performed
+//      mutations, the bootstrap's strata, the integrator's counters, the
+//      chain count, then per chain its samples' sum and count and its state.
 // Virtual hooks rather than a template on the chain type: the chain types
 // stay private to their integrators, gmlt overrides pmlt's hooks as a plain
 // subclass, the driver compiles once here, and a hook runs once per chain and
@@ -55,15 +73,20 @@ void WriteMetropolisMetadata(Metadata *m, const std::string &prefix, double b, i
 
 class MetropolisIntegrator : public Integrator {
   public:
+    // Records the film whose splat scale carries b (integrators call it first).
+    void preprocess(const Scene &scene, Film &film) override { film_ = &film; }
     void beginPass(PassContext &ctx) override;  // first pass: the bootstrap
     void runPass(PassContext &ctx) override;    // the chains' share of the pass's mutations
-    // Main image scaled by issued / performed mutations; metadata <name()>_*.
+    // Metadata <name()>_* (the film's splat scale already carries b and
+    // issued / performed mutations).
     void finish(const Film &film, const RenderStats &stats, Image *out) override;
     std::string saveState() const override;
     void loadState(const std::string &state) override;
     bool independentPasses() const override { return false; }
 
-    double b() const { return b_; }
+    double b() const { return b_; }                  // the current normalisation
+    double bootstrapB() const { return b0_; }        // the bootstrap's estimate
+    int64_t independentSamples() const;              // the chains' samples of b so far
     // Set when the bootstrap found no light-carrying path (the image is black).
     const std::string &warning() const { return warning_; }
 
@@ -78,9 +101,15 @@ class MetropolisIntegrator : public Integrator {
         : stateName_(std::move(stateName)), magic_(magic), tags_(tags) {}
 
     // ---- hooks: the bootstrap (beginPass of the first pass)
+    // A sum of target values and its sample count (one stratum of b).
+    struct RunningSum {
+        double sum = 0, count = 0;
+    };
     struct BootstrapWeights {
         std::vector<double> weights;  // per candidate, in a fixed order (chain starts index them)
         double divisor = 1;           // b = (sum of the weights) / divisor
+        // The strata of the running b (empty: one, {sum of the weights, divisor}).
+        std::vector<RunningSum> strata;
     };
     // Samples and weighs the candidates (key: seed ^ tags.bootstrap).
     virtual BootstrapWeights weighBootstrap(PassContext &ctx, uint64_t key) = 0;
@@ -106,7 +135,23 @@ class MetropolisIntegrator : public Integrator {
     virtual int64_t mutateChain(PassContext &ctx, int64_t c, int64_t count, RNG &rng, SampleRecorder &rec,
                                 Worker &wk) = 0;
 
-    // ---- hooks: checkpoints (after magic, b, issued and performed mutations)
+    // ---- hooks: the running normalisation (4. above)
+    // False: b stays the bootstrap's (mlt's "normalization" "bootstrap").
+    virtual bool runningNormalization() const { return true; }
+    // The stratum of chain c's independent samples (mlt: its depth).
+    virtual int chainStratum(int64_t c) const { return 0; }
+    // Independent samples the driver draws per mutation (pmlt, gmlt); sample
+    // n is drawn by the chain running mutation j when floor(j r) <= n <
+    // floor((j + 1) r). 0: none (mlt adds its large steps itself).
+    virtual double independentRate() const { return 0; }
+    // Target value of independent sample n (key: the driver's stream of them;
+    // wk.arena is free and reset afterwards).
+    virtual double independentSample(uint64_t key, int64_t n, Worker &wk) { return 0; }
+    // Sets the film's splat scales (default: the main image's to b x rescale).
+    virtual void scaleFilm(Film &film, double b, double rescale) const { film.setSplatScale(-1, b * rescale); }
+
+    // ---- hooks: checkpoints (after magic, the bootstrap's b, issued and
+    // performed mutations and the strata)
     virtual void saveCounters(std::string *s) const {}
     virtual bool loadCounters(const std::string &s, size_t *at) { return true; }
     virtual void saveChain(int64_t c, std::string *s) const = 0;
@@ -115,14 +160,23 @@ class MetropolisIntegrator : public Integrator {
     // ---- for the integrators
     // A bootstrap candidate drawn in proportion to its weight (chain starts).
     int64_t drawCandidate(RNG &pick) const;
-    // Expected-value splat scale b w / I of a state of target I splatted with
-    // weight w (a for the proposal, 1 - a for the current state).
-    double expectedValueScale(double w, double I) const { return b_ * w / I; }
+    // Expected-value splat scale w / I of a state of target I splatted with
+    // weight w (a for the proposal, 1 - a for the current state); the film's
+    // splat scale multiplies by b (3. above).
+    double expectedValueScale(double w, double I) const { return w / I; }
+    // Chain c's independent samples of its stratum: its thread adds each
+    // sample as it draws it (one running sum in mutation order, whatever the
+    // split into passes).
+    RunningSum &independentSum(int64_t c) { return chainSamples_[size_t(c)]; }
+    // Metadata of the normalisation: <name>_b_bootstrap, <name>_b_samples (the
+    // independent samples in b; 0 when b is the bootstrap's).
+    void writeNormalizationMetadata(Metadata *m) const;
     double rescale() const { return MetropolisRescale(mutationsIssued_, nMutations_.load()); }
-    // Statistics lines of the driver: the interrupted pass's scale, the warning.
+    // Statistics lines of the driver: b, the interrupted pass's scale, the warning.
     std::string driverStatistics() const;
 
-    double b_ = 0;
+    double b_ = 0;   // the current normalisation (running or the bootstrap's)
+    double b0_ = 0;  // the bootstrap's
     std::string warning_;
     int64_t mutationsIssued_ = 0;  // running mutation index (round-robin over the chains)
     std::atomic<int64_t> nMutations_{0}, nStartMismatch_{0};
@@ -132,6 +186,10 @@ class MetropolisIntegrator : public Integrator {
     void bootstrap(PassContext &ctx);
     double accumulateWeights(BootstrapWeights w);  // the weights' running sums; returns b
     void startChains(PassContext &ctx, uint64_t key);
+    // Chain i's independent samples of one pass (independentRate() > 0).
+    void drawIndependent(int64_t i, const PassMutations &pass, uint64_t key, Worker &wk);
+    // b from the strata and the chains' samples; the film's splat scale.
+    void updateNormalization();
     PassMutations scheduleMutations(const PassContext &ctx);
     [[noreturn]] void refuse() const;  // a checkpoint state that is not this integrator's
 
@@ -139,6 +197,9 @@ class MetropolisIntegrator : public Integrator {
     uint32_t magic_;
     Tags tags_;
     std::vector<double> cdf_;  // running sums of the bootstrap weights (until the chains start)
+    std::vector<RunningSum> strata_;        // the bootstrap's, per stratum
+    std::vector<RunningSum> chainSamples_;  // per chain: its independent samples
+    Film *film_ = nullptr;
 };
 
 }  // namespace gradus

@@ -21,7 +21,7 @@ namespace {
 constexpr uint64_t kBootstrapTag = 0x6d6c740000000001ULL;
 constexpr uint64_t kChainTag = 0x6d6c740000000002ULL;
 constexpr uint64_t kMutationTag = 0x6d6c740000000003ULL;
-constexpr uint32_t kMLTStateMagic = 0x544c4d32;  // "2MLT"
+constexpr uint32_t kMLTStateMagic = 0x544c4d33;  // "3MLT" (with the running normalisation)
 
 ParamTable<MLTSettings> Table() {
     using S = MLTSettings;
@@ -41,6 +41,9 @@ ParamTable<MLTSettings> Table() {
            Range{1e-7, 1, "a positive deviation within the unit interval"});
     t.boolean("largestepmis", &S::largeStepMIS, false,
               "count large steps also as independent samples (Kelemen et al. 2002, balance heuristic; mlt.h)");
+    t.enumeration("normalization", &S::normalization, "running", {"running", "bootstrap"},
+                  "b, the image's normalisation: running = the bootstrap's estimate refined by every large step "
+                  "(its seed-to-seed spread shrinks with the render); bootstrap = the bootstrap's alone (pbrt-v3)");
     return t;
 }
 
@@ -66,6 +69,7 @@ MLTIntegrator::MLTIntegrator(const EntityDesc &desc)
       loc_(desc.loc) {}
 
 void MLTIntegrator::preprocess(const Scene &scene, Film &film) {
+    MetropolisIntegrator::preprocess(scene, film);
     // Path vertices name media by a one-byte index (path_vertex.h).
     if (scene.features.media && scene.media.size() > 255)
         throw Error(loc_, "mlt supports at most 255 media (the scene has " + std::to_string(scene.media.size()) + ")");
@@ -89,6 +93,17 @@ void MLTIntegrator::preprocess(const Scene &scene, Film &film) {
     pixels_ = film.pixelBounds();
     const Point2i full = film.fullResolution();
     splatScale_ = pixels_.area() > 0 ? Float(int64_t(full.x) * full.y) / Float(pixels_.area()) : 1;
+    // largestepmis: the large steps' part of the image does not scale with b
+    // (mlt.h): its own splats, part of the main image.
+    if (set_.largeStepMIS) {
+        largeLayer_ = film.addLayer("mlt.largesteps", LayerUse::Splats, false);
+        film.addSplatsToMain(largeLayer_);
+    }
+}
+
+void MLTIntegrator::scaleFilm(Film &film, double b, double rescale) const {
+    MetropolisIntegrator::scaleFilm(film, b, rescale);
+    if (largeLayer_ >= 0) film.setSplatScale(largeLayer_, rescale);
 }
 
 Spectrum MLTIntegrator::contribution(PrimarySampler &u, int depth, Arena &arena, Point2 *pRaster) const {
@@ -207,6 +222,9 @@ MetropolisIntegrator::BootstrapWeights MLTIntegrator::weighBootstrap(PassContext
     BootstrapWeights w;
     w.weights.resize(bootstrapI_.size());
     nBootstrapNonZero_ = 0;
+    // The running b's strata: per depth the sum of I and N_d (metropolis.h).
+    w.strata.assign(size_t(depths), RunningSum());
+    for (int64_t d = 0; d < depths; ++d) w.strata[size_t(d)].count = double(perDepth_[size_t(d)]);
     std::vector<double> invN(static_cast<size_t>(depths));
     for (int64_t d = 0; d < depths; ++d) invN[size_t(d)] = 1.0 / double(perDepth_[size_t(d)]);
     bDepth_.assign(size_t(depths), 0.0);
@@ -215,6 +233,7 @@ MetropolisIntegrator::BootstrapWeights MLTIntegrator::weighBootstrap(PassContext
             const size_t d = size_t(i - rowStart_[size_t(k)]);
             w.weights[size_t(i)] = bootstrapI_[size_t(i)] * invN[d];
             bDepth_[d] += bootstrapI_[size_t(i)] * invN[d];
+            w.strata[d].sum += bootstrapI_[size_t(i)];
             nBootstrapNonZero_ += bootstrapI_[size_t(i)] > 0;
         }
     return w;
@@ -314,7 +333,7 @@ void MLTIntegrator::beginChains(PassContext &) {
     // chain starts at depth d. The large steps' own estimate is normalised by
     // their realised count, M x largestepprobability x (chains at d) / chains.
     if (chains_.empty()) return;
-    const double b = b_;
+    const double b = b0_;
     const int64_t nChains = int64_t(chains_.size());
     qLarge_.assign(size_t(set_.maxDepth) + 1, 0.0);
     largeNorm_.assign(qLarge_.size(), 0.0);
@@ -334,7 +353,10 @@ int64_t MLTIntegrator::mutateChain(PassContext &ctx, int64_t i, int64_t count, R
     if (!(c.I > 0)) return 0;
     c.u.setRNG(&rng);
     StepCounts n;
-    for (int64_t k = 0; k < count; ++k) mutate(c, rng, rec, wk.arena, &n);
+    // The large steps are uniform states of the chain's depth: independent
+    // samples of b_d (Kelemen et al. 2002; the running normalisation).
+    RunningSum &large = independentSum(i);
+    for (int64_t k = 0; k < count; ++k) mutate(c, rng, rec, wk.arena, &n, &large);
     c.u.setRNG(nullptr);
     nSmall_ += n.small;
     nLarge_ += n.large;
@@ -346,7 +368,8 @@ int64_t MLTIntegrator::mutateChain(PassContext &ctx, int64_t i, int64_t count, R
     return count;
 }
 
-void MLTIntegrator::mutate(Chain &c, RNG &rng, SampleRecorder &rec, Arena &arena, StepCounts *n) const {
+void MLTIntegrator::mutate(Chain &c, RNG &rng, SampleRecorder &rec, Arena &arena, StepCounts *n,
+                           RunningSum *large) const {
     // 1. Proposal y (a small or large step of u) and its contribution.
     c.u.propose();
     const bool isLarge = c.u.largeStep();
@@ -357,6 +380,10 @@ void MLTIntegrator::mutate(Chain &c, RNG &rng, SampleRecorder &rec, Arena &arena
     const Float IY = Target(LY, &nf);
     n->nonFinite += nf;
     n->zero += IY == 0;
+    if (isLarge) {
+        large->sum += IY;
+        large->count += 1;
+    }
     // 2. Acceptance: Metropolis-Hastings a = min(1, I(y) T(y->x) / (I(x) T(x->y)))
     // (pbrt-v3 Sec. 13.4.1) with Kelemen et al.'s symmetric small and large
     // steps, T(x->y) = T(y->x): a = min(1, I(y) / I(x)). I(x) > 0 for every
@@ -385,18 +412,20 @@ void MLTIntegrator::splatMutation(const Chain &c, const Spectrum &LY, Float IY, 
     if (set_.largeStepMIS) {
         // Kelemen et al. 2002, Sec. 4: balance heuristic of the chain (density
         // I / b) and the large steps (density q_d), weights w_c = (I/b) / (I/b + q_d)
-        // and w_l = q_d / (I/b + q_d). Chain states keep pbrt-v3's estimate
-        // b L / I times w_c (expected values as below); a large step adds
-        // L w_l / (its density per mutation at this depth, 1 / largeNorm).
-        const double b = b_;
+        // and w_l = q_d / (I/b + q_d), with the bootstrap's b and b_d (a fixed
+        // partition of unity). Chain states keep pbrt-v3's estimate b L / I
+        // times w_c (expected values as below): L w_c / I = L / (I + b q_d) to
+        // the main splats, which the film scales by the current b; a large step
+        // adds L w_l / (its density per mutation at this depth, 1 / largeNorm),
+        // which does not scale with b: to the large steps' layer.
+        const double b = b0_;
         const size_t d = size_t(c.depth);
         const double q = qLarge_[d];
         if (IY > 0) {
-            const double denY = IY / b + q;
-            const double wY = (a + (isLarge ? largeNorm_[d] * q : 0)) / denY;
-            rec.splat(pY, LY * Float(wY));
+            if (a > 0) rec.splat(pY, LY * Float(a / (IY + b * q)));
+            if (isLarge) rec.splat(pY, LY * Float(largeNorm_[d] * q / (IY / b + q)), largeLayer_);
         }
-        if (a < 1) rec.splat(c.pRaster, c.L * Float((1 - a) / (c.I / b + q)));
+        if (a < 1) rec.splat(c.pRaster, c.L * Float((1 - a) / (c.I + b * q)));
     } else {
         if (a > 0) rec.splat(pY, LY * expectedValueScale(a, IY));
         if (a < 1) rec.splat(c.pRaster, c.L * expectedValueScale(1 - a, c.I));
@@ -436,7 +465,7 @@ std::string MLTIntegrator::statistics() const {
     if (firstCut >= 0)
         o << "; bootstrapvertices " << set_.bootstrapVertices << " gives " << perDepth_[size_t(firstCut)]
           << " at depth " << firstCut << " down to " << perDepth_.back() << " at depth " << depths - 1;
-    o << "; " << nBootstrapNonZero_ << " carry light), b = " << b_ << "\n";
+    o << "; " << nBootstrapNonZero_ << " carry light), b = " << b0_ << "\n";
     o << "  chains: " << chains_.size() << "; mutations: " << nMutations_ << "\n";
     if (!chains_.empty()) {
         o << "  chains per depth:";

@@ -17,6 +17,16 @@
 //      and in the rest of the first.
 //   3. Each mutation splats current and proposed state with the expected-value
 //      weights, scaled by b; the film divides by the mutations per pixel.
+//   4. b converges with the render (normalization "running", the default;
+//      pbrt-v3 keeps the bootstrap's b, "bootstrap"): the large steps are
+//      uniform states of their chain's depth d, so b_d = (bootstrap's sum of
+//      I at d + the large steps' sum at d) / (N_d + their count), b = sum_d
+//      b_d; the film keeps the unnormalised splats and every image read from
+//      it carries the current b (metropolis/metropolis.h). With the bootstrap's
+//      b alone its relative spread from seed to seed stays ~ the bootstrap's
+//      (sd(I) / b / sqrt(N_d)) however long the render; running, it shrinks
+//      as 1 / sqrt(N_d + large steps). Running is consistent (ratio bias O(1 /
+//      samples)), pbrt-v3's is unbiased for any bootstrap size.
 // Passes: the render's "spp" is mutations per pixel (mutationsperpixel
 // without --spp); a pass of k spp runs k x (pixels) mutations, dealt to the
 // chains round-robin by a running mutation index, so any number of passes
@@ -42,6 +52,7 @@
 //   float largestepprobability 0.3      probability of a large step (independent proposal)
 //   float sigma 0.01                    standard deviation of a small step in primary sample space
 //   bool largestepmis false             also count large steps as independent samples (below)
+//   string normalization "running"      running | bootstrap (4. above; pbrt-v3: bootstrap)
 // largestepmis: Kelemen et al. 2002 (Sec. 4) combine the chain with its large
 // steps, which are uniform samples of primary sample space, by the balance
 // heuristic: chain density I / b, large-step density q_d = largestepprobability
@@ -49,11 +60,12 @@
 // w_c = (I/b) / (I/b + q_d) and w_l = q_d / (I/b + q_d). The chain's states
 // keep pbrt-v3's estimate (b L / I with expected values) times w_c; each
 // large step y adds L(y) w_l(y) divided by the large steps' realised density
-// at that depth (largestepprobability x chains at d / chains). Regions the
+// at that depth (largestepprobability x chains at d / chains): splats of their
+// own (a film layer added to the main image), as they do not scale with b. Regions the
 // chains almost never visit (a dim emitter beside one 1e18 times brighter)
 // get their light from the large steps. The weights use the bootstrap's b
-// and b_d, so the estimate is consistent (bias O(1 / bootstrap size)), not
-// unbiased for any bootstrap as pbrt-v3's; the image mean is no longer b.
+// and b_d (a fixed partition of unity), while the chain's part scales with the
+// (running) b; the image mean is no longer b.
 // Participating media as pbrt-v3's MLT (its subpaths and connections are
 // BDPT's): medium vertices on both subpaths and transmittance in the
 // connections (integrators/common/bidir.h). Every random number of the media
@@ -90,6 +102,7 @@ struct MLTSettings {
     Float largeStepProbability;
     Float sigma;
     bool largeStepMIS;
+    std::string normalization;
 };
 
 class MLTIntegrator : public MetropolisIntegrator {
@@ -144,6 +157,9 @@ class MLTIntegrator : public MetropolisIntegrator {
     int64_t chainCount() const override { return int64_t(chains_.size()); }
     int64_t startChain(int64_t c, RNG &pick, uint64_t key, Worker &wk) override;
     void releaseBootstrap() override { std::vector<double>().swap(bootstrapI_); }
+    bool runningNormalization() const override { return set_.normalization == "running"; }
+    int chainStratum(int64_t c) const override { return chains_[size_t(c)].depth; }
+    void scaleFilm(Film &film, double b, double rescale) const override;
     void beginChains(PassContext &ctx) override;
     int64_t mutateChain(PassContext &ctx, int64_t c, int64_t count, RNG &rng, SampleRecorder &rec,
                         Worker &wk) override;
@@ -158,7 +174,8 @@ class MLTIntegrator : public MetropolisIntegrator {
     int64_t rowOf(int64_t i) const;
     uint64_t stateKey(int64_t d, int64_t k) const { return uint64_t(k * (set_.maxDepth + 1) + d); }
     // One mutation of chain c: proposal, acceptance, splats, the step.
-    void mutate(Chain &c, RNG &rng, SampleRecorder &rec, Arena &arena, StepCounts *n) const;
+    // (large: the chain's running sum of its large steps' I, metropolis.h)
+    void mutate(Chain &c, RNG &rng, SampleRecorder &rec, Arena &arena, StepCounts *n, RunningSum *large) const;
     void splatMutation(const Chain &c, const Spectrum &LY, Float IY, Point2 pY, Float a, bool isLarge,
                        SampleRecorder &rec) const;
 
@@ -177,6 +194,7 @@ class MLTIntegrator : public MetropolisIntegrator {
     std::vector<Chain> chains_;
     // largestepmis (beginChains): q_d and the large steps' normaliser per depth.
     std::vector<double> qLarge_, largeNorm_;
+    int largeLayer_ = -1;  // largestepmis: the large steps' splats (part of the main image)
 
     std::atomic<int64_t> nSmall_{0}, nLarge_{0}, nSmallAccepted_{0}, nLargeAccepted_{0};
     std::atomic<int64_t> nZeroProposals_{0}, nNonFinite_{0};

@@ -25,7 +25,7 @@ constexpr uint64_t kChainTag = 0x706d6c7400000002ULL;
 constexpr uint64_t kMutationTag = 0x706d6c7400000003ULL;
 constexpr uint64_t kConnectTag = 0x706d6c7400000004ULL;
 constexpr uint64_t kDirectionTag = 0x706d6c7400000005ULL;
-constexpr uint32_t kPMLTStateMagic = 0x324c4d50;  // "PML2" (chains with their direction)
+constexpr uint32_t kPMLTStateMagic = 0x334c4d50;  // "PML3" (chains with their direction; the running b)
 
 }  // namespace
 
@@ -46,6 +46,10 @@ ParamTable<PMLTSettings> PMLTParamTable() {
               "direct light (at most one scattering vertex) by this many samples per pixel in the first pass "
               "instead of the chains (0: the chains render it)",
               AtLeast(0));
+    t.real("normalizationsamples", &S::normalizationSamples, 0.005,
+           "bidirectional samples per mutation drawn beside the chains to refine b, the image's normalisation "
+           "(0: b from the bootstrap alone)",
+           Range{0, 1e6});
     t.integer("rrdepth", &S::rrDepth, 3,
               "Russian roulette in the bootstrap's bidirectional subpaths after this many bounces (-1: off), "
               "as bdpt's default; an unbiased weighting of the candidates that keeps the bootstrap's cost "
@@ -90,6 +94,7 @@ PMLTIntegrator::PMLTIntegrator(const EntityDesc &desc, const PMLTSettings &set, 
 }
 
 void PMLTIntegrator::preprocess(const Scene &scene, Film &film) {
+    MetropolisIntegrator::preprocess(scene, film);
     ResetManifoldStats();
     lights_.clear();
     for (const auto &l : scene.lights) lights_.push_back(l.get());
@@ -227,6 +232,16 @@ MetropolisIntegrator::BootstrapWeights PMLTIntegrator::weighBootstrap(PassContex
     nBootstrapSamples_ = N;
     w.divisor = double(N);  // b = (sum of the luminances) / samples (pmlt.h)
     return w;
+}
+
+double PMLTIntegrator::independentSample(uint64_t key, int64_t n, Worker &wk) {
+    // A bidirectional sample drawn and weighed as the bootstrap's (its own
+    // key): an independent estimate of b (pmlt.h).
+    double sum = 0;
+    forEachStrategy(key, n, wk.arena, [&](const Sample &smp, int s, int t, const ConnectSamples &cu, double lum) {
+        sum += candidateWeight(smp, n, s, t, cu, lum, key, wk.arena);
+    });
+    return sum;
 }
 
 std::string PMLTIntegrator::emptyBootstrapWarning() const {
@@ -413,7 +428,7 @@ std::string PMLTIntegrator::statistics() const {
     std::ostringstream o;
     o << "Path-space MLT:\n";
     o << "  bootstrap: " << nBootstrapSamples_ << " bidirectional samples, " << nCandidates_
-      << " contributing strategies, b = " << b_ << "\n";
+      << " contributing strategies, b = " << b0_ << "\n";
     int64_t active = 0;
     for (const Chain &c : chains_) active += c.I > 0;
     o << "  chains: " << chains_.size() << " (" << active << " active); mutations: " << nMutations_ << "\n";

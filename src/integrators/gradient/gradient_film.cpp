@@ -98,29 +98,27 @@ void GradientFilm::record(SampleRecorder &rec, const GradientSample &s) const {
     // within the filter radius of the sample, with weight h(q - s).
     std::optional<Footprint> fp;
     if (filter_) fp.emplace(*filter_, filterNorm_, rec.pFilm(), rec.pixel());
-    // v to `layer` and the square of sq (v itself but for the primal) to layerSq (< 0: none).
-    auto put2 = [&](int layer, int layerSq, const Spectrum &v, const Spectrum &sq, Point2i offset) {
+    // v to `layer` and its square to layerSq (< 0: none).
+    auto put2 = [&](int layer, int layerSq, const Spectrum &v, Point2i offset) {
         const bool squares = variance_ && layerSq >= 0;
         if (!fp) {
             rec.addLayer(layer, v, offset);
-            if (squares) rec.addLayer(layerSq, sq * sq, offset);
+            if (squares) rec.addLayer(layerSq, v * v, offset);
             return;
         }
-        if (v.isBlack() && sq.isBlack()) return;  // adds nothing to either layer
+        if (v.isBlack()) return;  // adds nothing to either layer
         for (int i = 0; i < fp->size(); ++i) {
-            Spectrum hv = v * fp->weight(i), hs = sq * fp->weight(i);
+            Spectrum hv = v * fp->weight(i);
             Point2i at{fp->offset(i).x + offset.x, fp->offset(i).y + offset.y};
             rec.addLayer(layer, hv, at);
-            if (squares) rec.addLayer(layerSq, hs * hs, at);
+            if (squares) rec.addLayer(layerSq, hv * hv, at);
         }
     };
     auto put = [&](int layer, int layerSq, const Spectrum &v, Point2i offset) {
-        put2(layer_[layer], layer_[layerSq], v, v, offset);
+        put2(layer_[layer], layer_[layerSq], v, offset);
     };
-    // The primal's squares are those of the reconstruction's input, primal - separated.
-    const bool separated = !s.separated.isBlack() && s.separated.isFinite();
-    put2(layer_[Primal], layer_[PrimalSq], s.primal, separated ? s.primal - s.separated : s.primal, {0, 0});
-    if (separated) put2(sepLayer_, -1, s.separated, s.separated, {0, 0});
+    put(Primal, PrimalSq, s.primal, {0, 0});  // the full primal, separated light included
+    if (!s.separated.isBlack() && s.separated.isFinite()) put2(sepLayer_, -1, s.separated, {0, 0});
     for (int k = 0; k < kNumNeighbours; ++k) {
         if (!s.active[k] || !s.diff[k].isFinite()) continue;
         Point2i off = kNeighbourOffsets[k];
@@ -193,7 +191,6 @@ GradientImages GradientFilm::images(const Film &film, double spp) const {
     float L[NumLayers][3], S[3];
     auto var = [&](int mean, int sq, int c) {
         double m = L[mean][c], m2 = L[sq][c];
-        if (mean == Primal) m -= S[c];  // the squares are those of primal - separated
         return std::max(0.0, (m2 - m * m / footprint_) * invN);
     };
     for (size_t p = 0; p < n / 3; ++p) {

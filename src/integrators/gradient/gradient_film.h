@@ -25,8 +25,8 @@
 // gradient. The reconstruction solves for primal - separated and adds the
 // separated layer to its result (reconstruction.h): these pixels (a light's
 // image through glass) are not spread or lost by the screened Poisson solve.
-// The squares of the primal (primal_var) are those of primal - separated,
-// the reconstruction's input.
+// primal_var stays the variance of the full primal (the weighted
+// reconstruction then underweights the primal term where separated light is).
 // WriteGradientOutput writes primal (the full primal, separated light
 // included), separated (when kept), dx, dy, primal_var, dx_var, dy_var (with
 // variances), reconstructed_l1, reconstructed_l2, reconstructed_hybrid (and

@@ -455,7 +455,7 @@ std::vector<float> Interleaved(const FloatArray &a, const char *what, int *w, in
 
 py::object ReconstructArrays(const FloatArray &primal, const FloatArray &dx, const FloatArray &dy, const std::string &method,
                        std::optional<double> alpha, std::optional<FloatArray> primalVar, std::optional<FloatArray> dxVar,
-                       std::optional<FloatArray> dyVar, bool returnStats) {
+                       std::optional<FloatArray> dyVar, std::optional<FloatArray> separated, bool returnStats) {
     GradientImages in;
     int w = -1, h = -1;
     in.primal = Interleaved(primal, "primal", &w, &h);
@@ -470,6 +470,7 @@ py::object ReconstructArrays(const FloatArray &primal, const FloatArray &dx, con
         in.dxVar = Interleaved(*dxVar, "dx_var", &w, &h);
         in.dyVar = Interleaved(*dyVar, "dy_var", &w, &h);
     }
+    if (separated) in.separated = Interleaved(*separated, "separated", &w, &h);
     ReconstructionOptions o;
     try {
         o = ReconstructionOptions::Preset(method);
@@ -603,7 +604,7 @@ PYBIND11_MODULE(_gradus, m) {
     m.def("load_scene", &LoadPyScene, py::arg("path"), py::arg("resolution"), py::arg("crop"), py::arg("camera"),
           py::arg("quick"), py::arg("envmap"), py::arg("envmap_scale"), py::arg("envmap_rotate"));
     m.def("reconstruct", &ReconstructArrays, py::arg("primal"), py::arg("dx"), py::arg("dy"), py::arg("method"),
-          py::arg("alpha"), py::arg("primal_var"), py::arg("dx_var"), py::arg("dy_var"), py::arg("return_stats"));
+          py::arg("alpha"), py::arg("primal_var"), py::arg("dx_var"), py::arg("dy_var"), py::arg("separated"), py::arg("return_stats"));
     m.def("metrics", &Metrics, py::arg("test"), py::arg("ref"), py::arg("discard_fraction"),
           py::arg("discard_count"), py::arg("rel_epsilon"));
     m.def("read_image", &ReadImageFile, py::arg("path"));

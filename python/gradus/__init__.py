@@ -280,13 +280,16 @@ def load_scene(path, **overrides):
 
 
 def reconstruct(primal, dx, dy, method="hybrid", alpha=None, primal_var=None, dx_var=None, dy_var=None,
-                return_stats=False):
+                return_stats=False, separated=None):
     """Screened-Poisson reconstruction of H x W x 3 arrays (the code of the
     ``reconstruct`` tool): method "hybrid" (default), "l1", "l2", "weighted"
     (needs the three variances), "l1-reference" or "l2-cg"; alpha weights the
     primal (default: the preset's, 0.2). dx(x, y) = I(x+1, y) - I(x, y).
+    separated: the part of primal without gradients (a gradient render's
+    "separated" layer: light through ideal specular scattering only); the solve
+    takes primal - separated and the result adds it back.
     Returns the image (H x W x 3 float32), with return_stats a (image, stats) pair."""
-    return _gradus.reconstruct(primal, dx, dy, method, alpha, primal_var, dx_var, dy_var, return_stats)
+    return _gradus.reconstruct(primal, dx, dy, method, alpha, primal_var, dx_var, dy_var, separated, return_stats)
 
 
 def metrics(test, ref, discard_fraction=0.0, discard_count=0, rel_epsilon=0.001):

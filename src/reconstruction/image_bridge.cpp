@@ -42,6 +42,7 @@ GradientImages GradientImagesFromImage(const Image &img) {
     g.primal = LayerData(img, "primal");
     g.dx = LayerData(img, "dx");
     g.dy = LayerData(img, "dy");
+    if (HasLayer(img, "separated")) g.separated = LayerData(img, "separated");
     const bool vp = HasLayer(img, "primal_var"), vx = HasLayer(img, "dx_var"),
                vy = HasLayer(img, "dy_var");
     if (vp && vx && vy) {

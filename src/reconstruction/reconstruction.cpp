@@ -270,6 +270,12 @@ int LoadProblem(const GradientImages &in, PoissonProblem &P) {
     P.C = in.channels;
     P.N = size_t(P.W) * P.H;
     ToPlanar(in, in.primal, "primal", 0, 0, false, P.p);
+    if (!in.separated.empty()) {  // the solve's primal: primal - separated (header comment)
+        std::vector<float> s;
+        ToPlanar(in, in.separated, "separated", 0, 0, false, s);
+        for (size_t i = 0; i < s.size(); ++i)
+            if (s[i] != 0) P.p[i] -= s[i];
+    }
     ToPlanar(in, in.dx, "dx", 1, 0, false, P.gx);
     ToPlanar(in, in.dy, "dy", 0, 1, false, P.gy);
     // Range safety: inputs near the float limit (up to FLT_MAX after the film's
@@ -441,6 +447,11 @@ ReconstructionResult Reconstruct(const GradientImages &in, const ReconstructionO
     }
     SetEnergies(P, x, opt, st);
     ReconstructionResult res = MakeResult(P, x, rangeShift, opt, st);
+    if (!in.separated.empty()) {  // checked by LoadProblem: same size, finite
+        const float big = std::numeric_limits<float>::max();
+        for (size_t i = 0; i < res.image.size(); ++i)
+            if (in.separated[i] != 0) res.image[i] = std::clamp(res.image[i] + in.separated[i], -big, big);
+    }
     st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     res.stats = st;
     return res;

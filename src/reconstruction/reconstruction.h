@@ -31,6 +31,14 @@
 // with v the per-term variance averaged over the colour channels plus a floor
 // of 1e-3 times that layer's mean variance (zero-variance terms stay finite).
 // alpha is not used (the variances set the primal/gradient balance).
+//
+// Separated light: `separated` (optional) is the part of the primal that
+// takes no gradients (gradient_film.h: paths reaching an emitter through
+// Dirac scatterings only). Every norm solves for primal - separated (so the
+// gradients' image and the primal term agree) and adds separated to its
+// result; the hybrid's coarse scales come from the full primal, which gives
+// the hybrid of the unseparated solve plus separated. Residuals and the
+// objective are those of the solve.
 #pragma once
 #include <string>
 #include <vector>
@@ -43,6 +51,8 @@ class Image;
 struct GradientImages {
     int width = 0, height = 0, channels = 3;
     std::vector<float> primal, dx, dy;
+    // Optional: light in the primal that takes no gradients (empty: none).
+    std::vector<float> separated;
     // Optional per-term variances (same layout); required by Norm::Weighted.
     std::vector<float> primalVar, dxVar, dyVar;
     bool hasVariance() const { return !primalVar.empty(); }
@@ -129,10 +139,11 @@ std::vector<float> CombineScales(const std::vector<float> &fine, const std::vect
 ReconstructionNorm ParseReconstructionNorm(const std::string &name);
 const char *ReconstructionNormName(ReconstructionNorm norm);
 
-// ---- gradus::Image bridge (layers primal, dx, dy, optional primal_var, dx_var, dy_var) ----
+// ---- gradus::Image bridge (layers primal, dx, dy, optional separated, primal_var, dx_var, dy_var) ----
 
-// Extracts RGB layers "primal", "dx", "dy" (and variances when all three are
-// present). Throws gradus::Error naming a missing layer.
+// Extracts RGB layers "primal", "dx", "dy", "separated" when present (images
+// written before the separation have none: nothing is added) and variances
+// when all three are present. Throws gradus::Error naming a missing layer.
 GradientImages GradientImagesFromImage(const Image &img);
 // Same, from three separate images (their unprefixed R,G,B or Y).
 GradientImages GradientImagesFromImages(const Image &primal, const Image &dx, const Image &dy);

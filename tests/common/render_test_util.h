@@ -148,17 +148,26 @@ MeanOfRuns AverageRuns(int runs, RenderFn render) {
 
 // z-scores of a gradient render's dx/dy (with their variance layers) against
 // differences of neighbouring pixels of a reference mean, on disjoint pixel
-// pairs (even x for dx, even y for dy) so the terms are independent.
+// pairs (even x for dx, even y for dy) so the terms are independent. The
+// gradients leave out the separated light (gradient_film.h), which the
+// reference's differences include: pairs with a pixel where g's "separated"
+// layer is non-zero are not tested (they are counted in `separatedPairs`).
 struct GradientZ {
     int n = 0;          // terms tested
     double meanZ2 = 0;  // ~1 when unbiased with correct variances
     double Z = 0;       // sum of z / sqrt(n), ~N(0,1) when unbiased
+    int separatedPairs = 0;  // pairs left out: separated light at one of their pixels
 };
 inline GradientZ GradientZStats(const Image &g, const MeanOfRuns &ref) {
     Image dx = g.layerRGB("dx"), dy = g.layerRGB("dy"), vx = g.layerRGB("dx_var"), vy = g.layerRGB("dy_var");
     const Image &P = ref.mean, &V = ref.varMean;
+    const bool hasSep = g.channelIndex("separated.R") >= 0;
+    const Image S = hasSep ? g.layerRGB("separated") : Image();
+    auto sep = [&](int x, int y) {
+        return hasSep && (S.at(x, y, 0) != 0 || S.at(x, y, 1) != 0 || S.at(x, y, 2) != 0);
+    };
     double s2 = 0, s = 0;
-    int n = 0;
+    int n = 0, skipped = 0;
     auto term = [&](double est, double varEst, double diff, double varDiff) {
         double v = varEst + varDiff;
         if (!(v > 1e-12)) return;  // both exactly zero: nothing to test
@@ -170,15 +179,24 @@ inline GradientZ GradientZStats(const Image &g, const MeanOfRuns &ref) {
     for (int y = 0; y < g.height(); ++y)
         for (int x = 0; x < g.width(); ++x)
             for (int c = 0; c < 3; ++c) {
-                if (x % 2 == 0 && x + 1 < g.width())
-                    term(dx.at(x, y, c), vx.at(x, y, c), P.at(x + 1, y, c) - P.at(x, y, c),
-                         V.at(x + 1, y, c) + V.at(x, y, c));
-                if (y % 2 == 0 && y + 1 < g.height())
-                    term(dy.at(x, y, c), vy.at(x, y, c), P.at(x, y + 1, c) - P.at(x, y, c),
-                         V.at(x, y + 1, c) + V.at(x, y, c));
+                if (x % 2 == 0 && x + 1 < g.width()) {
+                    if (sep(x, y) || sep(x + 1, y))
+                        skipped += c == 0;
+                    else
+                        term(dx.at(x, y, c), vx.at(x, y, c), P.at(x + 1, y, c) - P.at(x, y, c),
+                             V.at(x + 1, y, c) + V.at(x, y, c));
+                }
+                if (y % 2 == 0 && y + 1 < g.height()) {
+                    if (sep(x, y) || sep(x, y + 1))
+                        skipped += c == 0;
+                    else
+                        term(dy.at(x, y, c), vy.at(x, y, c), P.at(x, y + 1, c) - P.at(x, y, c),
+                             V.at(x, y + 1, c) + V.at(x, y, c));
+                }
             }
     GradientZ r;
     r.n = n;
+    r.separatedPairs = skipped;
     if (n > 0) {
         r.meanZ2 = s2 / n;
         r.Z = s / std::sqrt(double(n));

@@ -121,8 +121,9 @@ TEST(GradientFilm, NoSquaresWithoutVariance) {
         film->setSplatSamples(spp);
         g[v] = gf.images(*film, spp);
     }
-    EXPECT_EQ(layers[0], 10);  // values of the primal and 4 differences, per-sample and splats
-    EXPECT_EQ(layers[1], 20);
+    // Values of the primal and 4 differences, per-sample and splats, and the separated light.
+    EXPECT_EQ(layers[0], 11);
+    EXPECT_EQ(layers[1], 21);
     EXPECT_FALSE(g[0].hasVariance());
     EXPECT_TRUE(g[1].hasVariance());
     EXPECT_EQ(g[0].primal, g[1].primal);

@@ -225,3 +225,77 @@ TEST_F(ToolTest, MetadataAndCropPlacementCarriedThrough) {
     EXPECT_EQ(res.originY, 4);
     EXPECT_EQ(res.displayWidth, W + 10);
 }
+
+// Separated light (reconstruction.h): a "separated" layer is part of the
+// primal but not of the gradients; every norm solves for primal - separated
+// and adds separated back. Exact gradients of a smooth image I with two
+// pixels of a bright emitter S in the primal only: the output is I + S (the
+// solve of exact inputs returns I), where a solve of the primal I + S would
+// spread the two pixels over the image (the gradients say they are not there).
+TEST_F(ToolTest, SeparatedLayerIsAddedAfterTheSolve) {
+    GradientImages g = ExactInputs(truth_, W, H);
+    std::vector<float> sep(g.primal.size(), 0.f);
+    for (int c = 0; c < 3; ++c) {
+        sep[(size_t(5) * W + 7) * 3 + c] = 1000.f + c;
+        sep[(size_t(6) * W + 7) * 3 + c] = 250.f;
+    }
+    std::vector<float> expected = truth_;
+    for (size_t i = 0; i < sep.size(); ++i) {
+        g.primal[i] += sep[i];
+        expected[i] += sep[i];
+    }
+    Image film = MakeFilm(g, true);
+    Image sepImg = Image::RGB(W, H);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x)
+            for (int c = 0; c < 3; ++c) sepImg.at(x, y, c) = sep[(size_t(y) * W + x) * 3 + c];
+    film.setLayerRGB("separated", sepImg);
+    WriteImage(path("film.exr"), film);
+    // The library reads the layer.
+    GradientImages back = GradientImagesFromImage(film);
+    EXPECT_EQ(back.separated, sep);
+    auto maxErr = [&](const Image &res) {
+        double m = 0;
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x)
+                for (int c = 0; c < 3; ++c)
+                    m = std::max(m, double(std::fabs(res.at(x, y, res.channelIndex("R") + c) -
+                                                     expected[(size_t(y) * W + x) * 3 + c])));
+        return m;
+    };
+    // Tolerance: the solve's float error on an image of maximum ~2.6, plus the
+    // rounding of (I + S) - S at the emitter's pixels (ulp of 1000: 6e-5).
+    const double tol = 1e-5 * MaxAbs(truth_) + 2e-4;
+    for (const char *norm : {"l1", "l2", "hybrid", "weighted"}) {
+        std::string err;
+        const std::string out = path(std::string("sep_") + norm + ".exr");
+        ASSERT_EQ(run("'" + path("film.exr") + "' --norm " + norm + " --outfile '" + out + "' --no-png", nullptr, &err), 0)
+            << err;
+        EXPECT_LT(maxErr(ReadImage(out)), tol) << norm;
+    }
+    // Separate files: --separated.
+    WriteImage(path("p.exr"), film.layerRGB("primal"));
+    WriteImage(path("dx.exr"), film.layerRGB("dx"));
+    WriteImage(path("dy.exr"), film.layerRGB("dy"));
+    WriteImage(path("s.exr"), sepImg);
+    std::string err;
+    ASSERT_EQ(run("--primal '" + path("p.exr") + "' --dx '" + path("dx.exr") + "' --dy '" + path("dy.exr") +
+                      "' --separated '" + path("s.exr") + "' --norm l2 --outfile '" + path("files.exr") + "' --no-png",
+                  nullptr, &err),
+              0)
+        << err;
+    EXPECT_LT(maxErr(ReadImage(path("files.exr"))), tol);
+    // An image without the layer (written before the separation) is solved as
+    // it is: the emitter's pixels are spread, far from I + S there.
+    WriteImage(path("old.exr"), MakeFilm(g, true));
+    ASSERT_EQ(run("'" + path("old.exr") + "' --norm l2 --outfile '" + path("old_out.exr") + "' --no-png", nullptr, &err), 0)
+        << err;
+    EXPECT_GT(maxErr(ReadImage(path("old_out.exr"))), 100);
+    // A separated image of another size is an error.
+    WriteImage(path("small.exr"), Image::RGB(W - 1, H));
+    EXPECT_EQ(run("--primal '" + path("p.exr") + "' --dx '" + path("dx.exr") + "' --dy '" + path("dy.exr") +
+                      "' --separated '" + path("small.exr") + "' --outfile '" + path("x.exr") + "'",
+                  nullptr, &err),
+              1);
+    EXPECT_NE(err.find("separated image differs in size"), std::string::npos) << err;
+}

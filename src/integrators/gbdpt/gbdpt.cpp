@@ -223,6 +223,11 @@ struct GBDPTIntegrator::SampleRun {
         }
         // [15] primal with the usual BDPT weight.
         primal += base.fx * base.wx;
+        if (s == 0 && DiracCameraChain(cam, t - 2)) {
+            // Separated light (DiracCameraChain): no gradients, for the base nor its offsets.
+            separated += base.fx * base.wx;
+            return;
+        }
         const int kc = t - 1;  // last camera vertex of the base path
         const int cas = (c >= 0 && kc >= c) ? 0 : 1;
         ++ts.cases[cas];
@@ -381,6 +386,7 @@ struct GBDPTIntegrator::SampleRun {
     bool havePrefix[kNumNeighbours] = {};
     PathVertex lens;  // the base's lens vertex with unit throughput (light-tracing shifts)
     Spectrum primal = Spectrum(0);
+    Spectrum separated = Spectrum(0);  // the part of primal separated from the reconstruction
 };
 
 GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler, Arena &arena,
@@ -397,6 +403,7 @@ GradientSample GBDPTIntegrator::sample(const CameraSample &cs, Sampler &sampler,
         // s = 1 samples its own light point: it runs even with an empty light subpath (bdpt.cpp).
         for (int s = 0; s <= std::max(run.light.n, scene_->lights.empty() ? 0 : 1); ++s) run.strategy(s, t, &out);
     out.primal = run.primal;
+    out.separated = run.separated;
     addStrategies(CameraState{&run.cam, run.shifts, inside, w, &arena, &sampler}, &out);
     return out;
 }

@@ -49,8 +49,12 @@
 //   string mis "combined"            combined (Eq. 8) | simple (Eq. 9)
 //   string manifoldsolver "newton"   newton (the direct Newton walk) | ceres (ceres::TinySolver,
 //                                    Levenberg-Marquardt): the solver of the manifold walks
-// Output layers: primal, dx, dy, *_var, reconstructed_l1, reconstructed_l2
-// (and reconstructed_weighted).
+// Output layers: primal, separated, dx, dy, *_var, reconstructed_l1, reconstructed_l2,
+// reconstructed_hybrid (and reconstructed_weighted). Strategies s = 0 whose camera
+// vertices all scattered by Dirac lobes (an emitter seen directly or through
+// mirrors and glass: DiracCameraChain) are separated light: in the primal and
+// the separated layer, in no gradient, added after the reconstruction
+// (gradient_film.h); G-VCM's public code (issue 59).
 #pragma once
 #include <memory>
 #include <mutex>

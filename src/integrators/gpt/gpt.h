@@ -9,7 +9,10 @@
 // symmetric estimator with gradient MIS combined with NEE/BSDF MIS (G-BDPT
 // Eq. 8 with the power heuristic); failed or non-invertible shifts fall back
 // to counting the base contribution alone (Sec. 2.2). The primal and
-// gradients are reconstructed at the end (screened Poisson).
+// gradients are reconstructed at the end (screened Poisson). Emission reached
+// after Dirac bounces only (emitters seen directly or through mirrors and
+// glass) is separated light: primal and layer "separated", no gradients,
+// added after the reconstruction (gradient_film.h).
 //
 // Parameters (path tracing, integrators/path/path.h):
 //   integer maxdepth 5               maximum number of bounces

@@ -73,6 +73,16 @@ Spectrum GradientPathTracer::offsetEmission(const OffsetPath &o, const Light *li
 }
 
 // Emission reached by the last segment (BSDF technique): primal and gradient terms.
+// Separated light (gradient_film.h): a path whose every bounce was sampled
+// from a Dirac lobe adds to the primal and the separated layer and to no
+// gradient. The gradients estimate those of the image without it: the
+// symmetric estimator (G-BDPT Eq. 3) applied to the integrand f_R(x) =
+// f(x) [x not separated], base and offset each tested on their own chain.
+// The half-vector/replay shift usually maps a Dirac chain to one (replay of
+// a Dirac sample on the same material), but not always (a smooth-coated
+// material may replay into its diffuse lobe), so a separated base still
+// contributes the offset's f_R(y) and vice versa; the MIS weights depend on
+// the densities only and are kept, so the pairs' weights still sum to one.
 void GradientPathTracer::emissionTerms() {
     const Light *keys[8];
     const int nkeys = EmittersReached(scene_, cur_, off_, keys);
@@ -82,12 +92,18 @@ void GradientPathTracer::emissionTerms() {
         Spectrum Lx = Emitted(lights_, light, cur_.found, cur_.isect, cur_.ray, prevIt_, specularBounce_, &nx);
         Float bx = prevBsdfPdf_;
         Spectrum Cx = beta_ * Lx;
-        if (!Lx.isBlack()) primal_ += Cx * (specularBounce_ ? 1 : PowerHeuristic(1, bx, 1, nx));
+        if (!Lx.isBlack()) {
+            const Spectrum c = Cx * (specularBounce_ ? 1 : PowerHeuristic(1, bx, 1, nx));
+            primal_ += c;
+            if (diracChain_) separated_ += c;
+        }
+        if (diracChain_) Cx = Spectrum(0);  // f_R(x)
         for (int k = 0; k < kNumNeighbours; ++k) {
             if (!inside_[k]) continue;
             OffsetPath &o = off_[k];
             Float ny, by;
             Spectrum Cy = offsetEmission(o, light, Lx, nx, bx, &ny, &by);
+            if (o.diracChain) Cy = Spectrum(0);  // f_R(y)
             if (Cx.isBlack() && Cy.isBlack()) continue;
             Float wgt = GradientMISWeight(bx, nx, by, ny, o.ratio * o.lastJ);
             o.diff += (Cy - Cx) * wgt;

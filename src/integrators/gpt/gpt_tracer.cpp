@@ -164,6 +164,7 @@ void GradientPathTracer::advanceOffset(OffsetPath &o, const BSDFSample &bs, Floa
             copyHalfVectorOrReplay(o, bs, uc, u);
         break;
     }
+    o.diracChain = o.diracChain && o.state != OffsetPath::Dead && o.lastSpecular;
 }
 
 void GradientPathTracer::trace(Sampler &sampler, int maxDepth, Float rrThreshold) {
@@ -214,6 +215,7 @@ void GradientPathTracer::trace(Sampler &sampler, int maxDepth, Float rrThreshold
 
         beta_ *= factor;
         specularBounce_ = bs.isSpecular();
+        diracChain_ = diracChain_ && specularBounce_;
         prevBsdfPdf_ = bs.pdf;
         prevIt_ = cur_.isect;
         if (bs.isTransmission()) etaScale_ *= Sqr(bs.eta);
@@ -234,6 +236,7 @@ void GradientPathTracer::trace(Sampler &sampler, int maxDepth, Float rrThreshold
 
 void GradientPathTracer::result(GradientSample *out) const {
     out->primal = primal_;
+    out->separated = separated_;
     for (int k = 0; k < kNumNeighbours; ++k) out->diff[k] = off_[k].diff;
 }
 

@@ -28,6 +28,7 @@ struct OffsetPath {
     Float lastPdfY = 1;     // last segment: the offset's own pdf of its direction
     Float lastJ = 1;        // last segment: |T'| (solid angle)
     bool lastSpecular = true;
+    bool diracChain = true;  // every segment so far sampled from a Dirac lobe (separated light)
     Interaction prevIt;     // the offset's previous vertex
     Spectrum diff{0};
     void kill(LocalShiftStats &st, ShiftFailure why) {
@@ -104,8 +105,9 @@ class GradientPathTracer {
     OffsetPath off_[kNumNeighbours];
     // Base path.
     PathHit cur_;
-    Spectrum beta_, primal_{0};
+    Spectrum beta_, primal_{0}, separated_{0};
     bool specularBounce_ = true;
+    bool diracChain_ = true;  // every bounce so far sampled from a Dirac lobe
     Float prevBsdfPdf_ = 1;  // the camera segment acts as a specular technique with pdf 1
     Interaction prevIt_;
     Float etaScale_ = 1;

@@ -74,7 +74,7 @@ void GradientFamily::finishGradients(const Film &film, const RenderStats &stats,
                                      Float alpha, Image *out, double scale) {
     GradientImages g = gfilm_.images(film, stats.spp);
     if (scale != 1) {
-        for (auto *v : {&g.primal, &g.dx, &g.dy})
+        for (auto *v : {&g.primal, &g.separated, &g.dx, &g.dy})
             for (float &x : *v) x = float(x * scale);
         for (auto *v : {&g.primalVar, &g.dxVar, &g.dyVar})
             for (float &x : *v) x = float(x * scale * scale);

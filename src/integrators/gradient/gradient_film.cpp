@@ -40,6 +40,7 @@ void GradientFilm::init(Film &film, bool useFilmFilter, bool lightTracing, bool 
     auto wanted = [&](int i) { return variance_ || !IsSquare(i); };
     for (int i = 0; i < NumLayers; ++i)
         layer_[i] = samples && wanted(i) ? film.addLayer(names[i], LayerUse::Samples, false) : -1;
+    sepLayer_ = samples ? film.addLayer("gd.separated", LayerUse::Samples, false) : -1;
     lightTracing_ = lightTracing;
     for (int i = 0; i < NumLayers; ++i)
         splatLayer_[i] = lightTracing && wanted(i)
@@ -97,21 +98,27 @@ void GradientFilm::record(SampleRecorder &rec, const GradientSample &s) const {
     // within the filter radius of the sample, with weight h(q - s).
     std::optional<Footprint> fp;
     if (filter_) fp.emplace(*filter_, filterNorm_, rec.pFilm(), rec.pixel());
-    auto put = [&](int layer, int layerSq, const Spectrum &v, Point2i offset) {
+    // v to `layer` and its square to layerSq (< 0: none).
+    auto put2 = [&](int layer, int layerSq, const Spectrum &v, Point2i offset) {
+        const bool squares = variance_ && layerSq >= 0;
         if (!fp) {
-            rec.addLayer(layer_[layer], v, offset);
-            if (variance_) rec.addLayer(layer_[layerSq], v * v, offset);
+            rec.addLayer(layer, v, offset);
+            if (squares) rec.addLayer(layerSq, v * v, offset);
             return;
         }
         if (v.isBlack()) return;  // adds nothing to either layer
         for (int i = 0; i < fp->size(); ++i) {
             Spectrum hv = v * fp->weight(i);
             Point2i at{fp->offset(i).x + offset.x, fp->offset(i).y + offset.y};
-            rec.addLayer(layer_[layer], hv, at);
-            if (variance_) rec.addLayer(layer_[layerSq], hv * hv, at);
+            rec.addLayer(layer, hv, at);
+            if (squares) rec.addLayer(layerSq, hv * hv, at);
         }
     };
-    put(Primal, PrimalSq, s.primal, {0, 0});
+    auto put = [&](int layer, int layerSq, const Spectrum &v, Point2i offset) {
+        put2(layer_[layer], layer_[layerSq], v, offset);
+    };
+    put(Primal, PrimalSq, s.primal, {0, 0});  // the full primal, separated light included
+    if (!s.separated.isBlack() && s.separated.isFinite()) put2(sepLayer_, -1, s.separated, {0, 0});
     for (int k = 0; k < kNumNeighbours; ++k) {
         if (!s.active[k] || !s.diff[k].isFinite()) continue;
         Point2i off = kNeighbourOffsets[k];
@@ -180,7 +187,8 @@ GradientImages GradientFilm::images(const Film &film, double spp) const {
     double invN = spp > 0 ? 1 / spp : 0;
     // The film's layer values (the floats of Film::layerImage) pixel by pixel:
     // no image per layer.
-    float L[NumLayers][3];
+    g.separated.resize(n);
+    float L[NumLayers][3], S[3];
     auto var = [&](int mean, int sq, int c) {
         double m = L[mean][c], m2 = L[sq][c];
         return std::max(0.0, (m2 - m * m / footprint_) * invN);
@@ -188,9 +196,11 @@ GradientImages GradientFilm::images(const Film &film, double spp) const {
     for (size_t p = 0; p < n / 3; ++p) {
         for (int k = 0; k < NumLayers; ++k)
             if (layer_[k] >= 0) film.layerValues(layer_[k], p, L[k]);
+        film.layerValues(sepLayer_, p, S);
         for (int c = 0; c < 3; ++c) {
             const size_t i = 3 * p + c;
             g.primal[i] = L[Primal][c];
+            g.separated[i] = S[c];
             g.dx[i] = SumF(L[DxF][c], L[DxB][c]);
             g.dy[i] = SumF(L[DyF][c], L[DyB][c]);
             if (!variance_) continue;
@@ -230,7 +240,9 @@ void WriteGradientOutput(const GradientImages &g, ReconstructionNorm norm, doubl
     // The output's channels first; then each layer is set as soon as it is
     // computed and its intermediate freed (at most one solution and one
     // layer image beside the output).
-    std::vector<const char *> layers = {"primal", "dx", "dy"};
+    std::vector<const char *> layers = {"primal"};
+    if (!g.separated.empty()) layers.push_back("separated");
+    layers.insert(layers.end(), {"dx", "dy"});
     if (g.hasVariance()) layers.insert(layers.end(), {"primal_var", "dx_var", "dy_var"});
     layers.insert(layers.end(), {"reconstructed_l1", "reconstructed_l2", "reconstructed_hybrid"});
     if (norm == ReconstructionNorm::Weighted) layers.push_back("reconstructed_weighted");
@@ -247,6 +259,7 @@ void WriteGradientOutput(const GradientImages &g, ReconstructionNorm norm, doubl
         img.setLayerRGB(layer, im);
     };
     put("primal", g.primal);
+    if (!g.separated.empty()) put("separated", g.separated);
     put("dx", g.dx);
     put("dy", g.dy);
     if (g.hasVariance()) {
@@ -255,6 +268,9 @@ void WriteGradientOutput(const GradientImages &g, ReconstructionNorm norm, doubl
         put("dy_var", g.dyVar);
     }
     // A solution to its layer, and to the unprefixed R, G, B when it is the chosen one.
+    // Every solution includes the separated light (Reconstruct adds it); the
+    // hybrid's coarse scales come from the full primal: (R + S) + G * ((p + S) - (R + S))
+    // is the hybrid of the solve R of p, plus S.
     auto solution = [&](const char *layer, const ReconstructionResult &r, bool chosen) {
         const Image im = ResultToImage(r);
         img.setLayerRGB(layer, im);

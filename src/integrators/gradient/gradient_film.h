@@ -18,9 +18,20 @@
 // differences through the film's splat path (normalised by the samples per
 // pixel like every splat) on layers of their own, whose variance is
 // approximated by the second moment / N; images() adds both parts.
-// WriteGradientOutput writes primal, dx, dy, primal_var, dx_var, dy_var (with
-// variances), reconstructed_l1, reconstructed_l2 (and reconstructed_weighted
-// when chosen) and sets the unprefixed R, G, B to the chosen reconstruction.
+// Separated light (G-VCM's public code; issue 59): contributions of paths
+// whose camera walk reaches the emitter after Dirac (ideal specular)
+// scatterings only - emitters seen directly or through mirrors and glass -
+// are counted in the primal and also in a layer of their own, and in no
+// gradient. The reconstruction solves for primal - separated and adds the
+// separated layer to its result (reconstruction.h): these pixels (a light's
+// image through glass) are not spread or lost by the screened Poisson solve.
+// primal_var stays the variance of the full primal (the weighted
+// reconstruction then underweights the primal term where separated light is).
+// WriteGradientOutput writes primal (the full primal, separated light
+// included), separated (when kept), dx, dy, primal_var, dx_var, dy_var (with
+// variances), reconstructed_l1, reconstructed_l2, reconstructed_hybrid (and
+// reconstructed_weighted when chosen; every reconstruction includes the
+// separated light) and sets the unprefixed R, G, B to the chosen one.
 #pragma once
 #include <string>
 
@@ -38,6 +49,9 @@ extern const Point2i kNeighbourOffsets[kNumNeighbours];
 
 struct GradientSample {
     Spectrum primal{0};
+    // The part of `primal` separated from the reconstruction (header comment):
+    // no gradient carries it.
+    Spectrum separated{0};
     // Estimates of I(p + offset) - I(p), one per neighbour shift.
     Spectrum diff[kNumNeighbours] = {Spectrum(0), Spectrum(0), Spectrum(0), Spectrum(0)};
     bool active[kNumNeighbours] = {false, false, false, false};
@@ -68,6 +82,7 @@ class GradientFilm {
 
   private:
     enum { Primal, PrimalSq, DxF, DxFSq, DxB, DxBSq, DyF, DyFSq, DyB, DyBSq, NumLayers };
+    int sepLayer_ = -1;  // separated light of the camera samples (-1: samples false)
     static bool IsSquare(int layer) { return layer % 2 == 1; }
     // Layers (value, square) of each neighbour's difference: +x is dx at p; -x
     // is dx at p-(1,0) with the sign flipped (I(p) - I(p-1)). Same for y.
@@ -85,7 +100,8 @@ class GradientFilm {
 };
 
 // Output image of a gradient integrator from its gradient images: layers
-// primal, dx, dy, their variances (when g has them), reconstructed_l1, reconstructed_l2 (and
+// primal, separated (when g has it), dx, dy, their variances (when g has them),
+// reconstructed_l1, reconstructed_l2, reconstructed_hybrid (and
 // reconstructed_weighted), the chosen one in the unprefixed R, G, B; keeps
 // out->metadata and adds the reconstruction's. `report` gets the timings.
 void WriteGradientOutput(const GradientImages &g, ReconstructionNorm norm, double alpha, Image *out,

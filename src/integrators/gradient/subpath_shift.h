@@ -83,6 +83,19 @@ struct ShiftSubpath {
 // Sets deltaSample and marks specular (class != Rough) surface vertices with
 // VERTEX_DELTA so that MIS and connections leave them out (Sec. 3.2).
 void PrepareSubpath(const SubpathShiftContext &ctx, ShiftSubpath *p);
+// The directions sampled at camera vertices 1 .. last all came from Dirac
+// lobes: an emitter at vertex last + 1 (strategy s = 0) is seen through an
+// ideal specular chain (or directly, last = 0), light separated from the
+// reconstruction (gradient_film.h). The camera-subpath shift copies
+// deltaSample vertex by vertex and takes the same Dirac lobe at each
+// (camera_shift.cpp), so a base and its offsets are classified alike and so
+// is the inverse shift's pair: dropping both halves of a separated base's
+// gradient keeps the symmetric estimator, for the image without that light.
+inline bool DiracCameraChain(const ShiftSubpath &cam, int last) {
+    for (int i = 1; i <= last; ++i)
+        if (!cam.deltaSample[i]) return false;
+    return true;
+}
 // Rough (diffuse) for shift purposes.
 bool IsDiffuseVertex(const SubpathShiftContext &ctx, const PathVertex &v, const BSDF *b);
 

@@ -423,6 +423,10 @@ void GVCMIntegrator::chainEmission(const CameraState &st, int u, GradientSample 
     if (Le.isBlack()) return;
     const Spectrum fx = zu.throughput() * Le * st.w;
     out->primal += fx;
+    if (DiracCameraChain(*st.cam, u - 1)) {  // separated light: no gradients (subpath_shift.h)
+        out->separated += fx;
+        return;
+    }
     for (int k = 0; k < kNumNeighbours; ++k) {
         if (!st.inside[k]) continue;
         const CameraShift &sh = st.shifts[k];

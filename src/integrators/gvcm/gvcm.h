@@ -41,6 +41,9 @@
 //      case 2, times eta_y / eta_x: each merge's density with its own kernel,
 //      as in w_y); a failed offset falls back to a zero offset with the base's
 //      weight (as G-BDPT).
+// Separated light (gbdpt.h, gradient_film.h): s = 0 paths and G-PM's chain
+// emission through Dirac scattering only take no gradients and are added
+// after the reconstruction.
 // G-PM (mode "mergeonly", Sec. 7): no light subpath per camera sample and no
 // connections; merges at the first connectable camera vertex z_b only and
 // emission through specular chains, every weight 1 (the unused strategies'

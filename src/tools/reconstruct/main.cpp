@@ -23,8 +23,12 @@ const char *kUsage = R"(usage: reconstruct IN.exr --outfile OUT.exr [options]
 
 IN.exr holds layers primal, dx, dy (channels primal.R, dx.G, ...; dx(x,y) =
 I(x+1,y) - I(x,y), the last column of dx and last row of dy are unused) and,
-for --norm weighted, primal_var, dx_var, dy_var. With three separate files,
---primal-var, --dx-var, --dy-var give the variances.
+for --norm weighted, primal_var, dx_var, dy_var. An optional layer separated
+(gradus' gradient integrators: light reaching the camera through ideal
+specular scattering only, which takes no gradients) is part of primal: the
+solve takes primal - separated and the output adds separated back; images
+without it are reconstructed as before. With separate files, --primal-var,
+--dx-var, --dy-var give the variances and --separated the separated light.
 
 options:
   --outfile OUT         output image (EXR: R,G,B + metadata; a PNG preview is
@@ -52,6 +56,7 @@ options:
   --preset NAME         hybrid (default), l1, l1-reference (20 IRLS x 50 plain CG from
                         the primal, as the reference implementation), l2, l2-cg, weighted;
                         later options override it
+  --separated S         with --primal/--dx/--dy: the separated light (see above)
   --no-png              do not write the PNG preview
   --json                print a JSON report (residuals, iterations, seconds) on stdout
   --help                this text
@@ -98,7 +103,7 @@ CommandLine ParseCommandLine(int argc, char **argv) {
     const std::vector<std::string> valued = {
         "--outfile", "--norm", "--lowpass-sigma", "--alpha", "--l2-method", "--cg-iterations", "--cg-tolerance",
         "--irls-iterations", "--irls-reg", "--irls-reg-factor", "--preconditioner", "--init",
-        "--preset", "--primal", "--dx", "--dy", "--primal-var", "--dx-var", "--dy-var"};
+        "--preset", "--primal", "--dx", "--dy", "--primal-var", "--dx-var", "--dy-var", "--separated"};
     const std::vector<std::string> flags = {"--no-png", "--json", "--help"};
     for (int i = 1; i < argc; ++i) {
         std::string a = argv[i];
@@ -170,6 +175,12 @@ GradientImages ReadSeparateInputs(const CommandLine &cl, Image *source) {
         if (!cl.has(k)) Fail(std::string("missing ") + k + " (separate inputs need --primal, --dx and --dy)");
     *source = ReadImage(cl.at("--primal"));
     GradientImages in = GradientImagesFromImages(*source, ReadImage(cl.at("--dx")), ReadImage(cl.at("--dy")));
+    if (cl.has("--separated")) {
+        const Image sep = ReadImage(cl.at("--separated"));
+        if (sep.width() != in.width || sep.height() != in.height)
+            Fail("the separated image differs in size from the primal");
+        in.separated = GradientImagesFromImages(sep, sep, sep).primal;
+    }
     const int nv = int(cl.opt.count("--primal-var") + cl.opt.count("--dx-var") + cl.opt.count("--dy-var"));
     if (nv != 0 && nv != 3) Fail("give all of --primal-var, --dx-var and --dy-var, or none");
     if (nv == 3) {
@@ -187,7 +198,7 @@ GradientImages ReadSeparateInputs(const CommandLine &cl, Image *source) {
 // One multi-layer input (primal, dx, dy and optional variance layers).
 GradientImages ReadLayeredInput(const CommandLine &cl, Image *source) {
     if (cl.pos.size() != 1) Fail(cl.pos.empty() ? "missing input (see --help)" : "more than one input given");
-    for (const char *k : {"--primal-var", "--dx-var", "--dy-var"})
+    for (const char *k : {"--primal-var", "--dx-var", "--dy-var", "--separated"})
         if (cl.has(k)) Fail(std::string(k) + " goes with --primal/--dx/--dy; a multi-layer input carries its own variance layers");
     Image img = ReadImage(cl.pos[0]);
     *source = img;

@@ -9,6 +9,16 @@ Every scene is small (width `size`, default 32 px) and has a check (see run.py):
   Sum(names)    expectation is the sum of the scenes `names` (lights are additive)
   None          only the crash / timeout / NaN-Inf checks
 
+pbrt-v3's classic integrators do not estimate full light transport, so a scene
+holds one check per kind of estimate (check_for):
+  full       every other integrator: the scene's `check`
+  direct     whitted, directlighting: emission seen directly or through specular
+             chains plus direct light (one scattering vertex), at any maxdepth
+             (theirs bounds the specular recursion only)
+  occlusion  ambientocclusion: per pixel integral of V(wi) cos over the hemisphere
+             of the first hit (pi unoccluded, 0 for a camera ray that escapes);
+             no radiance at all, so only what occlusion alone decides is checked
+
 "White furnace" scenes: a uniform environment of radiance 1 and only lossless
 surfaces (matte Kd 1, smooth glass): radiance 1 everywhere is the solution of
 the rendering equation, so every pixel expects exactly 1 whatever the
@@ -80,16 +90,40 @@ class Refused:
         return "refused: %s" % self.reason
 
 
+# Integrators whose estimate is not full light transport: name -> kind (see above).
+ESTIMATE_KIND = {"whitted": "direct", "directlighting": "direct", "ambientocclusion": "occlusion"}
+AO_BOUND = Bound(math.pi, "(occlusion: integral of V cos <= pi)")
+DIRECT_BOUND = Bound(1, "(direct light only, white furnace)")
+KEEP = object()  # Scene(direct=...): the same check as for full transport
+
+
+def default_occlusion_check(check):
+    """Occlusion keeps the checks decided by geometry alone: nothing visible (Zero),
+    refused input, and Same (occlusion is scale-invariant); otherwise it is only
+    bounded by pi. Exact radiance, strip radiance (Map) and light sums (Sum) are
+    radiance statements and do not apply."""
+    if check is None or isinstance(check, (Zero, Refused, Same)):
+        return check
+    return AO_BOUND
+
+
 class Scene:
     """One stress scene. `world(size)` returns the text between WorldBegin and
-    WorldEnd; the header (camera, film, sampler, integrator) is made here."""
+    WorldEnd; the header (camera, film, sampler, integrator) is made here.
+    `direct` / `occlusion`: the checks for those kinds of estimate (check_for)."""
 
     def __init__(self, name, about, world, check=None, maxdepth=5, eye=(0, 0, 0), look=(0, 0, 1),
-                 up=(0, 1, 0), fov=60, lens=None, width=None, height=None):
+                 up=(0, 1, 0), fov=60, lens=None, width=None, height=None, direct=KEEP, occlusion=KEEP,
+                 limits=None):
         self.name = name
         self.about = about
         self.world = world
         self.check = check
+        self.checks = dict(full=check, direct=check if direct is KEEP else direct,
+                           occlusion=default_occlusion_check(check) if occlusion is KEEP else occlusion)
+        # Known limitations: integrator spec (exactly, parameters included) -> why its energy
+        # check cannot pass here; the cell still fails on a crash, timeout or NaN/Inf.
+        self.limits = dict(limits or {})
         self.maxdepth = maxdepth
         self.eye, self.look, self.up, self.fov = eye, look, up, fov
         self.lens = lens  # (lensradius, focaldistance)
@@ -98,7 +132,12 @@ class Scene:
     def resolution(self, size):
         return (self.width or size), (self.height or size)
 
-    def text(self, integrator, size, spp):
+    def check_for(self, integrator):
+        """The check for integrator NAME (parameters stripped)."""
+        return self.checks[ESTIMATE_KIND.get(integrator, "full")]
+
+    def text(self, integrator, size, spp, maxdepth=True):
+        """maxdepth False: the integrator has no maxdepth parameter (it is left out)."""
         w, h = self.resolution(size)
         cam = '"float fov" [ %s ]' % num(self.fov)
         if self.lens:
@@ -114,7 +153,8 @@ class Scene:
             'PixelFilter "box" "float xwidth" [ 0.5 ] "float ywidth" [ 0.5 ]',
             'Film "image" "integer xresolution" [ %d ] "integer yresolution" [ %d ] '
             '"string filename" [ "%s.exr" ]' % (w, h, self.name),
-            'Integrator "%s" "integer maxdepth" [ %d ]' % (integrator, self.maxdepth),
+            ('Integrator "%s" "integer maxdepth" [ %d ]' % (integrator, self.maxdepth) if maxdepth
+             else 'Integrator "%s"' % integrator),
             "WorldBegin",
             self.world(size).strip(),
             "WorldEnd",
@@ -161,6 +201,8 @@ def furnace(depth, le, rho):
     le3 = le if isinstance(le, list) else [le] * 3
     rho3 = rho if isinstance(rho, list) else [rho] * 3
     value = [l * sum(r ** k for k in range(depth + 1)) for l, r in zip(le3, rho3)]
+    # Direct light only: Le seen plus Le rho reflected once, whatever maxdepth.
+    direct = [l * (1 + r) for l, r in zip(le3, rho3)]
 
     def world(size):
         return attr("ReverseOrientation", 'AreaLightSource "diffuse" "rgb L" %s' % rgb(le3),
@@ -169,7 +211,8 @@ def furnace(depth, le, rho):
     return Scene("furnace_d%d" % depth,
                  "closed emitting sphere, Le=%s, albedo %s, maxdepth %d" % (le, rho, depth), world,
                  Exact(value, "(Le sum rho^k)"), maxdepth=depth, eye=(0.3, 0.2, -0.4),
-                 look=(0.5, -0.3, 1))
+                 look=(0.5, -0.3, 1), direct=Exact(direct, "(Le (1 + rho), direct only)"),
+                 occlusion=Zero())  # closed: every occlusion ray hits the sphere
 
 
 # ---------------------------------------------------------------- white furnace scenes
@@ -329,6 +372,25 @@ def env_only_world(size):
     return ENV
 
 
+# Metropolis with pbrt-v3's estimator on strips 1e-6 .. 1e12: unbiased, but the per-pixel
+# ratio statistic weighs the 1e-6 strip 1e18 times the 1e12 one, and a strip gets its
+# expectation almost only from chain states on it, whose stationary probability is about
+# its share of the image luminance (1e-3 / 7 for the 1e9 strip, 1e-18 / 7 for the dimmest).
+# Without such states a dim strip receives only the large-step proposals, weighted by the
+# bright current state: p_large / 7 = 0.043 of its radiance (measured: 0.03 .. 0.05). No
+# feasible run visits them, and the pixel spread cannot show the missing mass, so the z is
+# meaningless. gmlt's reconstructions also spread the bright strip's Metropolis noise (pixels
+# 1e11 .. 2e12 at 4 spp) into the dim strips (1e9 .. 3e10 absolute) with the primal's exact
+# image mean. pmlt is the same Metropolis case (0.33 .. 0.66, z -1.0 .. -5.0 over seeds).
+# mlt[largestepmis=true] (large steps also as independent samples) is checked.
+METROPOLIS_STRIPS = {
+    "mlt": "pbrt-v3's Metropolis estimator: dim strips need chain states of probability down "
+           "to 1e-18 (README.md, known limitations)",
+    "pmlt": "path-space Metropolis, the same as mlt's (README.md, known limitations)",
+    "gmlt": "Metropolis primal as mlt's, reconstructions spread the 1e12 strip's noise into the "
+            "dim strips (README.md, known limitations)",
+}
+
 SPHERE_VIEW = dict(eye=(0, -3, 1.2), look=(0, 0, 0.4), up=(0, 0, 1), fov=50)
 
 
@@ -340,37 +402,38 @@ def all_scenes():
         furnace(5, [1.0, 0.5, 0.25], [0.8, 0.5, 0.3]),
         furnace(1000, 0.5, 0.5),
         Scene("empty", "no shapes, no lights", empty_world, Zero()),
-        Scene("empty_env", "no shapes, uniform environment 1", env_only_world, Exact(1, wf)),
+        Scene("empty_env", "no shapes, uniform environment 1", env_only_world, Exact(1, wf), occlusion=Zero()),
         Scene("grazing", "camera 1e-5 above a 1e5-radius ground, looking along it; an edge-on quad",
               lambda size: "\n".join([ENV, WHITE, GROUND,
                                       quad((3, 0, 0), (8, 0, 0), (8, 0, 2), (3, 0, 2))]),
-              Exact(1, wf), maxdepth=100, eye=(0, 0, 1e-5), look=(1, 0, 1e-5), up=(0, 0, 1), fov=30),
+              Exact(1, wf), maxdepth=100, direct=DIRECT_BOUND, eye=(0, 0, 1e-5), look=(1, 0, 1e-5), up=(0, 0, 1), fov=30),
         Scene("env_1e36", "white furnace in an environment of radiance 1e36 (float max 3.4e38)",
               lambda size: sphere_on_ground()(size).replace(ENV, 'LightSource "infinite" "rgb L" [ 1e36 1e36 1e36 ]'),
-              Exact(1e36, wf), maxdepth=100, **SPHERE_VIEW),
+              Exact(1e36, wf), maxdepth=100, direct=Bound(1e36, "(direct light only, white furnace)"),
+              **SPHERE_VIEW),
         Scene("far_camera", "camera 1e19 away from a unit sphere (Embree takes |ray origin| < 1.8e18)",
               sphere_on_ground(), Refused("1e15 scene units"), maxdepth=100, eye=(0, -1e19, 0.5), look=(0, 0, 0.5),
               up=(0, 0, 1), fov=30),
         Scene("degenerate_tris", "zero-area, coincident-vertex, needle and 1e-12 triangles; zero-area emitters",
-              degenerate_world, Exact(1, wf), maxdepth=100, eye=(0.2, -2.5, 1.2), look=(0, 0, 0.3),
+              degenerate_world, Exact(1, wf), maxdepth=100, direct=DIRECT_BOUND, eye=(0.2, -2.5, 1.2), look=(0, 0, 0.3),
               up=(0, 0, 1), fov=50),
         Scene("coincident", "coincident and 1e-7/1e-4-apart quads, coincident and 1e-6-apart spheres",
-              coincident_world, Exact(1, wf), maxdepth=100, eye=(0.3, -2.2, 1.5), look=(0.2, 0.2, 0.3),
+              coincident_world, Exact(1, wf), maxdepth=100, direct=DIRECT_BOUND, eye=(0.3, -2.2, 1.5), look=(0.2, 0.2, 0.3),
               up=(0, 0, 1), fov=55),
         Scene("lens_zero", "thin lens, lensradius 0 (pinhole), focaldistance 1e-6",
-              sphere_on_ground(), Exact(1, wf), maxdepth=100, lens=(0, 1e-6), **SPHERE_VIEW),
+              sphere_on_ground(), Exact(1, wf), maxdepth=100, direct=DIRECT_BOUND, lens=(0, 1e-6), **SPHERE_VIEW),
         Scene("lens_tiny", "thin lens, lensradius 1e-12, focaldistance 3.2",
-              sphere_on_ground(), Exact(1, wf), maxdepth=100, lens=(1e-12, 3.2), **SPHERE_VIEW),
+              sphere_on_ground(), Exact(1, wf), maxdepth=100, direct=DIRECT_BOUND, lens=(1e-12, 3.2), **SPHERE_VIEW),
         Scene("lens_huge", "thin lens, lensradius 1e3, focaldistance 3.2",
-              sphere_on_ground(), Exact(1, wf), maxdepth=100, lens=(1e3, 3.2), **SPHERE_VIEW),
+              sphere_on_ground(), Exact(1, wf), maxdepth=100, direct=DIRECT_BOUND, lens=(1e3, 3.2), **SPHERE_VIEW),
         Scene("lens_focus_near", "thin lens, lensradius 0.5, focaldistance 1e-6",
-              sphere_on_ground(), Exact(1, wf), maxdepth=100, lens=(0.5, 1e-6), **SPHERE_VIEW),
+              sphere_on_ground(), Exact(1, wf), maxdepth=100, direct=DIRECT_BOUND, lens=(0.5, 1e-6), **SPHERE_VIEW),
         Scene("lens_focus_far", "thin lens, lensradius 0.5, focaldistance 1e200",
               sphere_on_ground(), Refused("focaldistance"), maxdepth=100, lens=(0.5, 1e200), **SPHERE_VIEW),
     ]
     for label, index in (("1", 1.0), ("1.0001", 1.0001), ("1.5", 1.5), ("3", 3.0)):
         scenes.append(Scene("glass_ior%s" % label, "smooth glass sphere of index %s over the ground" % label,
-                            glass_world(index), Exact(1, wf), maxdepth=100, **SPHERE_VIEW))
+                            glass_world(index), Exact(1, wf), maxdepth=100, direct=DIRECT_BOUND, **SPHERE_VIEW))
     for label, r in (("1e-5", 1e-5), ("1", 1.0)):
         scenes.append(Scene("glass_rough%s" % label, "rough glass (alpha %s, index 1.5)" % label,
                             glass_world(1.5, r), Bound(1, wf), maxdepth=100, **SPHERE_VIEW))
@@ -384,6 +447,7 @@ def all_scenes():
               closed_box_world, Zero(), eye=(0.2, 0.1, -0.3), look=(0.7, 0.6, 1)),
         Scene("emitters_1e-6_1e12", "emitter strips of radiance 1e-6, 1e-3, ..., 1e12 side by side",
               bands_world, Map(bands_expect, "= strip radiance (inner rows)"), fov=90,
+              occlusion=Exact(math.pi, "(unoccluded wall filling the view)"), limits=METROPOLIS_STRIPS,
               width=32, height=len(BAND_RADIANCE) * BAND_ROWS),
         Scene("lights_tiny", "radius-1e-3 sphere light of radiance 1e5 over a diffuse floor",
               lights_world(True, False), eye=(0, -3, 3), look=(0, 0, 0), up=(0, 0, 1), fov=60),

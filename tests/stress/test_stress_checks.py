@@ -3,6 +3,7 @@
 (also correlated in blocks, and smooth reconstructions of a noisy primal) passes;
 a gain, a loss, a leak and a bias against a reference fail."""
 
+import math
 import os
 import random
 import sys
@@ -97,6 +98,36 @@ class Checks(unittest.TestCase):
         self.assertEqual(S.furnace(0, 0.5, 0.5).check.value, [0.5] * 3)
         self.assertEqual(S.furnace(1, 0.5, 0.5).check.value, [0.75] * 3)
         self.assertAlmostEqual(S.furnace(5, 1.0, 0.8).check.value[0], (1 - 0.8 ** 6) / 0.2)
+
+    def test_classic_integrators_get_their_own_expectations(self):
+        scenes = {s.name: s for s in S.all_scenes()}
+        # Direct light only: Le (1 + rho) whatever maxdepth (it bounds the specular recursion).
+        for name in ("furnace_d0", "furnace_d1", "furnace_d1000"):
+            for integ in ("whitted", "directlighting"):
+                self.assertEqual(scenes[name].check_for(integ).value, [0.75] * 3)
+        self.assertAlmostEqual(scenes["furnace_d5"].check_for("whitted").value[0], 1.8)
+        # A white furnace gives at most 1 with direct light only; the environment alone exactly 1.
+        self.assertIsInstance(scenes["glass_ior1.5"].check_for("whitted"), S.Bound)
+        self.assertIsInstance(scenes["empty_env"].check_for("directlighting"), S.Exact)
+        # Occlusion: nothing seen or a closed sphere gives 0, an open wall pi, elsewhere <= pi;
+        # the light sum is no occlusion statement.
+        for name in ("empty", "empty_env", "furnace_d1", "camera_in_box"):
+            self.assertIsInstance(scenes[name].check_for("ambientocclusion"), S.Zero)
+        self.assertAlmostEqual(scenes["emitters_1e-6_1e12"].check_for("ambientocclusion").value[0], 3.14159265)
+        self.assertEqual(scenes["lights_both"].check_for("ambientocclusion").value[0], math.pi)
+        self.assertIsInstance(scenes["scale_1e6"].check_for("ambientocclusion"), S.Same)
+        self.assertIsInstance(scenes["far_camera"].check_for("ambientocclusion"), S.Refused)
+        # Every other integrator keeps the full-transport check.
+        for name, s in scenes.items():
+            self.assertIs(s.check_for("path"), s.check)
+            self.assertIs(s.check_for("some_future_integrator"), s.check)
+        self.assertNotIn("maxdepth", scenes["empty"].text("ambientocclusion", 16, 4, maxdepth=False))
+        self.assertIn('"integer maxdepth" [ 5 ]', scenes["empty"].text("path", 16, 4))
+
+    def test_known_limitations_are_exact_specs(self):
+        limits = {s.name: s.limits for s in S.all_scenes() if s.limits}
+        self.assertEqual(set(limits), {"emitters_1e-6_1e12"})
+        self.assertEqual(set(limits["emitters_1e-6_1e12"]), {"mlt", "pmlt", "gmlt"})  # not mlt[largestepmis=true]
 
 
 if __name__ == "__main__":

@@ -273,8 +273,11 @@ int LoadProblem(const GradientImages &in, PoissonProblem &P) {
     if (!in.separated.empty()) {  // the solve's primal: primal - separated (header comment)
         std::vector<float> s;
         ToPlanar(in, in.separated, "separated", 0, 0, false, s);
+        // In double, clamped: primal and separated near the float limit with
+        // opposite signs would otherwise make +-inf (then NaN in the solvers).
+        const double big = std::numeric_limits<float>::max();
         for (size_t i = 0; i < s.size(); ++i)
-            if (s[i] != 0) P.p[i] -= s[i];
+            if (s[i] != 0) P.p[i] = float(std::clamp(double(P.p[i]) - double(s[i]), -big, big));
     }
     ToPlanar(in, in.dx, "dx", 1, 0, false, P.gx);
     ToPlanar(in, in.dy, "dy", 0, 1, false, P.gy);

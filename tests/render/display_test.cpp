@@ -203,8 +203,9 @@ TEST_F(DisplayTest, FinalPixelsEqualTheExr) {
     } cases[] = {
         {"--spp 4", 3},
         {"--spp 4 --cropwindow 0.2 0.9 0.1 0.6", 3},
-        // With layers, the output's every channel (gbdpt: primal, dx, dy, reconstructions).
-        {"--spp 2 --integrator gbdpt --display-layers", 21},
+        // With layers, the output's every channel (gbdpt: RGB, primal, dx, dy, separated and the
+        // three reconstructions: 8 layers of 3 channels).
+        {"--spp 2 --integrator gbdpt --display-layers", 24},
     };
     for (const Case &c : cases) {
         SCOPED_TRACE(c.args);

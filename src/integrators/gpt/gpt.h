@@ -57,6 +57,8 @@ class GPTIntegrator : public PixelSampleIntegrator, public GradientFamily {
     void finish(const Film &film, const RenderStats &stats, Image *out) override;
     double finishEstimate() const override { return reconstructionEstimate(set_.norm, set_.alpha); }
     std::string statistics() const override;
+    // Media: gpt_volume.h (a scene without media takes the surface-only tracer).
+    bool rendersMedia() const override { return true; }
 
     // One camera sample without a film (for tests): primal and the four neighbour
     // differences; `pixelInside` says which neighbours exist.
@@ -68,6 +70,7 @@ class GPTIntegrator : public PixelSampleIntegrator, public GradientFamily {
     GPTSettings set_;
     FileLoc loc_;
     LightSampler lightSampler_;
+    bool volumetric_ = false;  // the scene has media: sample() takes gpt::VolumeGradientPathTracer
     mutable ShiftStats stats_;
 };
 

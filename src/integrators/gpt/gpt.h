@@ -12,7 +12,8 @@
 // gradients are reconstructed at the end (screened Poisson). Emission reached
 // after Dirac bounces only (emitters seen directly or through mirrors and
 // glass) is separated light: primal and layer "separated", no gradients,
-// added after the reconstruction (gradient_film.h).
+// added after the reconstruction (gradient_film.h). Scenes with participating
+// media take gpt_volume.h's tracer (distance-copy and medium-vertex shifts).
 //
 // Parameters (path tracing, integrators/path/path.h):
 //   integer maxdepth 5               maximum number of bounces

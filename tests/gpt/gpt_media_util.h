@@ -66,7 +66,9 @@ inline std::string DenseFogBoxText() {
 // inside it differ in length by a lot and in one direction: the transmittance
 // ratios of changed segments (pass-through, scattering, reconnection across
 // the back face) set the gradients.
-inline std::string WedgeText() {
+// `extra`: more shapes in the world block.
+inline std::string WedgeText(const std::string &integratorLine = "Integrator \"path\" \"integer maxdepth\" [4]",
+                             const std::string &extra = "") {
     // Faces of the prism with x in [-1.5, 1.5], y in [0, 2], z from 0 to
     // 0.05 + (x + 1.5) / 3, each oriented outwards (pbrt's triangle normal is
     // cross(p0 - p2, p1 - p2); the interface's inside is against it).
@@ -92,7 +94,7 @@ inline std::string WedgeText() {
     s << "LookAt 0 1 -3  0 1 0  0 1 0\nCamera \"perspective\" \"float fov\" [50]\n"
       << "Film \"image\" \"integer xresolution\" [12] \"integer yresolution\" [9] \"string filename\" \"w.exr\"\n"
       << "Sampler \"sobol\" \"integer pixelsamples\" [16]\nPixelFilter \"box\"\n"
-      << "Integrator \"path\" \"integer maxdepth\" [4]\n"
+      << integratorLine << "\n"
       << "MakeNamedMedium \"smoke\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [0.4 0.4 0.4] "
          "\"rgb sigma_s\" [1.6 1.6 1.6] \"float g\" [0.2]\n"
       << "WorldBegin\n"
@@ -109,8 +111,22 @@ inline std::string WedgeText() {
       << face({{-1.5, 0, 0}, {-1.5, 2, 0}, {-1.5, 2, z0}, {-1.5, 0, z0}})
       << face({{1.5, 0, 0}, {1.5, 2, 0}, {1.5, 2, z1}, {1.5, 0, z1}})
       << face({{-1.5, 0, 0}, {1.5, 0, 0}, {1.5, 0, z1}, {-1.5, 0, z0}})
-      << face({{-1.5, 2, 0}, {1.5, 2, 0}, {1.5, 2, z1}, {-1.5, 2, z0}}) << "AttributeEnd\nWorldEnd\n";
+      << face({{-1.5, 2, 0}, {1.5, 2, 0}, {1.5, 2, z1}, {-1.5, 2, z0}}) << "AttributeEnd\n"
+      << extra << "WorldEnd\n";
     return s.str();
+}
+
+// Specular and near-specular surfaces in and behind the smoke: a smooth glass
+// sphere inside the wedge (random replay of its Dirac lobes; the smoke fills it:
+// its surface is no medium transition) and a near-specular metal sphere behind
+// it (roughness 5e-4, below the shift threshold: half-vector copy), so that
+// offsets copy free-flight distances after specular bounces.
+inline std::string WedgeSpecularText(const std::string &integratorLine) {
+    return WedgeText(integratorLine,
+                     "AttributeBegin\n  Material \"glass\"\n  Translate 0.6 1.2 0.45\n"
+                     "  Shape \"sphere\" \"float radius\" [0.3]\nAttributeEnd\n"
+                     "AttributeBegin\n  Material \"metal\" \"float roughness\" [0.0005] \"bool remaproughness\" \"false\"\n"
+                     "  Translate -0.6 0.7 1.6\n  Shape \"sphere\" \"float radius\" [0.5]\nAttributeEnd\n");
 }
 
 }  // namespace gradus::gptmedia

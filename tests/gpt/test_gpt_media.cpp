@@ -9,8 +9,10 @@
 //  - bad medium input is refused for gpt as for path;
 //  - agreement with path (gpt_media_check.h: primal, reconstruction, gradients,
 //    2% power checks) on a smoke wedge (gpt_media_util.h), whose gradients
-//    depend on the transmittance ratios of changed segments; fog-box and its
-//    grid variant are in the slow tier (test_gpt_media_slow.cpp).
+//    depend on the transmittance ratios of changed segments, and on the wedge
+//    with a glass and a near-specular metal sphere (replay and half-vector
+//    copy between medium vertices, shift modes halfvector and hybrid); fog-box
+//    and its grid variant are in the slow tier (test_gpt_media_slow.cpp).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -220,4 +222,14 @@ TEST(GPTMedia, BadMediumInputIsALocatedError) {
 // reconnection segments (Z 8.4).
 TEST(GPTMedia, AgreesWithPathOnSmokeWedge) {
     gptmedia::CheckAgainstPath("smoke-wedge", gptmedia::WedgeText(), 16, 256, 200, 0.02);
+}
+
+// Specular (replay) and near-specular (half-vector) vertices among the medium
+// vertices, with either shift mode.
+TEST(GPTMedia, AgreesWithPathOnSmokeWedgeWithSpecularSpheres) {
+    for (const char *shift : {"halfvector", "hybrid"})
+        gptmedia::CheckAgainstPath(std::string("smoke-wedge-specular ") + shift,
+                                   gptmedia::WedgeSpecularText(std::string("Integrator \"gpt\" \"integer maxdepth\" [4] "
+                                                                           "\"string shift\" \"") + shift + "\""),
+                                   16, 256, 200, 0.02);
 }

@@ -21,7 +21,8 @@
 //    the reconnection segment crosses the interfaces on its way;
 //  - otherwise the direction is shifted: half-vector copy or replay at
 //    surfaces (as without media), the same world direction at medium vertices
-//    (|T'| = 1; also with shift "hybrid");
+//    (|T'| = 1; also with shift "hybrid"; counted as half-vector copies in
+//    the statistics);
 //  - every changed segment multiplies the offset's throughput f(y)|T'|/p(x)
 //    by T_y / T_x (the base's p(x) holds T_x), estimated without bias by
 //    TransmittanceRatio (gradient/medium_shift.h: exact in homogeneous media,

@@ -120,9 +120,12 @@ inline std::string WedgeText(const std::string &integratorLine = "Integrator \"p
 // sphere inside the wedge (random replay of its Dirac lobes; the smoke fills it:
 // its surface is no medium transition) and a near-specular metal sphere behind
 // it (roughness 5e-4, below the shift threshold: half-vector copy), so that
-// offsets copy free-flight distances after specular bounces.
+// offsets copy free-flight distances after specular bounces; and an
+// environment light (environment shifts: reconnections towards infinity out of
+// the smoke).
 inline std::string WedgeSpecularText(const std::string &integratorLine) {
     return WedgeText(integratorLine,
+                     "LightSource \"infinite\" \"rgb L\" [0.4 0.5 0.6]\n"
                      "AttributeBegin\n  Material \"glass\"\n  Translate 0.6 1.2 0.45\n"
                      "  Shape \"sphere\" \"float radius\" [0.3]\nAttributeEnd\n"
                      "AttributeBegin\n  Material \"metal\" \"float roughness\" [0.0005] \"bool remaproughness\" \"false\"\n"

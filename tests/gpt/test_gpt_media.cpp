@@ -12,8 +12,8 @@
 //    depend on the transmittance ratios of changed segments, and on the wedge
 //    with a glass and a near-specular metal sphere (replay and half-vector
 //    copy between medium vertices, shift modes halfvector and hybrid) and an
-//    environment light; fog-box
-//    and its grid variant are in the slow tier (test_gpt_media_slow.cpp).
+//    environment light; fog-box and its grid variant are in the slow tier
+//    (test_gpt_media_slow.cpp).
 #include <gtest/gtest.h>
 
 #include <cmath>

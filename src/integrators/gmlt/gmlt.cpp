@@ -67,11 +67,39 @@ void GMLTIntegrator::preprocess(const Scene &scene, Film &film) {
     pmlt::MutationSettings ms = mset_;
     ms.shiftThreshold = gset_.shiftThreshold;  // near-specular vertices of the shift (Fig. 5a)
     mut_ = std::make_unique<pmlt::Mutator>(ctx_, film_, ms);
-    initGradients(film, false, true, false);  // the chains only splat: no per-sample layers
+    // The chains only splat: no per-sample layers. The direct pass's G-PT
+    // (PMLTIntegrator::preprocess) has added its per-sample layers; a
+    // GradientFilm of the same arguments finds them (Film::addLayer by name).
+    if (direct_) directFilm_.init(film, false, false, true);
+    initGradients(film, false, true, false);
     if (gset_.stateLayers) {
         densityLayer_ = film.addLayer("gmlt.density");
         irreversibleLayer_ = film.addLayer("gmlt.irreversible");
     }
+}
+
+EntityDesc GMLTIntegrator::directDesc() const {
+    // G-PT at maxdepth 1 (the paths the chains leave out: outsideTarget), its
+    // samples in their own pixel as the chains' splats, the shift's threshold.
+    EntityDesc d;
+    d.type = "gpt";
+    d.loc = loc_;
+    Param depth;
+    depth.type = "integer";
+    depth.name = "maxdepth";
+    depth.numbers = {1};
+    d.params.add(depth);
+    Param filter;
+    filter.type = "string";
+    filter.name = "pixelfilter";
+    filter.strings = {"box"};
+    d.params.add(filter);
+    Param threshold;
+    threshold.type = "float";
+    threshold.name = "shiftthreshold";
+    threshold.numbers = {double(gset_.shiftThreshold)};
+    d.params.add(threshold);
+    return d;
 }
 
 GMLTIntegrator::Target GMLTIntegrator::evaluate(const pmlt::State &xs, int dir, Arena &arena,
@@ -210,24 +238,13 @@ void GMLTIntegrator::splatState(SampleRecorder &rec, const pmlt::State &s, int d
 }
 
 void GMLTIntegrator::finish(const Film &film, const RenderStats &stats, Image *out) {
-    const bool direct = direct_ != nullptr;
-    Image directImage;
-    if (direct) directImage = out->layerRGB("");  // the path tracer's direct light (the film's main image)
     rescale_ = rescale();
     // The chains' splats are without b (metropolis.h): the gradients and the
-    // coarse primal by the same b, before the reconstruction.
-    finishGradients(film, stats, gset_.norm, gset_.alpha, out, rescale_ * b_);
-    if (direct) {
-        // Direct light is added after the solve (Sec. 7), to the primal and every reconstruction.
-        const std::vector<std::string> layers = out->layers();
-        for (const char *layer : {"", "primal", "reconstructed_l1", "reconstructed_l2", "reconstructed_hybrid",
-                                  "reconstructed_weighted"}) {
-            if (std::find(layers.begin(), layers.end(), layer) == layers.end()) continue;
-            Image im = out->layerRGB(layer);
-            for (size_t k = 0; k < im.data().size(); ++k) im.data()[k] += directImage.data()[k];
-            out->setLayerRGB(layer, im);
-        }
-    }
+    // coarse primal by the same b; the direct pass's G-PT images (averaged
+    // over its samples per pixel) added unscaled; then the reconstruction.
+    GradientImages direct;
+    if (direct_) direct = directFilm_.images(film, double(set_.directSamples));
+    finishGradients(film, stats, gset_.norm, gset_.alpha, out, rescale_ * b_, direct_ ? &direct : nullptr);
     if (densityLayer_ >= 0) {
         for (auto [idx, name] : {std::pair{densityLayer_, "density"}, std::pair{irreversibleLayer_, "irreversible"}}) {
             Image im = film.layerImage(idx);

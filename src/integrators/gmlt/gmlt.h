@@ -30,9 +30,12 @@
 // (kept with probability lum / tau, weight tau / lum): the shift of every
 // candidate tripled pmlt's bootstrap time (glass cube: 1.05 s -> 3.8 s).
 // The screened-Poisson reconstruction (Eq. 16, reconstruction/) runs in finish.
-// directsamples N > 0 (Sec. 7): direct light by the path tracer, added to the
-// primal and to every reconstruction after the solve (dx, dy hold the chains'
-// part only).
+// directsamples N > 0 (Sec. 7): paths of at most one scattering vertex by
+// G-PT (gpt, maxdepth 1, box filter, the same shiftthreshold) with N samples
+// per pixel in the first pass: its primal and gradients (G-PT's shift) are
+// added to the chains' (times b) before the reconstruction, which sees one
+// image; emitters seen directly or through Dirac vertices only are G-PT's
+// separated light (no gradients, added after the solve).
 //
 // Parameters (pmlt's, pmlt.h):
 //   integer maxdepth 5                 maximum path depth (edges - 1)
@@ -109,6 +112,7 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
     double candidateWeight(const Sample &smp, int64_t k, int s, int t, const ConnectSamples &cu, double lum,
                            uint64_t key, Arena &arena) const override;
     void prepareBootstrap(PassContext &ctx, uint64_t key) override;
+    EntityDesc directDesc() const override;
     // The roulette threshold tau (the independent samples after a resume weigh with it).
     void saveCounters(std::string *s) const override;
     bool loadCounters(const std::string &s, size_t *at) override;
@@ -142,6 +146,7 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
     std::atomic<int64_t> nNearSpecular_{0};  // chain shifts that moved a near-specular vertex
     double tau_ = 0;  // candidate roulette threshold (prepareBootstrap)
     int densityLayer_ = -1, irreversibleLayer_ = -1;
+    GradientFilm directFilm_;  // directsamples: the layers of the G-PT direct pass (read in finish)
 };
 
 }  // namespace gradus

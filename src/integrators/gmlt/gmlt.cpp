@@ -1,8 +1,12 @@
 #include "integrators/gmlt/gmlt.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <sstream>
+#if defined(__x86_64__) || defined(__i386__)
+#include <x86intrin.h>
+#endif
 
 #include "core/error.h"
 #include "integrators/factories.h"
@@ -30,6 +34,19 @@ ParamTable<GMLTSettings> Table() {
               "layers \"density\" (chain states per pixel per mutation per pixel) and \"irreversible\" "
               "(states whose shift has n = 1: the offset blocked or the shift failed)");
     return t;
+}
+
+// A cheap timestamp for the phase costs (the TSC: ~7 ns a read against
+// the ~25 ns of the clock; a shift costs microseconds).
+inline uint64_t Ticks() {
+#if defined(__x86_64__) || defined(__i386__)
+    return __rdtsc();
+#else
+    return uint64_t(std::chrono::steady_clock::now().time_since_epoch().count());
+#endif
+}
+double ClockSeconds() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 // Luminance of the channel-wise absolute value (Eq. 11's norm of a signed spectrum).
@@ -72,6 +89,8 @@ void GMLTIntegrator::preprocess(const Scene &scene, Film &film) {
     // GradientFilm of the same arguments finds them (Film::addLayer by name).
     if (direct_) directFilm_.init(film, false, false, true);
     initGradients(film, false, true, false);
+    ticks0_ = Ticks();
+    clock0_ = ClockSeconds();
     if (gset_.stateLayers) {
         densityLayer_ = film.addLayer("gmlt.density");
         irreversibleLayer_ = film.addLayer("gmlt.irreversible");
@@ -182,6 +201,14 @@ int64_t GMLTIntegrator::runMutations(Chain &ch, int64_t count, pmlt::State &xs, 
     flushCounts(w.cnt, w.mst);
     for (int s = 0; s < kShiftStatuses; ++s) shiftCounts_[s] += w.shifts[s];
     nNearSpecular_ += w.mst.nearSpecularShifts;
+    phases_.propose += w.ph.propose;
+    phases_.shiftWalk += w.ph.shiftWalk;
+    phases_.shiftJoin += w.ph.shiftJoin;
+    phases_.rest += w.ph.rest;
+    phases_.nWalkShifts += w.ph.nWalkShifts;
+    phases_.nJoinShifts += w.ph.nJoinShifts;
+    phases_.nWalkShiftFailures += w.ph.nWalkShiftFailures;
+    phases_.nMutations += count;
     return count;
 }
 
@@ -189,15 +216,29 @@ void GMLTIntegrator::mutate(ChainWalk &w, Sampler &u, RNG &rng, SampleRecorder &
                             Arena &arena) const {
     // 1. A new base path by one of pmlt's mutations and a uniform direction:
     // a symmetric proposal of the direction (Sec. 4.2.1).
+    const uint64_t t0 = Ticks();
     const Proposal p = proposeMutation(w.xs, rng, u, arena, &w.ys, &w.mst);
     const int dy = std::min(int(rng.uniform() * 4), 3);
+    uint64_t t1 = Ticks();
+    w.ph.propose += t1 - t0;
     // 2. Acceptance.
     Target ty;
     Float a = 0;
     if (p.res == pmlt::ProposalResult::Proposed && outsideTarget(w.ys)) {
         ++w.cnt.zero[p.type];  // outside the chains' target (directsamples)
     } else if (p.res == pmlt::ProposalResult::Proposed) {
+        const int64_t walks = w.mst.walks, failures = w.mst.walkFailures;
         ty = evaluate(w.ys, dy, arena, &w.mst);
+        const uint64_t t2 = Ticks();
+        if (w.mst.walks > walks) {
+            w.ph.shiftWalk += t2 - t1;
+            ++w.ph.nWalkShifts;
+            w.ph.nWalkShiftFailures += w.mst.walkFailures - failures;
+        } else {
+            w.ph.shiftJoin += t2 - t1;
+            ++w.ph.nJoinShifts;
+        }
+        t1 = t2;
         ++w.shifts[int(ty.status)];
         // Metropolis-Hastings on the extended space: pmlt's ratio is
         // I(y) T(y -> x) / (I(x) T(x -> y)); the target is f (Eq. 11).
@@ -220,6 +261,7 @@ void GMLTIntegrator::mutate(ChainWalk &w, Sampler &u, RNG &rng, SampleRecorder &
         if (w.tx.n == 1) rec.splat(w.xs.e.pRaster, Spectrum(1), irreversibleLayer_);
     }
     arena.reset();
+    w.ph.rest += Ticks() - t1;
 }
 
 void GMLTIntegrator::splatState(SampleRecorder &rec, const pmlt::State &s, int dir, const Target &t,
@@ -275,6 +317,21 @@ std::string GMLTIntegrator::statistics() const {
     o << "\n";
     o << "  shifts through near-specular vertices (roughness below shiftthreshold " << gset_.shiftThreshold
       << ", treated as specular: Fig. 5a): " << nNearSpecular_.load() << "\n";
+    {
+        // Thread-seconds per phase of the chains' mutations (TSC ticks at the
+        // rate measured since preprocess).
+        const double dt = ClockSeconds() - clock0_;
+        const double perTick = dt > 0 ? dt / double(Ticks() - ticks0_) : 0;
+        const int64_t M = phases_.nMutations.load(), nw = phases_.nWalkShifts.load(), nj = phases_.nJoinShifts.load();
+        auto us = [&](uint64_t ticks, int64_t n) { return n > 0 ? 1e6 * double(ticks) * perTick / double(n) : 0.0; };
+        const uint64_t total = phases_.propose + phases_.shiftWalk + phases_.shiftJoin + phases_.rest;
+        o << "  cost per mutation (" << M << " mutations): " << us(total, M) << " us = proposal "
+          << us(phases_.propose, M) << " + shift " << us(phases_.shiftWalk + phases_.shiftJoin, M)
+          << " + acceptance and splats " << us(phases_.rest, M) << "\n";
+        o << "  shifts of proposals: " << nw << " walked a second chain (" << us(phases_.shiftWalk, nw) << " us each, "
+          << phases_.nWalkShiftFailures.load() << " walks failed or not reversible), " << nj << " joined or no walk ("
+          << us(phases_.shiftJoin, nj) << " us each)\n";
+    }
     o << "  bootstrap: " << nBootstrapShifted_.load() << " candidates re-weighted to f, " << nRouletteDropped_.load()
       << " left out by Russian roulette below the pilot's mean luminance " << tau_ << "\n";
     if (nBootstrapDropped_ > 0)

@@ -121,6 +121,17 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
 
   private:
     static constexpr int kShiftStatuses = 6;
+    // Cost per phase of the chains' mutations (--stats), in timestamp-counter
+    // ticks: the proposal, the shift (those that walked a second chain and
+    // those that joined x_b' to x_{b+1}), the rest (acceptance, splats, step).
+    struct Phases {
+        uint64_t propose = 0, shiftWalk = 0, shiftJoin = 0, rest = 0;
+        int64_t nWalkShifts = 0, nJoinShifts = 0, nWalkShiftFailures = 0;
+    };
+    struct AtomicPhases {
+        std::atomic<uint64_t> propose{0}, shiftWalk{0}, shiftJoin{0}, rest{0};
+        std::atomic<int64_t> nWalkShifts{0}, nJoinShifts{0}, nWalkShiftFailures{0}, nMutations{0};
+    };
     // One chain's extended state z = (x, d) during a pass (x: the chain's
     // rebuilt state, y: the proposal's), with its counts.
     struct ChainWalk {
@@ -132,6 +143,7 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
         pmlt::MutationStats mst;
         ItemCounts cnt;
         int64_t shifts[kShiftStatuses] = {};
+        Phases ph;
     };
     // One mutation of the walk: proposal (base path and direction),
     // acceptance on the extended space, splats, the step.
@@ -144,6 +156,9 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
     mutable std::atomic<int64_t> shiftCounts_[kShiftStatuses] = {};
     mutable std::atomic<int64_t> nBootstrapDropped_{0}, nBootstrapShifted_{0}, nRouletteDropped_{0};
     std::atomic<int64_t> nNearSpecular_{0};  // chain shifts that moved a near-specular vertex
+    mutable AtomicPhases phases_;
+    uint64_t ticks0_ = 0;  // the counter and the clock at preprocess (ticks per second at statistics)
+    double clock0_ = 0;
     double tau_ = 0;  // candidate roulette threshold (prepareBootstrap)
     int densityLayer_ = -1, irreversibleLayer_ = -1;
     GradientFilm directFilm_;  // directsamples: the layers of the G-PT direct pass (read in finish)

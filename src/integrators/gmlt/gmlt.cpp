@@ -49,6 +49,16 @@ double ClockSeconds() {
     return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
+// Separated light: every vertex between the camera and the emitter x_{n-1}
+// scatters through a Dirac lobe (none: the emitter seen directly).
+bool SeparatedPath(const pmlt::Path &x) {
+    const int n = x.size();
+    if (n < 2) return false;
+    for (int j = 1; j < n - 1; ++j)
+        if (x.v[size_t(j)].type != VertexType::Surface || !x.v[size_t(j)].delta()) return false;
+    return true;
+}
+
 // Luminance of the channel-wise absolute value (Eq. 11's norm of a signed spectrum).
 double AbsLuminance(const Spectrum &s) { return Spectrum(std::abs(s.r), std::abs(s.g), std::abs(s.b)).y(); }
 
@@ -89,6 +99,7 @@ void GMLTIntegrator::preprocess(const Scene &scene, Film &film) {
     // GradientFilm of the same arguments finds them (Film::addLayer by name).
     if (direct_) directFilm_.init(film, false, false, true);
     initGradients(film, false, true, false);
+    separatedLayer_ = film.addLayer("gmlt.separated", LayerUse::Splats, false);
     ticks0_ = Ticks();
     clock0_ = ClockSeconds();
     if (gset_.stateLayers) {
@@ -124,6 +135,12 @@ EntityDesc GMLTIntegrator::directDesc() const {
 GMLTIntegrator::Target GMLTIntegrator::evaluate(const pmlt::State &xs, int dir, Arena &arena,
                                                 pmlt::MutationStats *stats) const {
     Target t;
+    if (SeparatedPath(xs.x)) {
+        // Separated light: no gradient, the target is the coarse primal's part of Eq. 11.
+        t.separated = true;
+        t.f = double(gset_.alpha) * 0.25 * double(xs.e.I);
+        return t;
+    }
     const Point2i off = kNeighbourOffsets[dir];
     thread_local pmlt::State ys;  // the offset (its vectors reused: one evaluation per proposal)
     t.status = mut_->shift(xs, Point2(xs.e.pRaster.x + Float(off.x), xs.e.pRaster.y + Float(off.y)), arena, &ys,
@@ -193,7 +210,7 @@ int64_t GMLTIntegrator::runMutations(Chain &ch, int64_t count, pmlt::State &xs, 
     ChainWalk w(xs);
     w.dx = ch.dir;
     w.tx = evaluate(xs, w.dx, cur, &w.mst);
-    ++w.shifts[int(w.tx.status)];
+    if (!w.tx.separated) ++w.shifts[int(w.tx.status)];
     if (!(w.tx.f > 0)) return 0;  // not reached: alpha > 0 and I(x) > 0
     RNGSampler u(rng);
     for (int64_t k = 0; k < count; ++k) mutate(w, u, rng, rec, cur, wk.arena);
@@ -209,6 +226,7 @@ int64_t GMLTIntegrator::runMutations(Chain &ch, int64_t count, pmlt::State &xs, 
     phases_.nJoinShifts += w.ph.nJoinShifts;
     phases_.nWalkShiftFailures += w.ph.nWalkShiftFailures;
     phases_.nMutations += count;
+    nSeparated_ += w.ph.nSeparated;
     return count;
 }
 
@@ -229,6 +247,7 @@ void GMLTIntegrator::mutate(ChainWalk &w, Sampler &u, RNG &rng, SampleRecorder &
     } else if (p.res == pmlt::ProposalResult::Proposed) {
         const int64_t walks = w.mst.walks, failures = w.mst.walkFailures;
         ty = evaluate(w.ys, dy, arena, &w.mst);
+        w.ph.nSeparated += ty.separated;
         const uint64_t t2 = Ticks();
         if (w.mst.walks > walks) {
             w.ph.shiftWalk += t2 - t1;
@@ -239,7 +258,7 @@ void GMLTIntegrator::mutate(ChainWalk &w, Sampler &u, RNG &rng, SampleRecorder &
             ++w.ph.nJoinShifts;
         }
         t1 = t2;
-        ++w.shifts[int(ty.status)];
+        if (!ty.separated) ++w.shifts[int(ty.status)];
         // Metropolis-Hastings on the extended space: pmlt's ratio is
         // I(y) T(y -> x) / (I(x) T(x -> y)); the target is f (Eq. 11).
         const double r = p.ratio * (double(w.xs.e.I) / double(w.ys.e.I)) * (ty.f / w.tx.f) *
@@ -258,7 +277,7 @@ void GMLTIntegrator::mutate(ChainWalk &w, Sampler &u, RNG &rng, SampleRecorder &
     }
     if (densityLayer_ >= 0) {
         rec.splat(w.xs.e.pRaster, Spectrum(1), densityLayer_);
-        if (w.tx.n == 1) rec.splat(w.xs.e.pRaster, Spectrum(1), irreversibleLayer_);
+        if (w.tx.n == 1 && !w.tx.separated) rec.splat(w.xs.e.pRaster, Spectrum(1), irreversibleLayer_);
     }
     arena.reset();
     w.ph.rest += Ticks() - t1;
@@ -274,9 +293,16 @@ void GMLTIntegrator::splatState(SampleRecorder &rec, const pmlt::State &s, int d
     GradientSplat g;
     g.pixel = Point2i{int(std::floor(s.e.pRaster.x)), int(std::floor(s.e.pRaster.y))};
     g.value.primal = s.e.F * 0.25;
-    g.value.diff[dir] = t.diff;
-    g.value.active[dir] = true;
-    gfilm_.splatLightTracing(rec, g, Float(expectedValueScale(w, t.f)));
+    const Float scale = Float(expectedValueScale(w, t.f));
+    if (t.separated) {
+        // No gradient; the primal also to the separated layer (added after the solve).
+        if (filmBounds_.inside(g.pixel) && g.value.primal.isFinite())
+            rec.splat(Point2(g.pixel.x + 0.5, g.pixel.y + 0.5), g.value.primal * scale, separatedLayer_);
+    } else {
+        g.value.diff[dir] = t.diff;
+        g.value.active[dir] = true;
+    }
+    gfilm_.splatLightTracing(rec, g, scale);
 }
 
 void GMLTIntegrator::finish(const Film &film, const RenderStats &stats, Image *out) {
@@ -284,9 +310,15 @@ void GMLTIntegrator::finish(const Film &film, const RenderStats &stats, Image *o
     // The chains' splats are without b (metropolis.h): the gradients and the
     // coarse primal by the same b; the direct pass's G-PT images (averaged
     // over its samples per pixel) added unscaled; then the reconstruction.
-    GradientImages direct;
-    if (direct_) direct = directFilm_.images(film, double(set_.directSamples));
-    finishGradients(film, stats, gset_.norm, gset_.alpha, out, rescale_ * b_, direct_ ? &direct : nullptr);
+    GradientImages add;
+    if (direct_) add = directFilm_.images(film, double(set_.directSamples));
+    // The chains' separated light, times the same b (its primal is in the film's primal already).
+    const Image sep = film.layerImage(separatedLayer_);
+    add.width = sep.width();
+    add.height = sep.height();
+    if (add.separated.empty()) add.separated.assign(sep.data().size(), 0.f);
+    for (size_t i = 0; i < sep.data().size(); ++i) add.separated[i] += float(sep.data()[i] * rescale_ * b_);
+    finishGradients(film, stats, gset_.norm, gset_.alpha, out, rescale_ * b_, &add);
     if (densityLayer_ >= 0) {
         for (auto [idx, name] : {std::pair{densityLayer_, "density"}, std::pair{irreversibleLayer_, "irreversible"}}) {
             Image im = film.layerImage(idx);
@@ -315,6 +347,7 @@ std::string GMLTIntegrator::statistics() const {
             if (shiftCounts_[s].load() > 0) o << "; " << ShiftStatusName(s) << " " << shiftCounts_[s].load();
     }
     o << "\n";
+    o << "  separated light (Dirac vertices only, no shift): " << nSeparated_.load() << " proposals\n";
     o << "  shifts through near-specular vertices (roughness below shiftthreshold " << gset_.shiftThreshold
       << ", treated as specular: Fig. 5a): " << nNearSpecular_.load() << "\n";
     {

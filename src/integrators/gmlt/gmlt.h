@@ -30,6 +30,15 @@
 // (kept with probability lum / tau, weight tau / lum): the shift of every
 // candidate tripled pmlt's bootstrap time (glass cube: 1.05 s -> 3.8 s).
 // The screened-Poisson reconstruction (Eq. 16, reconstruction/) runs in finish.
+// Separated light (as gpt, gbdpt, gvcm: gradient_film.h): a path whose
+// vertices between the camera and the emitter all scatter through Dirac
+// lobes (an emitter seen directly, in a mirror, through glass) gets no
+// shift: f*(z) = 0, f(z) = alpha (1/4) Y(F(x)) in the chains, the bootstrap
+// and b alike; its coarse primal also lands in a layer of its own, which the
+// reconstruction adds after the solve (the screened Poisson solve neither
+// spreads nor loses those pixels). The shift keeps Dirac vertices' lobes, so
+// such a path and its offsets are separated alike: leaving out both halves of
+// its gradient keeps the estimator, for the image without that light.
 // directsamples N > 0 (Sec. 7): paths of at most one scattering vertex by
 // G-PT (gpt, maxdepth 1, box filter, the same shiftthreshold) with N samples
 // per pixel in the first pass: its primal and gradients (G-PT's shift) are
@@ -98,6 +107,7 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
         Spectrum diff{0};    // f*(z) of Eq. 9 before the sign of d: n (offset - F(x))
         Float n = 1;
         double f = 0;        // Eq. 11
+        bool separated = false;  // an emitter seen through Dirac vertices only: no shift (header)
     };
     // After preprocess.
     Target evaluate(const pmlt::State &x, int dir, Arena &arena, pmlt::MutationStats *stats = nullptr) const;
@@ -126,7 +136,7 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
     // those that joined x_b' to x_{b+1}), the rest (acceptance, splats, step).
     struct Phases {
         uint64_t propose = 0, shiftWalk = 0, shiftJoin = 0, rest = 0;
-        int64_t nWalkShifts = 0, nJoinShifts = 0, nWalkShiftFailures = 0;
+        int64_t nWalkShifts = 0, nJoinShifts = 0, nWalkShiftFailures = 0, nSeparated = 0;
     };
     struct AtomicPhases {
         std::atomic<uint64_t> propose{0}, shiftWalk{0}, shiftJoin{0}, rest{0};
@@ -161,6 +171,8 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
     double clock0_ = 0;
     double tau_ = 0;  // candidate roulette threshold (prepareBootstrap)
     int densityLayer_ = -1, irreversibleLayer_ = -1;
+    int separatedLayer_ = -1;  // the chains' separated light (splats, without b)
+    mutable std::atomic<int64_t> nSeparated_{0};  // chain states of separated light (proposals evaluated)
     GradientFilm directFilm_;  // directsamples: the layers of the G-PT direct pass (read in finish)
 };
 

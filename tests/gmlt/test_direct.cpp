@@ -39,9 +39,10 @@ std::vector<double> Reduce(const Image &img) {
 // means: a gradient summed over a block is the difference of the image along
 // its sides). The last column's dx and the last row's dy (pairs that leave the
 // film, which the reconstruction does not use) are left out: there the chains
-// splat -F of shifts off the film, G-PT nothing. G-PT's separated light (the
-// emitter seen directly) takes no gradients; the chains alone give it its
-// gradients: its differences are added back to dx and dy.
+// splat -F of shifts off the film, G-PT nothing. Separated light (the emitter
+// seen directly or through Dirac vertices) takes no gradients, and the direct
+// pass separates more of it (G-PT's paths of one scattering vertex) than the
+// chains alone: its differences are added back to dx and dy of both.
 std::vector<double> Layers(const Image &img) {
     std::vector<double> v;
     const std::vector<std::string> names = img.layers();

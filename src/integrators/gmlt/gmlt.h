@@ -32,13 +32,13 @@
 // The screened-Poisson reconstruction (Eq. 16, reconstruction/) runs in finish.
 // Separated light (as gpt, gbdpt, gvcm: gradient_film.h): a path whose
 // vertices between the camera and the emitter all scatter through Dirac
-// lobes (an emitter seen directly, in a mirror, through glass) gets no
-// shift: f*(z) = 0, f(z) = alpha (1/4) Y(F(x)) in the chains, the bootstrap
-// and b alike; its coarse primal also lands in a layer of its own, which the
-// reconstruction adds after the solve (the screened Poisson solve neither
-// spreads nor loses those pixels). The shift keeps Dirac vertices' lobes, so
-// such a path and its offsets are separated alike: leaving out both halves of
-// its gradient keeps the estimator, for the image without that light.
+// lobes (an emitter seen directly, in a mirror, through glass) splats no
+// gradient (its target f stays Eq. 11's); its coarse primal also lands in a
+// layer of its own, which the reconstruction adds after the solve (the
+// screened Poisson solve neither spreads nor loses those pixels). The shift
+// keeps Dirac vertices' lobes, so such a path and its offsets are separated
+// alike: leaving out both halves of its gradient keeps the estimator, for the
+// image without that light.
 // directsamples N > 0 (Sec. 7): paths of at most one scattering vertex by
 // G-PT (gpt, maxdepth 1, box filter, the same shiftthreshold) with N samples
 // per pixel in the first pass: its primal and gradients (G-PT's shift) are
@@ -68,6 +68,8 @@
 //   float alpha 0.2                  Eq. 11's and Eq. 16's alpha
 //   string pixelfilter "box"         splats land in the pixel of their raster point (as pmlt's)
 // (gmlt):
+//   bool separated true              separated light (above) goes around the reconstruction
+//                                    (false: it is shifted and takes gradients like the rest)
 //   bool statelayers false           layers "density" (chain states per pixel per mutation
 //                                    per pixel, Fig. 8b) and "irreversible" (those whose
 //                                    shift has n = 1, Fig. 8f)
@@ -88,6 +90,7 @@ namespace gradus {
 
 struct GMLTSettings : PMLTSettings, GradientSettings {
     bool stateLayers;
+    bool separated;
 };
 
 class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
@@ -107,7 +110,7 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
         Spectrum diff{0};    // f*(z) of Eq. 9 before the sign of d: n (offset - F(x))
         Float n = 1;
         double f = 0;        // Eq. 11
-        bool separated = false;  // an emitter seen through Dirac vertices only: no shift (header)
+        bool separated = false;  // an emitter seen through Dirac vertices only: no gradient splat (header)
     };
     // After preprocess.
     Target evaluate(const pmlt::State &x, int dir, Arena &arena, pmlt::MutationStats *stats = nullptr) const;
@@ -172,7 +175,7 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
     double tau_ = 0;  // candidate roulette threshold (prepareBootstrap)
     int densityLayer_ = -1, irreversibleLayer_ = -1;
     int separatedLayer_ = -1;  // the chains' separated light (splats, without b)
-    mutable std::atomic<int64_t> nSeparated_{0};  // chain states of separated light (proposals evaluated)
+    mutable std::atomic<int64_t> nSeparated_{0};  // proposals of separated light
     GradientFilm directFilm_;  // directsamples: the layers of the G-PT direct pass (read in finish)
 };
 

@@ -744,7 +744,9 @@ TEST(GBDPTShift, IncrementalOffsetWeightsEqualFullWeights) {
         }
         EXPECT_GT(compared, 300) << "light tracing " << lightTracing << ", merging " << merging;
         // The merge terms change the weights being compared (else merging would go untested).
-        if (merging) EXPECT_GT(mergeMatters, compared / 4);
+        if (merging) {
+            EXPECT_GT(mergeMatters, compared / 4);
+        }
         std::printf("light tracing %d, merging %d: %d offset weights compared (%d changed by merging)\n",
                     int(lightTracing), int(merging), compared, mergeMatters);
     }

@@ -229,7 +229,6 @@ int RandomWalkT(const BidirContext &ctx, const Ray &ray, const Spectrum &beta, F
                 Arena &arena, TransportMode mode, int n, int maxVertices, PathVertex *path, BSDF *bsdfs,
                 const Medium *medium, UniformSource rng) {
     GRADUS_STAT_COUNTER("BDPT/Subpath vertices", nVerts);
-    GRADUS_STAT_COUNTER("BDPT/Medium vertices", nMediumVerts);
     const Scene &scene = *ctx.scene;
     GRADUS_CHECK(!kMedia || rng);
     Walk<kMedia> w{ctx, scene, sampler, arena, mode, maxVertices, path, bsdfs, rng,
@@ -238,6 +237,7 @@ int RandomWalkT(const BidirContext &ctx, const Ray &ray, const Spectrum &beta, F
         SurfaceInteraction isect;
         MediaStep st;
         if constexpr (kMedia) {
+            GRADUS_STAT_COUNTER("BDPT/Medium vertices", nMediumVerts);
             MediumInteraction mi;
             st = w.trace(&isect, &mi);
             if (st == MediaStep::Medium) {

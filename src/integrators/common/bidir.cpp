@@ -583,15 +583,22 @@ Float PdfArea(const BidirContext &ctx, const PathVertex &cur, const BSDF *bsdf, 
     return PdfAreaT<false>(ctx, cur, bsdf, prev, next, mode);
 }
 
-Spectrum EvalBSDF(const PathVertex &cur, const BSDF &bsdf, const PathVertex &next, TransportMode mode) {
+namespace {
+template <bool kMedia>
+Spectrum EvalBSDFT(const PathVertex &cur, const BSDF &bsdf, const PathVertex &next, TransportMode mode) {
     Vec3 wi = next.p - cur.p;
     if (wi.lengthSquared() == 0) return Spectrum(0);
     wi = Normalize(wi);
     Vec3 wo = cur.wo;
-    if (cur.type == VertexType::Medium) return Spectrum(cur.medium->phase.p(wo, wi));
+    if (kMedia && cur.type == VertexType::Medium) return Spectrum(cur.medium->phase.p(wo, wi));
     Spectrum f = bsdf.f(wo, wi, mode);
     if (mode == TransportMode::Importance) f *= ShadingCorrection(cur, wo, wi);
     return f;
+}
+}  // namespace
+
+Spectrum EvalBSDF(const PathVertex &cur, const BSDF &bsdf, const PathVertex &next, TransportMode mode) {
+    return EvalBSDFT<true>(cur, bsdf, next, mode);
 }
 
 Spectrum EmittedRadiance(const BidirContext &ctx, const PathVertex &v, const PathVertex &towards) {
@@ -664,7 +671,8 @@ Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathVi
     if (t > 0) {
         const PathVertex &pt = Cv(t - 1);
         if (s > 0)
-            ptRev = PdfAreaT<kMedia>(ctx, Lv(s - 1), Lb(s - 1), s > 1 ? &Lv(s - 2) : nullptr, pt, TransportMode::Importance);
+            ptRev = PdfAreaT<kMedia>(ctx, Lv(s - 1), Lb(s - 1), s > 1 ? &Lv(s - 2) : nullptr, pt,
+                                     TransportMode::Importance);
         else if (t > 1)
             ptRev = PdfLightOrigin(ctx, pt, Cv(t - 2));
         if (t > 1) {
@@ -676,8 +684,10 @@ Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathVi
     }
     if (s > 0) {
         const PathVertex &qs = Lv(s - 1);
-        qsRev = PdfAreaT<kMedia>(ctx, Cv(t - 1), Cb(t - 1), t > 1 ? &Cv(t - 2) : nullptr, qs, TransportMode::Radiance);
-        if (s > 1) qsMinusRev = PdfAreaT<kMedia>(ctx, qs, Lb(s - 1), &Cv(t - 1), Lv(s - 2), TransportMode::Radiance);
+        qsRev = PdfAreaT<kMedia>(ctx, Cv(t - 1), Cb(t - 1), t > 1 ? &Cv(t - 2) : nullptr, qs,
+                                 TransportMode::Radiance);
+        if (s > 1)
+            qsMinusRev = PdfAreaT<kMedia>(ctx, qs, Lb(s - 1), &Cv(t - 1), Lv(s - 2), TransportMode::Radiance);
     }
     *ptRevOut = ptRev;
     auto camRev = [&](int i) { return i == t - 1 ? ptRev : (i == t - 2 ? ptMinusRev : Cv(i).pdfRev); };
@@ -777,7 +787,8 @@ Float MISWeightT(const BidirContext &ctx, const StrategySet &set, SubpathView li
     if (s + t == 2) return 1;
     GRADUS_CHECK(!parts || (SplitSupported(set) && split >= 1 && split + 2 <= t - 1));
     Float ptRev;
-    Float w = 1 / (1 + OtherStrategies<kMedia>(ctx, set, light, camera, s, t, sampled, false, &ptRev, split, parts));
+    Float w =
+        1 / (1 + OtherStrategies<kMedia>(ctx, set, light, camera, s, t, sampled, false, &ptRev, split, parts));
     if (parts) parts->valid = true;
     return w;
 }
@@ -849,20 +860,6 @@ Float ScatterCosT(const PathVertex &v, const Vec3 &w) {
     else return AbsDot(w, Vec3(v.ns));
 }
 template <bool kMedia>
-Spectrum EvalBSDFT(const PathVertex &cur, const BSDF &bsdf, const PathVertex &next, TransportMode mode) {
-    if constexpr (kMedia) {
-        return EvalBSDF(cur, bsdf, next, mode);
-    } else {
-        Vec3 wi = next.p - cur.p;
-        if (wi.lengthSquared() == 0) return Spectrum(0);
-        wi = Normalize(wi);
-        const Vec3 wo = cur.wo;
-        Spectrum f = bsdf.f(wo, wi, mode);
-        if (mode == TransportMode::Importance) f *= ShadingCorrection(cur, wo, wi);
-        return f;
-    }
-}
-template <bool kMedia>
 Spectrum TransmittanceT(const BidirContext &ctx, const PathVertex &a, const Interaction &ia, const Interaction &ib,
                         UniformSource rng) {
     if constexpr (kMedia) return Transmittance(ctx, a, ia, ib, rng);
@@ -912,7 +909,8 @@ bool ConnectT(const BidirContext &ctx, SubpathView light, SubpathView camera, in
         if (u.infiniteLightsOnly && !sampled.isInfiniteLight()) return false;
         haveSampled = true;
         if (!EdgeConnectible(ctx, sampled, pt)) return false;
-        L = pt.throughput() * EvalBSDFT<kMedia>(pt, *pb, sampled, TransportMode::Radiance) * Lw * ScatterCosT<kMedia>(pt, ls.wi);
+        L = pt.throughput() * EvalBSDFT<kMedia>(pt, *pb, sampled, TransportMode::Radiance) * Lw *
+            ScatterCosT<kMedia>(pt, ls.wi);
         if (L.isBlack()) return false;
         res->shadowRayTraced = !u.knownVisible;
         if (!u.knownVisible) {
@@ -943,9 +941,9 @@ bool ConnectT(const BidirContext &ctx, SubpathView light, SubpathView camera, in
         }
     }
     if (L.isBlack()) return false;
+    const bool split = u.misParts && u.misSplit >= 1 && u.misSplit + 2 <= t - 1;
     Float w = MISWeightT<kMedia>(ctx, ctx.strategies, light, camera, s, t, haveSampled ? &sampled : nullptr,
-                        u.misParts && u.misSplit >= 1 && u.misSplit + 2 <= t - 1 ? u.misSplit : -1,
-                        u.misParts && u.misSplit >= 1 && u.misSplit + 2 <= t - 1 ? u.misParts : nullptr);
+                                 split ? u.misSplit : -1, split ? u.misParts : nullptr);
     res->weight = w;
     res->unweighted = L;
     res->L = L * w;

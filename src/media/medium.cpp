@@ -64,6 +64,12 @@ Spectrum ExpNeg(const Spectrum &sigma, Float d) {
 
 Spectrum HomogeneousMedium::Tr(const Ray &ray, UniformSource) const { return ExpNeg(sigmaT, CappedDistance(ray)); }
 
+bool HomogeneousMedium::support(const Ray &ray, Float *t0, Float *t1) const {
+    *t0 = 0;
+    *t1 = ray.tMax * ray.d.length();
+    return sigmaT.maxComponent() > 0;
+}
+
 // Spectral MIS distance sampling (pbrt-v3 Sec. 15.2.1): a channel chosen
 // uniformly, the distance from its exponential; the pdf is the average over
 // channels (the one-sample MIS of the three exponentials).
@@ -198,6 +204,17 @@ bool GridMedium::clip(const Ray &ray, Ray *local, Float *t0, Float *t1) const {
     *t0 = lo;
     *t1 = hi;
     return true;
+}
+
+Spectrum GridMedium::sigmaTAt(const Point3 &pWorld) const {
+    const Point3 p = mediumFromWorld_.applyPoint(pWorld);
+    if (p.x < 0 || p.y < 0 || p.z < 0 || p.x > 1 || p.y > 1 || p.z > 1) return Spectrum(0);
+    return Spectrum(sigmaT_ * density(p));
+}
+
+bool GridMedium::support(const Ray &ray, Float *t0, Float *t1) const {
+    Ray local;
+    return maxDensity_ > 0 && sigmaT_ > 0 && clip(ray, &local, t0, t1);
 }
 
 // Ratio tracking (Novak et al. 2014, Sec. 4.2) against the cells' majorants

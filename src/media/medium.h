@@ -58,6 +58,14 @@ class Medium {
     virtual Spectrum sample(const Ray &ray, UniformSource rng, MediumInteraction *mi) const = 0;
     // True when sigma_t is the same in every channel.
     virtual bool greySigmaT() const = 0;
+    // Point queries for the gradient-domain shifts (integrators/gradient/medium_shift.h).
+    virtual bool homogeneous() const = 0;
+    virtual Spectrum sigmaTAt(const Point3 &pWorld) const = 0;
+    // An upper bound of sigma_t over every point and channel.
+    virtual Float maxSigmaT() const = 0;
+    // The part [*t0, *t1] (world distances) of ray where sigma_t may be non-zero;
+    // false when there is none.
+    virtual bool support(const Ray &ray, Float *t0, Float *t1) const = 0;
     HGPhase phase;
     std::string name;
 
@@ -72,6 +80,10 @@ class HomogeneousMedium : public Medium {
     Spectrum Tr(const Ray &ray, UniformSource rng) const override;
     Spectrum sample(const Ray &ray, UniformSource rng, MediumInteraction *mi) const override;
     bool greySigmaT() const override;
+    bool homogeneous() const override { return true; }
+    Spectrum sigmaTAt(const Point3 &) const override { return sigmaT; }
+    Float maxSigmaT() const override { return sigmaT.maxComponent(); }
+    bool support(const Ray &ray, Float *t0, Float *t1) const override;
     const Spectrum sigmaA, sigmaS, sigmaT;
 };
 
@@ -89,6 +101,10 @@ class GridMedium : public Medium {
     Spectrum Tr(const Ray &ray, UniformSource rng) const override;
     Spectrum sample(const Ray &ray, UniformSource rng, MediumInteraction *mi) const override;
     bool greySigmaT() const override { return true; }
+    bool homogeneous() const override { return false; }
+    Spectrum sigmaTAt(const Point3 &pWorld) const override;  // 0 outside the grid's box, as Tr and sample
+    Float maxSigmaT() const override { return sigmaT_ * maxDensity_; }
+    bool support(const Ray &ray, Float *t0, Float *t1) const override;
     Float density(const Point3 &pMedium) const;  // in the medium's space
 
   private:

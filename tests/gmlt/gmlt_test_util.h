@@ -17,10 +17,17 @@ struct GMLTSetup {
     SceneSetup su;
     std::unique_ptr<GMLTIntegrator> gm;
     // threshold: the shift's "shiftthreshold", maxDepth: "maxdepth" of the
-    // integrator and of the bdpt samples (negative: the defaults).
+    // integrator and of the bdpt samples (negative: the defaults). "separated"
+    // false: every path is shifted (these tests are the shift's; separated
+    // light: test_separated.cpp).
     explicit GMLTSetup(const std::string &text, double threshold = -1, int maxDepth = -1) : su(text) {
         EntityDesc d;
         d.type = "gmlt";
+        Param sep;
+        sep.type = "bool";
+        sep.name = "separated";
+        sep.bools = {false};
+        d.params.add(sep);
         auto add = [&](const char *type, const char *name, double v) {
             Param p;
             p.type = type;

@@ -14,9 +14,11 @@ using mlt_test::Render;
 // on one half, 0 on the other, so dx = +-1 on column 7 (the sign from a bdpt
 // render: which half is lit) and 0 everywhere else, dy = 0. Only paths lens-emitter exist: shifts inside the
 // emitter have F(y) |T'| = F(x) (|T'| = p_E(x_1) / p_E(y_1)) and those across
-// the edge from column 8 towards -x lose the emitter (n = 1).
+// the edge from column 8 towards -x lose the emitter (n = 1). With
+// "separated" false: the emitter seen directly is shifted like the rest.
 std::string EdgeScene() {
-    return "Integrator \"gmlt\" \"integer bootstrapsamples\" [20000] \"integer chains\" [64]\n"
+    return "Integrator \"gmlt\" \"integer bootstrapsamples\" [20000] \"integer chains\" [64] \"bool separated\" "
+           "false\n"
            "Sampler \"random\" \"integer pixelsamples\" [4]\nPixelFilter \"box\"\n"
            "Film \"image\" \"integer xresolution\" [16] \"integer yresolution\" [8] \"string filename\" [\"u.exr\"]\n"
            "LookAt 0 0 0  0 0 -1  0 1 0\nCamera \"perspective\" \"float fov\" [90]\nWorldBegin\n"

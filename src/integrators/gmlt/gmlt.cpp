@@ -1,8 +1,12 @@
 #include "integrators/gmlt/gmlt.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <sstream>
+#if defined(__x86_64__) || defined(__i386__)
+#include <x86intrin.h>
+#endif
 
 #include "core/error.h"
 #include "integrators/factories.h"
@@ -26,10 +30,36 @@ ParamTable<GMLTSettings> Table() {
     GradientParamOptions o;
     o.noFilmFilter = "is not supported by gmlt (a chain's splat lands in the pixel of its raster point, as pmlt's)";
     t.append(GradientParams(o));
+    t.boolean("separated", &S::separated, true,
+              "light through Dirac vertices only to the emitter (seen directly, in mirrors, through glass) goes "
+              "around the reconstruction, as gpt's, gbdpt's and gvcm's (false: it is shifted and takes gradients)");
     t.boolean("statelayers", &S::stateLayers, false,
               "layers \"density\" (chain states per pixel per mutation per pixel) and \"irreversible\" "
               "(states whose shift has n = 1: the offset blocked or the shift failed)");
     return t;
+}
+
+// A cheap timestamp for the phase costs (the TSC: ~7 ns a read against
+// the ~25 ns of the clock; a shift costs microseconds).
+inline uint64_t Ticks() {
+#if defined(__x86_64__) || defined(__i386__)
+    return __rdtsc();
+#else
+    return uint64_t(std::chrono::steady_clock::now().time_since_epoch().count());
+#endif
+}
+double ClockSeconds() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+// Separated light: every vertex between the camera and the emitter x_{n-1}
+// scatters through a Dirac lobe (none: the emitter seen directly).
+bool SeparatedPath(const pmlt::Path &x) {
+    const int n = x.size();
+    if (n < 2) return false;
+    for (int j = 1; j < n - 1; ++j)
+        if (x.v[size_t(j)].type != VertexType::Surface || !x.v[size_t(j)].delta()) return false;
+    return true;
 }
 
 // Luminance of the channel-wise absolute value (Eq. 11's norm of a signed spectrum).
@@ -67,16 +97,51 @@ void GMLTIntegrator::preprocess(const Scene &scene, Film &film) {
     pmlt::MutationSettings ms = mset_;
     ms.shiftThreshold = gset_.shiftThreshold;  // near-specular vertices of the shift (Fig. 5a)
     mut_ = std::make_unique<pmlt::Mutator>(ctx_, film_, ms);
-    initGradients(film, false, true, false);  // the chains only splat: no per-sample layers
+    // The chains only splat: no per-sample layers. The direct pass's G-PT
+    // (PMLTIntegrator::preprocess) has added its per-sample layers; a
+    // GradientFilm of the same arguments finds them (Film::addLayer by name).
+    if (direct_) directFilm_.init(film, false, false, true);
+    initGradients(film, false, true, false);
+    separatedLayer_ = film.addLayer("gmlt.separated", LayerUse::Splats, false);
+    ticks0_ = Ticks();
+    clock0_ = ClockSeconds();
     if (gset_.stateLayers) {
         densityLayer_ = film.addLayer("gmlt.density");
         irreversibleLayer_ = film.addLayer("gmlt.irreversible");
     }
 }
 
+EntityDesc GMLTIntegrator::directDesc() const {
+    // G-PT at maxdepth 1 (the paths the chains leave out: outsideTarget), its
+    // samples in their own pixel as the chains' splats, the shift's threshold.
+    EntityDesc d;
+    d.type = "gpt";
+    d.loc = loc_;
+    Param depth;
+    depth.type = "integer";
+    depth.name = "maxdepth";
+    depth.numbers = {1};
+    d.params.add(depth);
+    Param filter;
+    filter.type = "string";
+    filter.name = "pixelfilter";
+    filter.strings = {"box"};
+    d.params.add(filter);
+    Param threshold;
+    threshold.type = "float";
+    threshold.name = "shiftthreshold";
+    threshold.numbers = {double(gset_.shiftThreshold)};
+    d.params.add(threshold);
+    return d;
+}
+
 GMLTIntegrator::Target GMLTIntegrator::evaluate(const pmlt::State &xs, int dir, Arena &arena,
                                                 pmlt::MutationStats *stats) const {
     Target t;
+    // Separated light keeps Eq. 11's target (with f = alpha/4 Y(F) alone the
+    // chains visited a directly seen emitter less and the image mean's sd
+    // grew 2.6x: GMLTRender.LongChainsAgreeWithBdpt); only its splats differ.
+    t.separated = gset_.separated && SeparatedPath(xs.x);
     const Point2i off = kNeighbourOffsets[dir];
     thread_local pmlt::State ys;  // the offset (its vectors reused: one evaluation per proposal)
     t.status = mut_->shift(xs, Point2(xs.e.pRaster.x + Float(off.x), xs.e.pRaster.y + Float(off.y)), arena, &ys,
@@ -154,6 +219,15 @@ int64_t GMLTIntegrator::runMutations(Chain &ch, int64_t count, pmlt::State &xs, 
     flushCounts(w.cnt, w.mst);
     for (int s = 0; s < kShiftStatuses; ++s) shiftCounts_[s] += w.shifts[s];
     nNearSpecular_ += w.mst.nearSpecularShifts;
+    phases_.propose += w.ph.propose;
+    phases_.shiftWalk += w.ph.shiftWalk;
+    phases_.shiftJoin += w.ph.shiftJoin;
+    phases_.rest += w.ph.rest;
+    phases_.nWalkShifts += w.ph.nWalkShifts;
+    phases_.nJoinShifts += w.ph.nJoinShifts;
+    phases_.nWalkShiftFailures += w.ph.nWalkShiftFailures;
+    phases_.nMutations += count;
+    nSeparated_ += w.ph.nSeparated;
     return count;
 }
 
@@ -161,15 +235,30 @@ void GMLTIntegrator::mutate(ChainWalk &w, Sampler &u, RNG &rng, SampleRecorder &
                             Arena &arena) const {
     // 1. A new base path by one of pmlt's mutations and a uniform direction:
     // a symmetric proposal of the direction (Sec. 4.2.1).
+    const uint64_t t0 = Ticks();
     const Proposal p = proposeMutation(w.xs, rng, u, arena, &w.ys, &w.mst);
     const int dy = std::min(int(rng.uniform() * 4), 3);
+    uint64_t t1 = Ticks();
+    w.ph.propose += t1 - t0;
     // 2. Acceptance.
     Target ty;
     Float a = 0;
     if (p.res == pmlt::ProposalResult::Proposed && outsideTarget(w.ys)) {
         ++w.cnt.zero[p.type];  // outside the chains' target (directsamples)
     } else if (p.res == pmlt::ProposalResult::Proposed) {
+        const int64_t walks = w.mst.walks, failures = w.mst.walkFailures;
         ty = evaluate(w.ys, dy, arena, &w.mst);
+        w.ph.nSeparated += ty.separated;
+        const uint64_t t2 = Ticks();
+        if (w.mst.walks > walks) {
+            w.ph.shiftWalk += t2 - t1;
+            ++w.ph.nWalkShifts;
+            w.ph.nWalkShiftFailures += w.mst.walkFailures - failures;
+        } else {
+            w.ph.shiftJoin += t2 - t1;
+            ++w.ph.nJoinShifts;
+        }
+        t1 = t2;
         ++w.shifts[int(ty.status)];
         // Metropolis-Hastings on the extended space: pmlt's ratio is
         // I(y) T(y -> x) / (I(x) T(x -> y)); the target is f (Eq. 11).
@@ -192,6 +281,7 @@ void GMLTIntegrator::mutate(ChainWalk &w, Sampler &u, RNG &rng, SampleRecorder &
         if (w.tx.n == 1) rec.splat(w.xs.e.pRaster, Spectrum(1), irreversibleLayer_);
     }
     arena.reset();
+    w.ph.rest += Ticks() - t1;
 }
 
 void GMLTIntegrator::splatState(SampleRecorder &rec, const pmlt::State &s, int dir, const Target &t,
@@ -204,30 +294,32 @@ void GMLTIntegrator::splatState(SampleRecorder &rec, const pmlt::State &s, int d
     GradientSplat g;
     g.pixel = Point2i{int(std::floor(s.e.pRaster.x)), int(std::floor(s.e.pRaster.y))};
     g.value.primal = s.e.F * 0.25;
-    g.value.diff[dir] = t.diff;
-    g.value.active[dir] = true;
-    gfilm_.splatLightTracing(rec, g, Float(expectedValueScale(w, t.f)));
+    const Float scale = Float(expectedValueScale(w, t.f));
+    if (t.separated) {
+        // No gradient; the primal also to the separated layer (added after the solve).
+        if (filmBounds_.inside(g.pixel) && g.value.primal.isFinite())
+            rec.splat(Point2(g.pixel.x + 0.5, g.pixel.y + 0.5), g.value.primal * scale, separatedLayer_);
+    } else {
+        g.value.diff[dir] = t.diff;
+        g.value.active[dir] = true;
+    }
+    gfilm_.splatLightTracing(rec, g, scale);
 }
 
 void GMLTIntegrator::finish(const Film &film, const RenderStats &stats, Image *out) {
-    const bool direct = direct_ != nullptr;
-    Image directImage;
-    if (direct) directImage = out->layerRGB("");  // the path tracer's direct light (the film's main image)
     rescale_ = rescale();
     // The chains' splats are without b (metropolis.h): the gradients and the
-    // coarse primal by the same b, before the reconstruction.
-    finishGradients(film, stats, gset_.norm, gset_.alpha, out, rescale_ * b_);
-    if (direct) {
-        // Direct light is added after the solve (Sec. 7), to the primal and every reconstruction.
-        const std::vector<std::string> layers = out->layers();
-        for (const char *layer : {"", "primal", "reconstructed_l1", "reconstructed_l2", "reconstructed_hybrid",
-                                  "reconstructed_weighted"}) {
-            if (std::find(layers.begin(), layers.end(), layer) == layers.end()) continue;
-            Image im = out->layerRGB(layer);
-            for (size_t k = 0; k < im.data().size(); ++k) im.data()[k] += directImage.data()[k];
-            out->setLayerRGB(layer, im);
-        }
-    }
+    // coarse primal by the same b; the direct pass's G-PT images (averaged
+    // over its samples per pixel) added unscaled; then the reconstruction.
+    GradientImages add;
+    if (direct_) add = directFilm_.images(film, double(set_.directSamples));
+    // The chains' separated light, times the same b (its primal is in the film's primal already).
+    const Image sep = film.layerImage(separatedLayer_);
+    add.width = sep.width();
+    add.height = sep.height();
+    if (add.separated.empty()) add.separated.assign(sep.data().size(), 0.f);
+    for (size_t i = 0; i < sep.data().size(); ++i) add.separated[i] += float(sep.data()[i] * rescale_ * b_);
+    finishGradients(film, stats, gset_.norm, gset_.alpha, out, rescale_ * b_, &add);
     if (densityLayer_ >= 0) {
         for (auto [idx, name] : {std::pair{densityLayer_, "density"}, std::pair{irreversibleLayer_, "irreversible"}}) {
             Image im = film.layerImage(idx);
@@ -256,8 +348,24 @@ std::string GMLTIntegrator::statistics() const {
             if (shiftCounts_[s].load() > 0) o << "; " << ShiftStatusName(s) << " " << shiftCounts_[s].load();
     }
     o << "\n";
+    o << "  separated light (Dirac vertices only, no gradient): " << nSeparated_.load() << " proposals\n";
     o << "  shifts through near-specular vertices (roughness below shiftthreshold " << gset_.shiftThreshold
       << ", treated as specular: Fig. 5a): " << nNearSpecular_.load() << "\n";
+    {
+        // Thread-seconds per phase of the chains' mutations (TSC ticks at the
+        // rate measured since preprocess).
+        const double dt = ClockSeconds() - clock0_;
+        const double perTick = dt > 0 ? dt / double(Ticks() - ticks0_) : 0;
+        const int64_t M = phases_.nMutations.load(), nw = phases_.nWalkShifts.load(), nj = phases_.nJoinShifts.load();
+        auto us = [&](uint64_t ticks, int64_t n) { return n > 0 ? 1e6 * double(ticks) * perTick / double(n) : 0.0; };
+        const uint64_t total = phases_.propose + phases_.shiftWalk + phases_.shiftJoin + phases_.rest;
+        o << "  cost per mutation (" << M << " mutations): " << us(total, M) << " us = proposal "
+          << us(phases_.propose, M) << " + shift " << us(phases_.shiftWalk + phases_.shiftJoin, M)
+          << " + acceptance and splats " << us(phases_.rest, M) << "\n";
+        o << "  shifts of proposals: " << nw << " walked a second chain (" << us(phases_.shiftWalk, nw) << " us each, "
+          << phases_.nWalkShiftFailures.load() << " walks failed or not reversible), " << nj << " joined or no walk ("
+          << us(phases_.shiftJoin, nj) << " us each)\n";
+    }
     o << "  bootstrap: " << nBootstrapShifted_.load() << " candidates re-weighted to f, " << nRouletteDropped_.load()
       << " left out by Russian roulette below the pilot's mean luminance " << tau_ << "\n";
     if (nBootstrapDropped_ > 0)

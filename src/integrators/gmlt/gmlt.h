@@ -30,9 +30,21 @@
 // (kept with probability lum / tau, weight tau / lum): the shift of every
 // candidate tripled pmlt's bootstrap time (glass cube: 1.05 s -> 3.8 s).
 // The screened-Poisson reconstruction (Eq. 16, reconstruction/) runs in finish.
-// directsamples N > 0 (Sec. 7): direct light by the path tracer, added to the
-// primal and to every reconstruction after the solve (dx, dy hold the chains'
-// part only).
+// Separated light (as gpt, gbdpt, gvcm: gradient_film.h): a path whose
+// vertices between the camera and the emitter all scatter through Dirac
+// lobes (an emitter seen directly, in a mirror, through glass) splats no
+// gradient (its target f stays Eq. 11's); its coarse primal also lands in a
+// layer of its own, which the reconstruction adds after the solve (the
+// screened Poisson solve neither spreads nor loses those pixels). The shift
+// keeps Dirac vertices' lobes, so such a path and its offsets are separated
+// alike: leaving out both halves of its gradient keeps the estimator, for the
+// image without that light.
+// directsamples N > 0 (Sec. 7): paths of at most one scattering vertex by
+// G-PT (gpt, maxdepth 1, box filter, the same shiftthreshold) with N samples
+// per pixel in the first pass: its primal and gradients (G-PT's shift) are
+// added to the chains' (times b) before the reconstruction, which sees one
+// image; emitters seen directly or through Dirac vertices only are G-PT's
+// separated light (no gradients, added after the solve).
 //
 // Parameters (pmlt's, pmlt.h):
 //   integer maxdepth 5                 maximum path depth (edges - 1)
@@ -56,6 +68,8 @@
 //   float alpha 0.2                  Eq. 11's and Eq. 16's alpha
 //   string pixelfilter "box"         splats land in the pixel of their raster point (as pmlt's)
 // (gmlt):
+//   bool separated true              separated light (above) goes around the reconstruction
+//                                    (false: it is shifted and takes gradients like the rest)
 //   bool statelayers false           layers "density" (chain states per pixel per mutation
 //                                    per pixel, Fig. 8b) and "irreversible" (those whose
 //                                    shift has n = 1, Fig. 8f)
@@ -76,6 +90,7 @@ namespace gradus {
 
 struct GMLTSettings : PMLTSettings, GradientSettings {
     bool stateLayers;
+    bool separated;
 };
 
 class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
@@ -95,6 +110,7 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
         Spectrum diff{0};    // f*(z) of Eq. 9 before the sign of d: n (offset - F(x))
         Float n = 1;
         double f = 0;        // Eq. 11
+        bool separated = false;  // an emitter seen through Dirac vertices only: no gradient splat (header)
     };
     // After preprocess.
     Target evaluate(const pmlt::State &x, int dir, Arena &arena, pmlt::MutationStats *stats = nullptr) const;
@@ -109,6 +125,7 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
     double candidateWeight(const Sample &smp, int64_t k, int s, int t, const ConnectSamples &cu, double lum,
                            uint64_t key, Arena &arena) const override;
     void prepareBootstrap(PassContext &ctx, uint64_t key) override;
+    EntityDesc directDesc() const override;
     // The roulette threshold tau (the independent samples after a resume weigh with it).
     void saveCounters(std::string *s) const override;
     bool loadCounters(const std::string &s, size_t *at) override;
@@ -117,6 +134,17 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
 
   private:
     static constexpr int kShiftStatuses = 6;
+    // Cost per phase of the chains' mutations (--stats), in timestamp-counter
+    // ticks: the proposal, the shift (those that walked a second chain and
+    // those that joined x_b' to x_{b+1}), the rest (acceptance, splats, step).
+    struct Phases {
+        uint64_t propose = 0, shiftWalk = 0, shiftJoin = 0, rest = 0;
+        int64_t nWalkShifts = 0, nJoinShifts = 0, nWalkShiftFailures = 0, nSeparated = 0;
+    };
+    struct AtomicPhases {
+        std::atomic<uint64_t> propose{0}, shiftWalk{0}, shiftJoin{0}, rest{0};
+        std::atomic<int64_t> nWalkShifts{0}, nJoinShifts{0}, nWalkShiftFailures{0}, nMutations{0};
+    };
     // One chain's extended state z = (x, d) during a pass (x: the chain's
     // rebuilt state, y: the proposal's), with its counts.
     struct ChainWalk {
@@ -128,6 +156,7 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
         pmlt::MutationStats mst;
         ItemCounts cnt;
         int64_t shifts[kShiftStatuses] = {};
+        Phases ph;
     };
     // One mutation of the walk: proposal (base path and direction),
     // acceptance on the extended space, splats, the step.
@@ -140,8 +169,14 @@ class GMLTIntegrator : public PMLTIntegrator, public GradientFamily {
     mutable std::atomic<int64_t> shiftCounts_[kShiftStatuses] = {};
     mutable std::atomic<int64_t> nBootstrapDropped_{0}, nBootstrapShifted_{0}, nRouletteDropped_{0};
     std::atomic<int64_t> nNearSpecular_{0};  // chain shifts that moved a near-specular vertex
+    mutable AtomicPhases phases_;
+    uint64_t ticks0_ = 0;  // the counter and the clock at preprocess (ticks per second at statistics)
+    double clock0_ = 0;
     double tau_ = 0;  // candidate roulette threshold (prepareBootstrap)
     int densityLayer_ = -1, irreversibleLayer_ = -1;
+    int separatedLayer_ = -1;  // the chains' separated light (splats, without b)
+    mutable std::atomic<int64_t> nSeparated_{0};  // proposals of separated light
+    GradientFilm directFilm_;  // directsamples: the layers of the G-PT direct pass (read in finish)
 };
 
 }  // namespace gradus

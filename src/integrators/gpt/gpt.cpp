@@ -5,6 +5,7 @@
 #include "core/error.h"
 #include "integrators/factories.h"
 #include "integrators/gpt/gpt_tracer.h"
+#include "integrators/gpt/gpt_volume.h"
 
 namespace gradus {
 
@@ -31,6 +32,7 @@ void GPTIntegrator::preprocess(const Scene &scene, Film &film) {
     lightSampler_ = LightSampler(scene.lights, set_.lightStrategy, loc_, scene.bounds);
     initGradients(film, set_.filmFilter);
     scene_ = &scene;
+    volumetric_ = scene.features.media;
     stats_.reset();
 }
 
@@ -58,6 +60,17 @@ GradientSample GPTIntegrator::sample(const CameraSample &cs, Sampler &sampler, A
                                      const bool inside[kNumNeighbours]) const {
     GradientSample out;
     LocalShiftStats st;
+    if (volumetric_) {
+        // Media draw from their own stream, keyed as path's (path.cpp).
+        RNG rng(Hash(sampler.seed(), FloatBits(cs.pFilm.x), FloatBits(cs.pFilm.y), FloatBits(cs.pLens.x)));
+        gpt::VolumeGradientPathTracer vt(*scene_, lightSampler_, set_.shiftThreshold, set_.mode == ShiftMode::Hybrid,
+                                         inside, arena, st, rng);
+        if (!vt.start(cs, &out)) return out;
+        vt.trace(sampler, set_.maxDepth, set_.rrThreshold);
+        vt.result(&out);
+        stats_.add(st);
+        return out;
+    }
     gpt::GradientPathTracer tracer(*scene_, lightSampler_, set_.shiftThreshold, set_.mode == ShiftMode::Hybrid, inside, arena, st);
     if (!tracer.start(cs, &out)) return out;
     tracer.trace(sampler, set_.maxDepth, set_.rrThreshold);

@@ -12,7 +12,8 @@
 // gradients are reconstructed at the end (screened Poisson). Emission reached
 // after Dirac bounces only (emitters seen directly or through mirrors and
 // glass) is separated light: primal and layer "separated", no gradients,
-// added after the reconstruction (gradient_film.h).
+// added after the reconstruction (gradient_film.h). Scenes with participating
+// media take gpt_volume.h's tracer (distance-copy and medium-vertex shifts).
 //
 // Parameters (path tracing, integrators/path/path.h):
 //   integer maxdepth 5               maximum number of bounces
@@ -57,6 +58,8 @@ class GPTIntegrator : public PixelSampleIntegrator, public GradientFamily {
     void finish(const Film &film, const RenderStats &stats, Image *out) override;
     double finishEstimate() const override { return reconstructionEstimate(set_.norm, set_.alpha); }
     std::string statistics() const override;
+    // Media: gpt_volume.h (a scene without media takes the surface-only tracer).
+    bool rendersMedia() const override { return true; }
 
     // One camera sample without a film (for tests): primal and the four neighbour
     // differences; `pixelInside` says which neighbours exist.
@@ -68,6 +71,7 @@ class GPTIntegrator : public PixelSampleIntegrator, public GradientFamily {
     GPTSettings set_;
     FileLoc loc_;
     LightSampler lightSampler_;
+    bool volumetric_ = false;  // the scene has media: sample() takes gpt::VolumeGradientPathTracer
     mutable ShiftStats stats_;
 };
 

@@ -4,6 +4,8 @@
 #include <chrono>
 #include <memory>
 
+#include "core/error.h"
+
 namespace gradus {
 
 namespace {
@@ -71,13 +73,28 @@ double GradientFamily::reconstructionEstimate(ReconstructionNorm norm, Float alp
 }
 
 void GradientFamily::finishGradients(const Film &film, const RenderStats &stats, ReconstructionNorm norm,
-                                     Float alpha, Image *out, double scale) {
+                                     Float alpha, Image *out, double scale, const GradientImages *add) {
     GradientImages g = gfilm_.images(film, stats.spp);
     if (scale != 1) {
         for (auto *v : {&g.primal, &g.separated, &g.dx, &g.dy})
             for (float &x : *v) x = float(x * scale);
         for (auto *v : {&g.primalVar, &g.dxVar, &g.dyVar})
             for (float &x : *v) x = float(x * scale * scale);
+    }
+    if (add) {
+        GRADUS_CHECK(add->width == g.width && add->height == g.height);
+        auto sum = [](std::vector<float> &to, const std::vector<float> &from) {
+            if (from.empty()) return;
+            if (to.empty()) to.assign(from.size(), 0.f);
+            for (size_t i = 0; i < to.size(); ++i) to[i] += from[i];
+        };
+        sum(g.primal, add->primal);
+        sum(g.separated, add->separated);
+        sum(g.dx, add->dx);
+        sum(g.dy, add->dy);
+        sum(g.primalVar, add->primalVar);
+        sum(g.dxVar, add->dxVar);
+        sum(g.dyVar, add->dyVar);
     }
     WriteGradientOutput(g, norm, alpha, out, &reconReport_);
 }

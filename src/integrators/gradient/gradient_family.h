@@ -28,9 +28,10 @@ class GradientFamily {
     }
     // The integrator's finish(): replaces *out by the gradient output (keeping its metadata).
     // `scale` multiplies the gradient images (variances by its square) before
-    // the reconstruction (an interrupted Metropolis pass).
+    // the reconstruction (an interrupted Metropolis pass); `add` (same size)
+    // is then added, unscaled (gmlt's direct pass).
     void finishGradients(const Film &film, const RenderStats &stats, ReconstructionNorm norm, Float alpha,
-                         Image *out, double scale = 1);
+                         Image *out, double scale = 1, const GradientImages *add = nullptr);
 
     // Seconds finishGradients will take at this film's size: reconstructions
     // of 64x64 and 128x128 problems, timed on first use (only a render with a

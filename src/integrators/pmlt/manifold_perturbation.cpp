@@ -112,6 +112,13 @@ ProposalResult Mutator::manifoldMove(const State &xs, int b, int c, int endGeom,
     const int n = x.size();
     const PathVertex &xc = x.v[size_t(c)];
 
+    // The eye chain along the ray first (a move whose eye chain fails costs
+    // no chain set-up and no walk).
+    SurfaceInteraction siYb;
+    double hvJacobian = 1;
+    if (!traceEyeChain(xs, b, ray, arena, ys, &siYb, &hvJacobian)) return ProposalResult::Zero;
+    if (ys->x.v.back().type != VertexType::Surface) return ProposalResult::Zero;
+
     // The base chain x_b .. x_c.
     ManifoldSettings sc;
     sc.mscene = set_.mscene;
@@ -136,11 +143,7 @@ ProposalResult Mutator::manifoldMove(const State &xs, int b, int c, int endGeom,
     if (!BuildChain(sc, set_.mscene->fromInteraction(siXb), in, k, EndpointSP(xc.p, Vec3(xc.ng), endGeom), &base))
         return ProposalResult::Zero;
 
-    // The eye chain along the ray, then the walk of the second chain to x_c.
-    SurfaceInteraction siYb;
-    double hvJacobian = 1;
-    if (!traceEyeChain(xs, b, ray, arena, ys, &siYb, &hvJacobian)) return ProposalResult::Zero;
-    if (ys->x.v.back().type != VertexType::Surface) return ProposalResult::Zero;
+    // The walk of the second chain to x_c.
     ManifoldWalkResult walk;
     WalkedInterior walked;
     const ChainShiftFailure failure = ShiftChain(sc, scene, base, set_.mscene->fromInteraction(siYb), base.back().sp,

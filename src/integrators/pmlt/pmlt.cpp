@@ -108,15 +108,7 @@ void PMLTIntegrator::preprocess(const Scene &scene, Film &film) {
     film_.scale = film_.pixels.area() > 0 ? Float(int64_t(full.x) * full.y) / Float(film_.pixels.area()) : 1;
     mset_.maxDepth = set_.maxDepth;
     if (set_.directSamples > 0) {
-        EntityDesc d;
-        d.type = "path";
-        d.loc = loc_;
-        Param depth;
-        depth.type = "integer";
-        depth.name = "maxdepth";
-        depth.numbers = {1};
-        d.params.add(depth);
-        direct_ = CreateIntegrator(d);
+        direct_ = CreateIntegrator(directDesc());
         direct_->preprocess(scene, film);
     }
     if (set_.manifold > 0) {
@@ -124,6 +116,18 @@ void PMLTIntegrator::preprocess(const Scene &scene, Film &film) {
         mset_.mscene = mscene_.get();
     }
     mut_ = std::make_unique<pmlt::Mutator>(ctx_, film_, mset_);
+}
+
+EntityDesc PMLTIntegrator::directDesc() const {
+    EntityDesc d;
+    d.type = "path";
+    d.loc = loc_;
+    Param depth;
+    depth.type = "integer";
+    depth.name = "maxdepth";
+    depth.numbers = {1};
+    d.params.add(depth);
+    return d;
 }
 
 bool PMLTIntegrator::makeSample(uint64_t key, int64_t k, Arena &arena, Sample *s) const {
@@ -317,6 +321,7 @@ void PMLTIntegrator::renderDirect(PassContext &ctx) {
                     cs.pLens = sampler.get2D();
                     SampleRecorder rec(tile, pixel, cs.pFilm);
                     est.estimate(cs, sampler, w.arena, rec);
+                    tile.addCount(pixel, 1);  // per-sample layers (gmlt's G-PT) average by it
                     nonFinite += rec.nonFinite;
                     w.arena.reset();
                 }

@@ -190,6 +190,9 @@ class PMLTIntegrator : public MetropolisIntegrator {
                        pmlt::State *st) const;
     // Called before the bootstrap's candidates are weighted (key: the bootstrap's).
     virtual void prepareBootstrap(PassContext &, uint64_t) {}
+    // directsamples: the integrator of the direct pass (paths of at most one
+    // scattering vertex; pmlt: the path tracer at maxdepth 1, gmlt: G-PT's).
+    virtual EntityDesc directDesc() const;
     // Calls fn(sample, s, t, connection numbers, luminance) for every strategy
     // of bootstrap sample k with a finite positive contribution (its subpaths
     // in arena); returns the number of non-finite contributions left out.
@@ -218,7 +221,7 @@ class PMLTIntegrator : public MetropolisIntegrator {
     AtomicCounts typeCounts_[pmlt::kMutationTypes];
     std::atomic<int64_t> nWalks_{0}, nWalkFailures_{0};
     std::unique_ptr<EmbreeManifoldScene> mscene_;
-    std::unique_ptr<Integrator> direct_;  // directsamples: the path tracer at maxdepth 1
+    std::unique_ptr<Integrator> direct_;  // directsamples: the direct pass (directDesc)
     int64_t nBootstrapSamples_ = 0;
 
   private:

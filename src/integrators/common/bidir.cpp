@@ -74,7 +74,9 @@ MediaStep TraceThroughMedia(const Scene &scene, Ray *ray, const Medium **medium,
 
 // One random walk in progress (RandomWalk): the ray to trace, the throughput,
 // the solid-angle density of the next vertex and the medium the ray is in;
-// path[n-1] is the last vertex.
+// path[n-1] is the last vertex. Compiled with and without media (kMedia: the
+// scene has media), so that media-free scenes run no media code.
+template <bool kMedia>
 struct Walk {
     const BidirContext &ctx;
     const Scene &scene;
@@ -85,7 +87,6 @@ struct Walk {
     PathVertex *path;
     BSDF *bsdfs;
     UniformSource rng;
-    const bool media;
     Ray ray;
     Spectrum beta;
     const Float beta0;
@@ -95,12 +96,12 @@ struct Walk {
 
     // What the next segment met: Miss, Surface or Medium; Absorbed and Stuck end the walk.
     MediaStep trace(SurfaceInteraction *isect, MediumInteraction *mi) {
-        if (!media) {
+        if constexpr (!kMedia) {
             const Scene::SurfaceHit h = scene.intersectSurface(&ray, isect);  // through interfaces
             if (h == Scene::SurfaceHit::Stuck) return MediaStep::Stuck;
             return h == Scene::SurfaceHit::Hit ? MediaStep::Surface : MediaStep::Miss;
         }
-        return TraceThroughMedia(scene, &ray, &medium, rng, isect, mi, &beta);
+        else return TraceThroughMedia(scene, &ray, &medium, rng, isect, mi, &beta);
     }
 
     // Russian roulette on the throughput relative to the subpath's start, after
@@ -175,7 +176,7 @@ struct Walk {
         PathVertex &v = path[n];
         BSDF bsdf = isect.material->getBSDF(isect, arena, mode);
         MakeSurfaceVertex(ctx, isect, bsdf, &v);
-        if (media) v.mediumIndex = MediumIndexOf(scene, medium);
+        if constexpr (kMedia) v.mediumIndex = MediumIndexOf(scene, medium);
         v.setThroughput(beta);
         v.pdfFwd = ConvertDensity(pdfFwd, prev, v);
         bsdfs[n] = bsdf;
@@ -212,7 +213,7 @@ struct Walk {
         prev.pdfRev = ConvertDensity(pdfRev, v, prev);
         if (beta.isBlack() || !beta.isFinite()) return false;
         if (!roulette(v)) return false;
-        if (media) medium = isect.mediumAfter(bs.wi, medium);
+        if constexpr (kMedia) medium = isect.mediumAfter(bs.wi, medium);
         ray = isect.spawnRay(bs.wi);
         return true;
     }
@@ -223,27 +224,32 @@ struct Walk {
 // vertex and pdfRev of its predecessor.
 // With media, each segment samples a scattering distance in its medium
 // (`medium`, distances from *rng); a scattering there is a medium vertex.
-int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sampler &sampler, Arena &arena,
-               TransportMode mode, int n, int maxVertices, PathVertex *path, BSDF *bsdfs, const Medium *medium,
-               UniformSource rng) {
+template <bool kMedia>
+int RandomWalkT(const BidirContext &ctx, const Ray &ray, const Spectrum &beta, Float pdfDir, Sampler &sampler,
+                Arena &arena, TransportMode mode, int n, int maxVertices, PathVertex *path, BSDF *bsdfs,
+                const Medium *medium, UniformSource rng) {
     GRADUS_STAT_COUNTER("BDPT/Subpath vertices", nVerts);
-    GRADUS_STAT_COUNTER("BDPT/Medium vertices", nMediumVerts);
     const Scene &scene = *ctx.scene;
-    const bool media = scene.features.media;
-    GRADUS_CHECK(!media || rng);
-    Walk w{ctx, scene, sampler, arena, mode, maxVertices, path, bsdfs, rng, media,
-           ray, beta, beta.maxComponent(), pdfDir, medium, n};
+    GRADUS_CHECK(!kMedia || rng);
+    Walk<kMedia> w{ctx, scene, sampler, arena, mode, maxVertices, path, bsdfs, rng,
+                   ray, beta, beta.maxComponent(), pdfDir, medium, n};
     while (w.n < maxVertices) {
         SurfaceInteraction isect;
-        MediumInteraction mi;
-        const MediaStep st = w.trace(&isect, &mi);
-        if (st == MediaStep::Absorbed || st == MediaStep::Stuck) break;
-        if (st == MediaStep::Medium) {
-            ++nVerts;
-            ++nMediumVerts;
-            if (!w.mediumVertex(mi)) break;
-            continue;
+        MediaStep st;
+        if constexpr (kMedia) {
+            GRADUS_STAT_COUNTER("BDPT/Medium vertices", nMediumVerts);
+            MediumInteraction mi;
+            st = w.trace(&isect, &mi);
+            if (st == MediaStep::Medium) {
+                ++nVerts;
+                ++nMediumVerts;
+                if (!w.mediumVertex(mi)) break;
+                continue;
+            }
+        } else {
+            st = w.trace(&isect, nullptr);
         }
+        if (st == MediaStep::Absorbed || st == MediaStep::Stuck) break;
         if (st == MediaStep::Miss) {
             w.escaped();
             break;
@@ -252,6 +258,15 @@ int RandomWalk(const BidirContext &ctx, Ray ray, Spectrum beta, Float pdfDir, Sa
         if (!w.surfaceVertex(isect)) break;
     }
     return w.n;
+}
+
+int RandomWalk(const BidirContext &ctx, const Ray &ray, const Spectrum &beta, Float pdfDir, Sampler &sampler,
+               Arena &arena, TransportMode mode, int n, int maxVertices, PathVertex *path, BSDF *bsdfs,
+               const Medium *medium, UniformSource rng) {
+    if (ctx.scene->features.media)
+        return RandomWalkT<true>(ctx, ray, beta, pdfDir, sampler, arena, mode, n, maxVertices, path, bsdfs, medium,
+                                 rng);
+    return RandomWalkT<false>(ctx, ray, beta, pdfDir, sampler, arena, mode, n, maxVertices, path, bsdfs, medium, rng);
 }
 
 }  // namespace
@@ -533,8 +548,10 @@ Float PdfLightDirection(const BidirContext &ctx, const PathVertex &v, const Path
     return pdf;
 }
 
-Float PdfArea(const BidirContext &ctx, const PathVertex &cur, const BSDF *bsdf, const PathVertex *prev,
-              const PathVertex &next, TransportMode mode) {
+namespace {
+template <bool kMedia>
+Float PdfAreaT(const BidirContext &ctx, const PathVertex &cur, const BSDF *bsdf, const PathVertex *prev,
+               const PathVertex &next, TransportMode mode) {
     // A light vertex, or an emissive surface vertex used as the origin of a light subpath.
     if (cur.type == VertexType::Light || (cur.type == VertexType::Surface && !prev && EmitterOf(ctx, cur)))
         return PdfLightDirection(ctx, cur, next);
@@ -545,7 +562,7 @@ Float PdfArea(const BidirContext &ctx, const PathVertex &cur, const BSDF *bsdf, 
     if (cur.type == VertexType::Camera) {
         Float pdfPos;
         ctx.camera->pdfWe(Ray(cur.p, wn), &pdfPos, &pdf);
-    } else if (cur.type == VertexType::Medium) {
+    } else if (kMedia && cur.type == VertexType::Medium) {
         if (!prev) return 0;
         Vec3 wp = prev->p - cur.p;
         if (wp.lengthSquared() == 0) return 0;
@@ -558,16 +575,30 @@ Float PdfArea(const BidirContext &ctx, const PathVertex &cur, const BSDF *bsdf, 
     }
     return ConvertDensity(pdf, cur, next);
 }
+}  // namespace
 
-Spectrum EvalBSDF(const PathVertex &cur, const BSDF &bsdf, const PathVertex &next, TransportMode mode) {
+Float PdfArea(const BidirContext &ctx, const PathVertex &cur, const BSDF *bsdf, const PathVertex *prev,
+              const PathVertex &next, TransportMode mode) {
+    if (ctx.scene->features.media) return PdfAreaT<true>(ctx, cur, bsdf, prev, next, mode);
+    return PdfAreaT<false>(ctx, cur, bsdf, prev, next, mode);
+}
+
+namespace {
+template <bool kMedia>
+Spectrum EvalBSDFT(const PathVertex &cur, const BSDF &bsdf, const PathVertex &next, TransportMode mode) {
     Vec3 wi = next.p - cur.p;
     if (wi.lengthSquared() == 0) return Spectrum(0);
     wi = Normalize(wi);
     Vec3 wo = cur.wo;
-    if (cur.type == VertexType::Medium) return Spectrum(cur.medium->phase.p(wo, wi));
+    if (kMedia && cur.type == VertexType::Medium) return Spectrum(cur.medium->phase.p(wo, wi));
     Spectrum f = bsdf.f(wo, wi, mode);
     if (mode == TransportMode::Importance) f *= ShadingCorrection(cur, wo, wi);
     return f;
+}
+}  // namespace
+
+Spectrum EvalBSDF(const PathVertex &cur, const BSDF &bsdf, const PathVertex &next, TransportMode mode) {
+    return EvalBSDFT<true>(cur, bsdf, next, mode);
 }
 
 Spectrum EmittedRadiance(const BidirContext &ctx, const PathVertex &v, const PathVertex &towards) {
@@ -626,6 +657,7 @@ namespace {
 // gets the light-side density of camera[t-1]. mergeMode: the strategy being
 // weighted is a merge at camera[t-1] (VCM), so light[s-1] is not known to be
 // connectible and its delta flag counts.
+template <bool kMedia>
 Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s,
                       int t, const PathVertex *sampled, bool mergeMode, Float *ptRevOut, int split = -1,
                       MISSplit *parts = nullptr, Float *etaOwnOut = nullptr) {
@@ -639,20 +671,23 @@ Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathVi
     if (t > 0) {
         const PathVertex &pt = Cv(t - 1);
         if (s > 0)
-            ptRev = PdfArea(ctx, Lv(s - 1), Lb(s - 1), s > 1 ? &Lv(s - 2) : nullptr, pt, TransportMode::Importance);
+            ptRev = PdfAreaT<kMedia>(ctx, Lv(s - 1), Lb(s - 1), s > 1 ? &Lv(s - 2) : nullptr, pt,
+                                     TransportMode::Importance);
         else if (t > 1)
             ptRev = PdfLightOrigin(ctx, pt, Cv(t - 2));
         if (t > 1) {
             if (s > 0)
-                ptMinusRev = PdfArea(ctx, pt, Cb(t - 1), &Lv(s - 1), Cv(t - 2), TransportMode::Importance);
+                ptMinusRev = PdfAreaT<kMedia>(ctx, pt, Cb(t - 1), &Lv(s - 1), Cv(t - 2), TransportMode::Importance);
             else
                 ptMinusRev = PdfLightDirection(ctx, pt, Cv(t - 2));
         }
     }
     if (s > 0) {
         const PathVertex &qs = Lv(s - 1);
-        qsRev = PdfArea(ctx, Cv(t - 1), Cb(t - 1), t > 1 ? &Cv(t - 2) : nullptr, qs, TransportMode::Radiance);
-        if (s > 1) qsMinusRev = PdfArea(ctx, qs, Lb(s - 1), &Cv(t - 1), Lv(s - 2), TransportMode::Radiance);
+        qsRev = PdfAreaT<kMedia>(ctx, Cv(t - 1), Cb(t - 1), t > 1 ? &Cv(t - 2) : nullptr, qs,
+                                 TransportMode::Radiance);
+        if (s > 1)
+            qsMinusRev = PdfAreaT<kMedia>(ctx, qs, Lb(s - 1), &Cv(t - 1), Lv(s - 2), TransportMode::Radiance);
     }
     *ptRevOut = ptRev;
     auto camRev = [&](int i) { return i == t - 1 ? ptRev : (i == t - 2 ? ptMinusRev : Cv(i).pdfRev); };
@@ -742,17 +777,27 @@ Float OtherStrategies(const BidirContext &ctx, const StrategySet &set, SubpathVi
 
 }  // namespace
 
-Float MISWeight(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s, int t,
-                const PathVertex *sampled, int split, MISSplit *parts) {
+namespace {
+template <bool kMedia>
+Float MISWeightT(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s, int t,
+                 const PathVertex *sampled, int split, MISSplit *parts) {
     GRADUS_CHECK(!set.lightTracing || set.lightTracingSamples > 0);
     if (parts) *parts = MISSplit();
     if (t == 1 && !set.lightTracing) return 0;  // not in play
     if (s + t == 2) return 1;
     GRADUS_CHECK(!parts || (SplitSupported(set) && split >= 1 && split + 2 <= t - 1));
     Float ptRev;
-    Float w = 1 / (1 + OtherStrategies(ctx, set, light, camera, s, t, sampled, false, &ptRev, split, parts));
+    Float w =
+        1 / (1 + OtherStrategies<kMedia>(ctx, set, light, camera, s, t, sampled, false, &ptRev, split, parts));
     if (parts) parts->valid = true;
     return w;
+}
+}  // namespace
+
+Float MISWeight(const BidirContext &ctx, const StrategySet &set, SubpathView light, SubpathView camera, int s, int t,
+                const PathVertex *sampled, int split, MISSplit *parts) {
+    if (ctx.scene->features.media) return MISWeightT<true>(ctx, set, light, camera, s, t, sampled, split, parts);
+    return MISWeightT<false>(ctx, set, light, camera, s, t, sampled, split, parts);
 }
 
 Float CameraPrefixSum(const BidirContext &ctx, const StrategySet &set, SubpathView camera, int split) {
@@ -788,7 +833,10 @@ Float MergeWeight(const BidirContext &ctx, const StrategySet &set, SubpathView l
                   int t) {
     GRADUS_CHECK(set.merging && s >= 1 && t >= 2);
     Float ptRev, etaOwn;
-    const Float others = OtherStrategies(ctx, set, light, camera, s, t, nullptr, true, &ptRev, -1, nullptr, &etaOwn);
+    const Float others =
+        ctx.scene->features.media
+            ? OtherStrategies<true>(ctx, set, light, camera, s, t, nullptr, true, &ptRev, -1, nullptr, &etaOwn)
+            : OtherStrategies<false>(ctx, set, light, camera, s, t, nullptr, true, &ptRev, -1, nullptr, &etaOwn);
     // The connection (s, t) itself is a strategy of this path unless light[s-1]
     // is specular or the edge is degenerate.
     const bool vc = (s == 1 || !light.v[s - 1].delta()) && EdgeConnectible(ctx, light.v[s - 1], camera.v[t - 1]);
@@ -797,8 +845,30 @@ Float MergeWeight(const BidirContext &ctx, const StrategySet &set, SubpathView l
     return misOwn / ((vc ? 1 : 0) + others);
 }
 
-bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera, int s, int t,
-                 const ConnectSamples &u, ConnectResult *res) {
+namespace {
+
+// The connection code compiled with and without media (kMedia: the scene has
+// media): without, no vertex is a medium vertex and visibility is a shadow ray.
+template <bool kMedia>
+bool Scatters(const PathVertex &v) {
+    if constexpr (kMedia) return v.scatters();
+    else return v.type == VertexType::Surface;
+}
+template <bool kMedia>
+Float ScatterCosT(const PathVertex &v, const Vec3 &w) {
+    if constexpr (kMedia) return ScatterCos(v, w);
+    else return AbsDot(w, Vec3(v.ns));
+}
+template <bool kMedia>
+Spectrum TransmittanceT(const BidirContext &ctx, const PathVertex &a, const Interaction &ia, const Interaction &ib,
+                        UniformSource rng) {
+    if constexpr (kMedia) return Transmittance(ctx, a, ia, ib, rng);
+    else return ctx.scene->unoccluded(ia, ib) ? Spectrum(1) : Spectrum(0);
+}
+
+template <bool kMedia>
+bool ConnectT(const BidirContext &ctx, SubpathView light, SubpathView camera, int s, int t, const ConnectSamples &u,
+              ConnectResult *res) {
     *res = ConnectResult();
     if (t < 1 || (s == 1 && t == 1)) return false;
     if (t == 1 && !ctx.strategies.lightTracing) return false;
@@ -814,17 +884,17 @@ bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera,
     } else if (t == 1) {
         const PathVertex &qs = light.v[s - 1];
         const BSDF *qb = light.bsdf ? &light.bsdf[s - 1] : nullptr;
-        if (!IsConnectible(qs, qb) || !qs.scatters()) return false;
+        if (!IsConnectible(qs, qb) || !Scatters<kMedia>(qs)) return false;
         CameraWiSample cws;
         if (!SampleLensVertex(ctx, qs, u.uLens, &sampled, &cws)) return false;
         haveSampled = true;
         if (!EdgeConnectible(ctx, qs, sampled)) return false;
-        L = qs.throughput() * EvalBSDF(qs, *qb, sampled, TransportMode::Importance) * (cws.We / cws.pdf) *
-            ScatterCos(qs, cws.wi);
+        L = qs.throughput() * EvalBSDFT<kMedia>(qs, *qb, sampled, TransportMode::Importance) * (cws.We / cws.pdf) *
+            ScatterCosT<kMedia>(qs, cws.wi);
         if (L.isBlack()) return false;
         res->shadowRayTraced = !u.knownVisible;
         if (!u.knownVisible) {
-            L *= Transmittance(ctx, qs, AsInteraction(qs), cws.pLens, u.rng);
+            L *= TransmittanceT<kMedia>(ctx, qs, AsInteraction(qs), cws.pLens, u.rng);
             if (L.isBlack()) return false;
         }
         res->splat = true;
@@ -832,18 +902,19 @@ bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera,
     } else if (s == 1) {
         const PathVertex &pt = camera.v[t - 1];
         const BSDF *pb = camera.bsdf ? &camera.bsdf[t - 1] : nullptr;
-        if (!IsConnectible(pt, pb) || !pt.scatters()) return false;
+        if (!IsConnectible(pt, pb) || !Scatters<kMedia>(pt)) return false;
         LightLiSample ls;
         Spectrum Lw;
         if (!SampleLightVertex(ctx, pt, u.uLightSelect, u.uLight, &sampled, &ls, &Lw)) return false;
         if (u.infiniteLightsOnly && !sampled.isInfiniteLight()) return false;
         haveSampled = true;
         if (!EdgeConnectible(ctx, sampled, pt)) return false;
-        L = pt.throughput() * EvalBSDF(pt, *pb, sampled, TransportMode::Radiance) * Lw * ScatterCos(pt, ls.wi);
+        L = pt.throughput() * EvalBSDFT<kMedia>(pt, *pb, sampled, TransportMode::Radiance) * Lw *
+            ScatterCosT<kMedia>(pt, ls.wi);
         if (L.isBlack()) return false;
         res->shadowRayTraced = !u.knownVisible;
         if (!u.knownVisible) {
-            L *= Transmittance(ctx, pt, AsInteraction(pt), ls.pLight, u.rng);
+            L *= TransmittanceT<kMedia>(ctx, pt, AsInteraction(pt), ls.pLight, u.rng);
             if (L.isBlack()) return false;
         }
     } else {
@@ -851,32 +922,40 @@ bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera,
         const BSDF *qb = light.bsdf ? &light.bsdf[s - 1] : nullptr;
         const BSDF *pb = camera.bsdf ? &camera.bsdf[t - 1] : nullptr;
         if (!IsConnectible(qs, qb) || !IsConnectible(pt, pb)) return false;
-        if (!qs.scatters() || !pt.scatters()) return false;
+        if (!Scatters<kMedia>(qs) || !Scatters<kMedia>(pt)) return false;
         if (!EdgeConnectible(ctx, qs, pt)) return false;
-        L = qs.throughput() * EvalBSDF(qs, *qb, pt, TransportMode::Importance) *
-            EvalBSDF(pt, *pb, qs, TransportMode::Radiance) * pt.throughput();
+        L = qs.throughput() * EvalBSDFT<kMedia>(qs, *qb, pt, TransportMode::Importance) *
+            EvalBSDFT<kMedia>(pt, *pb, qs, TransportMode::Radiance) * pt.throughput();
         if (L.isBlack()) return false;
         // Geometry term with shading-normal cosines (the adjoint correction
         // in EvalBSDF accounts for the geometric ones on the light side).
         Vec3 d = qs.p - pt.p;
         Float d2 = d.lengthSquared();
         d = d / std::sqrt(d2);
-        L *= ScatterCos(qs, d) * ScatterCos(pt, d) / d2;
+        L *= ScatterCosT<kMedia>(qs, d) * ScatterCosT<kMedia>(pt, d) / d2;
         if (L.isBlack()) return false;
         res->shadowRayTraced = !u.knownVisible;
         if (!u.knownVisible) {
-            L *= Transmittance(ctx, qs, AsInteraction(qs), AsInteraction(pt), u.rng);
+            L *= TransmittanceT<kMedia>(ctx, qs, AsInteraction(qs), AsInteraction(pt), u.rng);
             if (L.isBlack()) return false;
         }
     }
     if (L.isBlack()) return false;
-    Float w = MISWeight(ctx, ctx.strategies, light, camera, s, t, haveSampled ? &sampled : nullptr,
-                        u.misParts && u.misSplit >= 1 && u.misSplit + 2 <= t - 1 ? u.misSplit : -1,
-                        u.misParts && u.misSplit >= 1 && u.misSplit + 2 <= t - 1 ? u.misParts : nullptr);
+    const bool split = u.misParts && u.misSplit >= 1 && u.misSplit + 2 <= t - 1;
+    Float w = MISWeightT<kMedia>(ctx, ctx.strategies, light, camera, s, t, haveSampled ? &sampled : nullptr,
+                                 split ? u.misSplit : -1, split ? u.misParts : nullptr);
     res->weight = w;
     res->unweighted = L;
     res->L = L * w;
     return w > 0;
+}
+
+}  // namespace
+
+bool ConnectBDPT(const BidirContext &ctx, SubpathView light, SubpathView camera, int s, int t,
+                 const ConnectSamples &u, ConnectResult *res) {
+    if (ctx.scene->features.media) return ConnectT<true>(ctx, light, camera, s, t, u, res);
+    return ConnectT<false>(ctx, light, camera, s, t, u, res);
 }
 
 }  // namespace gradus

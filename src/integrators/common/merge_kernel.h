@@ -61,6 +61,16 @@ struct MergeKernel {
     }
 };
 
+// The photon-normal filter of the G-VCM authors' public code (gdvcm, not in
+// the paper): a light vertex y is merged at camera vertex z only if their
+// unit geometric normals (each as its surface orients it) satisfy
+// n_y . n_z >= 0.1. It drops photons on perpendicular or opposite-facing
+// surfaces within the kernel (corners, the far side of thin solids); like the
+// kernel itself a bias that vanishes as r -> 0 on smooth surfaces. The MIS
+// weights are left as they are (as in that code).
+constexpr Float kPhotonNormalMinDot = 0.1;
+inline bool PhotonNormalAgrees(const Vec3 &ny, const Vec3 &nz) { return Dot(ny, nz) >= kPhotonNormalMinDot; }
+
 // eta_j at every vertex j of a camera-order path (n vertices, vertex(0) on the
 // lens): 0 before the first vertex with mergeable(j), then as MergeKernel says.
 // vertex(j) -> const PathVertex &, bsdf(j) -> const BSDF * (may be null).

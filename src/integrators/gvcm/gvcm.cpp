@@ -473,8 +473,8 @@ bool GVCMIntegrator::mergesAt(SampleMerges &sm, int u, GradientSample *out) cons
 
 void GVCMIntegrator::gatherPhotons(const PathVertex &zu, const BSDF &bu, int u, Float etaU, Found *found) const {
     found->clear();
-    grid_.query(zu.p, std::sqrt(etaU / kernel_.piN), [&](uint32_t idx, Float) {
-        const LightVertex &lv = vertices_[idx];
+    ForEachMergeCandidate(grid_, vertices_, zu, std::sqrt(etaU / kernel_.piN), gset_.normalFilter,
+                          [&](uint32_t idx, const LightVertex &lv) {
         if (int(lv.depth) + u - 1 > set_.maxDepth) return;
         const Spectrum f = bu.f(Vec3(zu.wo), lv.wo, TransportMode::Radiance);
         if (!f.isBlack()) found->emplace_back(idx, f);

@@ -90,7 +90,10 @@
 //   string mode "vcm"                vcm (G-VCM) | mergeonly (G-PM)
 //   float radius 0                   initial merging radius in scene units (0: from the pixel footprint)
 //   float radiusscale 1              the footprint radius in pixels (radius 0)
-//   float radiusalpha 0.75           radius reduction r_i^2 = r_1^2 i^(alpha - 1)
+//   float radiusalpha 0.75           radius reduction r_i^2 = r_1^2 i^(alpha - 1) (0.9 with radiusschedule "radius")
+//   string radiusschedule "area"     area | radius: r_i = r_1 i^(alpha - 1) (the G-VCM authors' code; vcm.h)
+//   bool normalfilter false          merge only photons whose geometric normal agrees with the camera
+//                                    vertex's (dot >= 0.1; the authors' code, merge_kernel.h), in G-VCM and G-PM
 //   string kernel "fixed"            fixed | adaptive (Sec. 6, above)
 //   float kernelshrink 10            adaptive: r_j = 0.5^(kernelshrink tau) r_{j-1}
 //   string footprint "median"        median | path (Sec. 6, above)
@@ -124,7 +127,9 @@ class GVCMIntegrator : public GBDPTIntegrator {
     void runPass(PassContext &ctx) override;
     void finish(const Film &film, const RenderStats &stats, Image *out) override;
     std::string statistics() const override;
-    Float radiusAt(int iteration) const { return VCMRadius(radius1_, gset_.radiusAlpha, iteration); }
+    Float radiusAt(int iteration) const {
+        return VCMRadius(radius1_, gset_.radiusAlpha, iteration, gset_.schedule);
+    }
 
   protected:
     void addStrategies(const CameraState &st, GradientSample *out) const override;

@@ -29,7 +29,17 @@ ParamTable<MergeRadiusSettings> MergeRadiusParams() {
     ParamTable<S> t("merging radius");
     t.real("radius", &S::radius, 0, "initial merging radius in scene units (0: from the pixel footprint)", AtLeast(0));
     t.real("radiusscale", &S::radiusScale, 1, "the footprint radius in pixels (radius 0)", Range{1e-3, 1e3});
-    t.real("radiusalpha", &S::radiusAlpha, 0.75, "radius reduction r_i^2 = r_1^2 i^(alpha - 1)", Range{1e-3, 1});
+    t.real("radiusalpha", &S::radiusAlpha, 0.75,
+           "radius reduction: r_i^2 = r_1^2 i^(alpha - 1) (radiusschedule area) | r_i = r_1 i^(alpha - 1) "
+           "(radiusschedule radius; default 0.9 there)",
+           Range{1e-3, 1});
+    t.enumeration<RadiusSchedule>("radiusschedule", &S::schedule, "area",
+                                  {{"area", RadiusSchedule::Area}, {"radius", RadiusSchedule::Radius}},
+                                  "area: r_i^2 = r_1^2 i^(alpha - 1) (Knaus and Zwicker) | radius: r_i = r_1 "
+                                  "i^(alpha - 1) (the G-VCM authors' code, radiusalpha 0.9 unless given)")
+        .thenWithParams([](S &s, const ParamSet &ps, const FileLoc &) {
+            if (s.schedule == RadiusSchedule::Radius && !ps.has("radiusalpha")) s.radiusAlpha = 0.9;
+        });
     t.enumeration<bool>("kernel", &S::adaptiveKernel, "fixed", {{"fixed", false}, {"adaptive", true}},
                         "fixed (r_1 at every vertex) | adaptive (G-VCM Sec. 6: r_j = 0.5^(kernelshrink tau) r_{j-1})");
     t.real("kernelshrink", &S::kernelShrink, 10,
@@ -37,6 +47,9 @@ ParamTable<MergeRadiusSettings> MergeRadiusParams() {
     t.enumeration<bool>("footprint", &S::pathFootprint, "median", {{"median", false}, {"path", true}},
                         "radius 0: r_1 from the median pixel footprint of the primary hits | from each path's "
                         "pixel width at its first mergeable vertex (G-VCM Sec. 6), at most 2 r_i");
+    t.boolean("normalfilter", &S::normalFilter, false,
+              "merge only photons whose geometric normal n_y has n_y . n_z >= 0.1 with the camera vertex's n_z "
+              "(the G-VCM authors' code)");
     return t;
 }
 
@@ -276,22 +289,23 @@ void BuildLightVertexGrid(PassContext &ctx, const std::vector<LightVertex> &vert
     });
 }
 
-Float VCMRadius(Float r1, Float alpha, int iteration) {
-    // r_i^2 = r_1^2 i^(alpha - 1) (vcm.h).
-    return r1 * std::pow(Float(std::max(iteration, 1)), Float(0.5) * (alpha - 1));
+Float VCMRadius(Float r1, Float alpha, int iteration, RadiusSchedule schedule) {
+    // Area: r_i^2 = r_1^2 i^(alpha - 1); Radius: r_i = r_1 i^(alpha - 1) (vcm.h).
+    const Float e = schedule == RadiusSchedule::Radius ? alpha - 1 : Float(0.5) * (alpha - 1);
+    return r1 * std::pow(Float(std::max(iteration, 1)), e);
 }
 
 MergeKernel VCMKernel(const MergeRadiusSettings &s, Float r1, int iteration, int64_t nLight, const Camera &camera,
                       bool merging) {
     MergeKernel k;
-    const Float ri = VCMRadius(r1, s.radiusAlpha, iteration);
+    const Float ri = VCMRadius(r1, s.radiusAlpha, iteration, s.schedule);
     // eta_VCM = pi r^2 N_light (G-VCM Eq. 12: N p_VM with N light subpaths merged).
     k.piN = merging ? Pi * Float(nLight) : 0;
     k.r2 = ri * ri;
     // Sec. 6: the shrink along the camera subpath, and r_1 from the path's pixel footprint.
     if (s.adaptiveKernel) k.shrink = s.kernelShrink;
     if (s.pathFootprint && s.radius <= 0) {
-        const Float scale = s.radiusScale * VCMRadius(1, s.radiusAlpha, iteration);  // radiusscale times the schedule
+        const Float scale = s.radiusScale * VCMRadius(1, s.radiusAlpha, iteration, s.schedule);  // radiusscale times the schedule
         k.footprint2 = scale * scale;
         k.r2Max = 4 * k.r2;  // the grid (built for r_i) answers queries up to 2 r_i
         k.pixels = Float(camera.fullResolution.x) * Float(camera.fullResolution.y);
@@ -306,10 +320,19 @@ std::string KernelName(const MergeRadiusSettings &s) {
     const char *r1 = s.radius > 0       ? "r_1 = radius"
                      : s.pathFootprint ? "r_1 from each path's footprint (at most 2 r_i)"
                                        : "r_1 from the median footprint";
-    return std::string(shrink) + ", " + r1;
+    std::string name = std::string(shrink) + ", " + r1;
+    if (s.schedule == RadiusSchedule::Radius) {
+        char b[64];
+        std::snprintf(b, sizeof b, ", r_i = r_1 i^(%g - 1)", s.radiusAlpha);
+        name += b;
+    }
+    if (s.normalFilter) name += ", photon-normal filter";
+    return name;
 }
 
-Float VCMIntegrator::radiusAt(int iteration) const { return VCMRadius(radius1_, set_.radiusAlpha, iteration); }
+Float VCMIntegrator::radiusAt(int iteration) const {
+    return VCMRadius(radius1_, set_.radiusAlpha, iteration, set_.schedule);
+}
 
 void VCMIntegrator::preprocess(const Scene &scene, Film &film) {
     preprocessBidir(scene, film, set_, loc_);
@@ -499,8 +522,8 @@ struct VCMIntegrator::CameraPath {
         const BSDF &bu = zb[u];
         Spectrum Lm(0);
         const Float etaU = eta[u];
-        in.grid_.query(zu.p, std::sqrt(etaU / in.kernel_.piN), [&](uint32_t k, Float) {
-            const LightVertex &lv = in.vertices_[k];
+        ForEachMergeCandidate(in.grid_, in.vertices_, zu, std::sqrt(etaU / in.kernel_.piN), in.set_.normalFilter,
+                              [&](uint32_t, const LightVertex &lv) {
             if (lv.inMedium() || int(lv.depth) + u - 1 > in.set_.maxDepth) return;  // merging on surfaces only
             const Vec3 wi = lv.wo;  // towards y_{m-1}
             const Spectrum f = bu.f(Vec3(zu.wo), wi, TransportMode::Radiance);

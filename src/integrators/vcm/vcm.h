@@ -81,7 +81,10 @@
 //   string mode "vcm"               vcm | vc (connections only: BDPT) | vm (merging only: progressive photon mapping)
 //   float radius 0                  initial merging radius in scene units (0: from the pixel footprint)
 //   float radiusscale 1             the footprint radius in pixels (radius 0)
-//   float radiusalpha 0.75          radius reduction r_i^2 = r_1^2 i^(alpha - 1)
+//   float radiusalpha 0.75          radius reduction r_i^2 = r_1^2 i^(alpha - 1) (0.9 with radiusschedule "radius")
+//   string radiusschedule "area"    area: r_i^2 = r_1^2 i^(alpha - 1) | radius: r_i = r_1 i^(alpha - 1) (the G-VCM authors' code)
+//   bool normalfilter false         merge only photons whose geometric normal n_y has n_y . n_z >= 0.1 with the
+//                                   camera vertex's n_z (the G-VCM authors' code; merge_kernel.h)
 //   string kernel "fixed"           fixed (r_1 at every vertex) | adaptive (G-VCM Sec. 6: r_j = 0.5^(kernelshrink tau) r_{j-1})
 //   float kernelshrink 10           adaptive: the exponent's factor (tau: roughness at the previous vertex)
 //   string footprint "median"       radius 0: r_1 from the median primary-hit footprint | path (each path's own, Sec. 6)
@@ -102,12 +105,20 @@ namespace gradus {
 
 enum class VCMMode { VCM, VC, VM };
 
+// How the merging radius shrinks with the iteration i (VCMRadius).
+enum class RadiusSchedule {
+    Area,    // r_i^2 = r_1^2 i^(alpha - 1) (Knaus and Zwicker; Georgiev's VCM)
+    Radius,  // r_i = r_1 i^(alpha - 1) (the G-VCM authors' code, alpha 0.9 there)
+};
+
 // The merging radius of vcm and gvcm (set by MergeRadiusParams).
 struct MergeRadiusSettings {
     Float radius, radiusScale, radiusAlpha;
+    RadiusSchedule schedule;
     bool adaptiveKernel;  // G-VCM Sec. 6's shrink (merge_kernel.h)
     Float kernelShrink;
     bool pathFootprint;   // G-VCM Sec. 6's per-path footprint r_1
+    bool normalFilter;    // merge only photons whose normal agrees (PhotonNormalAgrees, merge_kernel.h)
 };
 ParamTable<MergeRadiusSettings> MergeRadiusParams();
 // The kernel of 1-based iteration i: r_i (VCMRadius) from the median footprint
@@ -220,8 +231,23 @@ class LightVertexGather {
 };
 // The photon hash grid over a pass's light vertices (cell 2r), built in parallel.
 void BuildLightVertexGrid(PassContext &ctx, const std::vector<LightVertex> &vertices, Float radius, PhotonGrid *grid);
-// Radius of 1-based iteration i: r_i^2 = r_1^2 i^(alpha - 1).
-Float VCMRadius(Float r1, Float alpha, int iteration);
+// Radius of 1-based iteration i: r_i^2 = r_1^2 i^(alpha - 1) (Area) or
+// r_i = r_1 i^(alpha - 1) (Radius).
+Float VCMRadius(Float r1, Float alpha, int iteration, RadiusSchedule schedule = RadiusSchedule::Area);
+
+// The light vertices merged at camera vertex z within radius r (vcm and gvcm):
+// fn(index, vertex) for every stored light vertex closer than r to z.p, in the
+// grid's order, except, with normalFilter, those whose geometric normal
+// disagrees with z's (PhotonNormalAgrees).
+template <typename Fn>
+void ForEachMergeCandidate(const PhotonGrid &grid, const std::vector<LightVertex> &vertices, const PathVertex &z,
+                           Float r, bool normalFilter, Fn &&fn) {
+    grid.query(z.p, r, [&](uint32_t k, Float) {
+        const LightVertex &lv = vertices[k];
+        if (normalFilter && !PhotonNormalAgrees(Vec3(lv.ng), Vec3(z.ng))) return;
+        fn(k, lv);
+    });
+}
 
 class VCMIntegrator : public PixelSampleIntegrator, public BidirFamily {
   public:

@@ -114,14 +114,8 @@ void GMLTIntegrator::preprocess(const Scene &scene, Film &film) {
 EntityDesc GMLTIntegrator::directDesc() const {
     // G-PT at maxdepth 1 (the paths the chains leave out: outsideTarget), its
     // samples in their own pixel as the chains' splats, the shift's threshold.
-    EntityDesc d;
+    EntityDesc d = PMLTIntegrator::directDesc();  // maxdepth 1 at the scene location
     d.type = "gpt";
-    d.loc = loc_;
-    Param depth;
-    depth.type = "integer";
-    depth.name = "maxdepth";
-    depth.numbers = {1};
-    d.params.add(depth);
     Param filter;
     filter.type = "string";
     filter.name = "pixelfilter";

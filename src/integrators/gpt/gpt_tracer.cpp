@@ -222,13 +222,11 @@ void GradientPathTracer::trace(Sampler &sampler, int maxDepth, Float rrThreshold
         cur_ = next;
 
         // Russian roulette on the base; offsets follow its decision.
-        Spectrum rrBeta = beta_ * etaScale_;
-        Float uRR = sampler.get1D();
-        if (rrBeta.maxComponent() < rrThreshold && bounces > 3) {
-            Float q = std::max<Float>(0.05, 1 - rrBeta.maxComponent());
-            if (uRR < q) break;
-            beta_ = beta_ / (1 - q);
-            for (OffsetPath &o : off_) o.beta = o.beta / (1 - q);
+        const Float pSurvive = BaseRouletteSurvival(beta_ * etaScale_, bounces, rrThreshold, sampler.get1D());
+        if (pSurvive == 0) break;
+        if (pSurvive < 1) {
+            beta_ = beta_ / pSurvive;
+            for (OffsetPath &o : off_) o.beta = o.beta / pSurvive;
         }
         if (beta_.isBlack()) break;
     }

@@ -63,6 +63,14 @@ struct LightChoice {
 // tangent plane of a surface end carry no light (InTangentPlane), as in the
 // bidirectional connections; offsets saw a light outside a closed box through
 // a face's own plane before (bench/stress camera_in_box, 6e-32 in the gradients).
+// Russian roulette of the base path after depth 3 (path's rule; offsets follow
+// the base's decision). Returns 0 to stop, else the survival probability 1 - q.
+inline Float BaseRouletteSurvival(const Spectrum &rrBeta, int bounces, Float rrThreshold, Float u) {
+    if (!(rrBeta.maxComponent() < rrThreshold && bounces > 3)) return 1;
+    const Float q = std::max<Float>(0.05, 1 - rrBeta.maxComponent());
+    return u < q ? 0 : 1 - q;
+}
+
 inline bool ShiftEdgeVisible(const Scene &scene, const Interaction &a, const Interaction &b) {
     const Vec3 d = b.p - a.p;
     return !InTangentPlane(a.n, d) && !InTangentPlane(b.n, d) && scene.unoccluded(a, b);

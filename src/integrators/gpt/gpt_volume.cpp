@@ -608,13 +608,11 @@ void VolumeGradientPathTracer::trace(Sampler &sampler, int maxDepth, Float rrThr
         medium_ = cur_.leaving(wi_);
 
         // Russian roulette on the base (path's); offsets follow its decision.
-        const Spectrum rrBeta = beta_ * etaScale_;
-        const Float uRR = sampler.get1D();
-        if (rrBeta.maxComponent() < rrThreshold && bounces > 3) {
-            const Float q = std::max<Float>(0.05, 1 - rrBeta.maxComponent());
-            if (uRR < q) break;
-            beta_ = beta_ / (1 - q);
-            for (VolumeOffset &o : off_) o.beta = o.beta / (1 - q);
+        const Float pSurvive = BaseRouletteSurvival(beta_ * etaScale_, bounces, rrThreshold, sampler.get1D());
+        if (pSurvive == 0) break;
+        if (pSurvive < 1) {
+            beta_ = beta_ / pSurvive;
+            for (VolumeOffset &o : off_) o.beta = o.beta / pSurvive;
         }
         if (beta_.isBlack()) break;
     }

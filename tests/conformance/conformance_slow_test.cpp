@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "agreement.h"
+#include "media_rows.h"
 
 using namespace gradus::conformance;
 
@@ -23,3 +24,14 @@ TEST_P(AgreementSlow, AgreesWithBdpt) {
 INSTANTIATE_TEST_SUITE_P(conformance_slow, AgreementSlow,
                          ::testing::Combine(::testing::ValuesIn(Integrators()), ::testing::ValuesIn(Scenes())),
                          AgreementName);
+
+// Media rows (media_rows.h) with the 2% power check: K = 40 runs, references of
+// 128 spp, rows of 64 spp (mlt: its default bootstrap of 100000 states per depth).
+class MediaTableSlow : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(MediaTableSlow, RefusesOrAgrees) {
+    CheckMediaRows(GetParam(), MediaConfig{40, 128, 64, 64, 64, 100000, 3000, 5000, 7000, 1.02});
+}
+
+INSTANTIATE_TEST_SUITE_P(conformance_slow, MediaTableSlow, ::testing::ValuesIn(MediaScenes()),
+                         [](const ::testing::TestParamInfo<std::string> &info) { return Sanitize(info.param); });

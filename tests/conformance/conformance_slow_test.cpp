@@ -26,11 +26,19 @@ INSTANTIATE_TEST_SUITE_P(conformance_slow, AgreementSlow,
                          AgreementName);
 
 // Media rows (media_rows.h) with the 2% power check: K = 40 runs, references of
-// 128 spp, rows of 64 spp (mlt: its default bootstrap of 100000 states per depth).
+// 128 spp, rows of 64 spp (mlt: its default bootstrap of 100000 states per
+// depth); media-interface, the least noisy, with half the samples. Smallest
+// power margins (|t|/critical of a 2% bias): media-fog 1.41, media-grid 1.29
+// (gpt's primal), media-interface 2.43 (mlt). Measured on the 2 shared cores
+// (load average 6): media-fog 186 s, media-grid 306 s, media-interface 102 s
+// wall (CPU about the same).
 class MediaTableSlow : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(MediaTableSlow, RefusesOrAgrees) {
-    CheckMediaRows(GetParam(), MediaConfig{40, 128, 64, 64, 64, 100000, 3000, 5000, 7000, 1.02});
+    const std::string &scene = GetParam();
+    const MediaConfig cfg = scene == "media-interface" ? MediaConfig{40, 64, 32, 32, 32, 100000, 3000, 5000, 7000, 1.02}
+                                                       : MediaConfig{40, 128, 64, 64, 64, 100000, 3000, 5000, 7000, 1.02};
+    CheckMediaRows(scene, cfg);
 }
 
 INSTANTIATE_TEST_SUITE_P(conformance_slow, MediaTableSlow, ::testing::ValuesIn(MediaScenes()),

@@ -308,7 +308,7 @@ def foggy_room(d):
               '"rgb sigma_s" [0.15 0.14 0.12] "float g" [0.3]\nMediumInterface "" "fog"')
     w = ["# a foggy room: homogeneous fog everywhere, a smoke grid, a spot light, a glass sphere"]
     w.append('MakeNamedMedium "smoke" "string type" "heterogeneous" "rgb sigma_a" [0.5 0.5 0.5] '
-             '"rgb sigma_s" [3 3 3] "float g" [0.1] "point p0" [-1.6 0 0.2] "point p1" [-0.4 1.2 1.4] '
+             '"rgb sigma_s" [3 3 3] "float g" [0.1] "point p0" [-1.6 0.01 0.2] "point p1" [-0.4 1.21 1.4] '
              '"integer nx" [%d] "integer ny" [%d] "integer nz" [%d] "float density" [' % (n, n, n))
     for k in range(0, len(dens), 16):
         w.append("  " + " ".join("%.4f" % v for v in dens[k:k + 16]))
@@ -328,7 +328,7 @@ def foggy_room(d):
         w.append("  " + quad(*q, uv=False))
     w.append("AttributeEnd")
     w.append('AttributeBegin\n  MediumInterface "smoke" "fog"\n  Material ""\n  ' +
-             box([-1.6, 0, 0.2], [-0.4, 1.2, 1.4]) + "\nAttributeEnd")
+             box([-1.6, 0.01, 0.2], [-0.4, 1.21, 1.4]) + "\nAttributeEnd")
     w.append('AttributeBegin\n  MediumInterface "" "fog"\n  Material "glass" "float index" [1.5]\n'
              '  Translate 0.8 0.6 0.4\n  Shape "sphere" "float radius" [0.45]\nAttributeEnd')
     return header, "\n".join(w)

@@ -55,6 +55,16 @@ TEST(MetropolisNormalisation, FurnaceMeanMLTLargeStepMIS) {
     ExpectConverges("mlt furnace, largestepmis", Ratios(scene, FurnaceMean(), 16, 551));
 }
 
+// normalizationsamples: every strategy of the chain's depth on one pair of
+// subpaths per sample (mlt.h), pooled with the large steps.
+TEST(MetropolisNormalisation, FurnaceMeanMLTAllStrategySamples) {
+    const std::string scene = Furnace("Integrator \"mlt\" " + kDepthParam +
+                                          "\"integer bootstrapsamples\" [20] \"integer chains\" [256] "
+                                          "\"float normalizationsamples\" [1]",
+                                      32);
+    ExpectConverges("mlt furnace, normalizationsamples", Ratios(scene, FurnaceMean(), 16, 581));
+}
+
 TEST(MetropolisNormalisation, FurnaceMeanPMLT) {
     const std::string scene = Furnace("Integrator \"pmlt\" " + kDepthParam +
                                           "\"integer bootstrapsamples\" [20] \"integer chains\" [256] "

@@ -125,7 +125,7 @@ void MetropolisIntegrator::drawIndependent(int64_t i, const PassMutations &pass,
         const int64_t j = i + pass.chains * m;
         const int64_t n0 = int64_t(std::floor(double(j) * r)), n1 = int64_t(std::floor(double(j + 1) * r));
         for (int64_t k = n0; k < n1; ++k) {
-            acc.sum += independentSample(key, k, wk);
+            acc.sum += independentSample(key, k, i, wk);
             acc.count += 1;
             wk.arena.reset();
         }

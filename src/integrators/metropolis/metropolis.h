@@ -140,13 +140,15 @@ class MetropolisIntegrator : public Integrator {
     virtual bool runningNormalization() const { return true; }
     // The stratum of chain c's independent samples (mlt: its depth).
     virtual int chainStratum(int64_t c) const { return 0; }
-    // Independent samples the driver draws per mutation (pmlt, gmlt); sample
-    // n is drawn by the chain running mutation j when floor(j r) <= n <
-    // floor((j + 1) r). 0: none (mlt adds its large steps itself).
+    // Independent samples the driver draws per mutation (pmlt, gmlt; mlt's
+    // normalizationsamples); sample n is drawn by the chain running mutation
+    // j when floor(j r) <= n < floor((j + 1) r). 0: none (mlt adds its large
+    // steps itself in any case).
     virtual double independentRate() const { return 0; }
-    // Target value of independent sample n (key: the driver's stream of them;
-    // wk.arena is free and reset afterwards).
-    virtual double independentSample(uint64_t key, int64_t n, Worker &wk) { return 0; }
+    // Target value of independent sample n, drawn for chain c (it joins c's
+    // stratum; key: the driver's stream of them; wk.arena is free and reset
+    // afterwards).
+    virtual double independentSample(uint64_t key, int64_t n, int64_t c, Worker &wk) { return 0; }
     // Sets the film's splat scales (default: the main image's to b x rescale).
     virtual void scaleFilm(Film &film, double b, double rescale) const { film.setSplatScale(-1, b * rescale); }
 

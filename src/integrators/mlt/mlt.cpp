@@ -44,6 +44,9 @@ ParamTable<MLTSettings> Table() {
     t.enumeration("normalization", &S::normalization, "running", {"running", "bootstrap"},
                   "b, the image's normalisation: running = the bootstrap's estimate refined by every large step "
                   "(its seed-to-seed spread shrinks with the render); bootstrap = the bootstrap's alone (pbrt-v3)");
+    t.real("normalizationsamples", &S::normalizationSamples, 0,
+           "independent all-strategy samples of b per mutation besides the large steps (running normalization)",
+           Range{0, 1e6, "a rate in [0, 1e6]"});
     return t;
 }
 
@@ -176,6 +179,65 @@ Spectrum MLTIntegrator::contribution(PrimarySampler &u, int depth, Arena &arena,
     }
     *pRaster = pFilm;
     return L * w;
+}
+
+double MLTIntegrator::allStrategies(PrimarySampler &u, int depth, Arena &arena) const {
+    // Every (s, t) with s + t = depth + 2 on one camera subpath of depth + 2
+    // vertices and one light subpath of depth + 1, each strategy on their
+    // prefixes as bdpt does (its MIS weights need only the prefix). I of the
+    // state that selects (s, t) is Target(nStrategies L_st); the mean over
+    // the selection is sum_st Target(L_st) (Target is positively homogeneous),
+    // so the sum below has the mean of I: b_d (mlt.h, normalizationsamples).
+    const UniformSource media = ctx_.scene->features.media ? UniformSource(u) : UniformSource();
+    const int maxCam = depth + 2, maxLight = depth + 1;
+    PathVertex *camV, *lightV;
+    BSDF *camB, *lightB;
+    AllocSubpath(arena, maxCam, &camV, &camB);
+    AllocSubpath(arena, maxLight, &lightV, &lightB);
+    u.startStream(mlt::kCameraStream);
+    CameraSample cs;
+    const Point2 uf = u.get2D();
+    cs.pFilm = Point2(pixels_.pMin.x + uf.x * pixels_.width(), pixels_.pMin.y + uf.y * pixels_.height());
+    cs.pLens = u.get2D();
+    Ray ray;
+    const Float w = ctx_.camera->generateRay(cs, &ray);
+    const int nC = w > 0 ? GenerateCameraSubpath(ctx_, ray, u, arena, maxCam, camV, camB, media) : 0;
+    u.startStream(mlt::kLightStream);
+    const int nL = depth > 0 ? GenerateLightSubpath(ctx_, u, arena, maxLight, lightV, lightB, media) : 0;
+    u.startStream(mlt::kConnectionStream);
+    double sum = 0;
+    bool nonFinite = false;
+    for (int s = 0; s <= depth + 1; ++s) {
+        const int t = depth + 2 - s;
+        if (depth == 0 && s > 0) break;  // depth 0: (0, 2) alone, as contribution()
+        if (s > nL || (t >= 2 && t > nC)) continue;
+        ConnectSamples cu;
+        if (s == 1) {
+            cu.uLightSelect = u.get1D();
+            cu.uLight = u.get2D();
+        }
+        if (t == 1) cu.uLens = u.get2D();
+        cu.rng = media;
+        SubpathView cam{camV, camB, t >= 2 ? t : 1};
+        if (t == 1) {
+            // t = 1 samples its lens point in the connection: a placeholder
+            // camera vertex, as contribution() passes.
+            PathVertex *v0 = arena.make<PathVertex>();
+            v0->type = VertexType::Camera;
+            cam = SubpathView{v0, camB, 1};
+        }
+        ConnectResult r;
+        if (!ConnectBDPT(ctx_, SubpathView{lightV, lightB, s}, cam, s, t, cu, &r)) continue;
+        sum += Target(r.L * (r.splat ? splatScale_ : w), &nonFinite);  // non-finite: 0, as I
+    }
+    return sum;
+}
+
+double MLTIntegrator::independentSample(uint64_t key, int64_t n, int64_t c, Worker &wk) {
+    PrimarySampler u(set_.sigma, set_.largeStepProbability);
+    RNG rng(Hash(key, uint64_t(n)));
+    u.restart(&rng);
+    return allStrategies(u, chains_[size_t(c)].depth, wk.arena);
 }
 
 // ---------------------------------------------------------------- bootstrap and chain starts

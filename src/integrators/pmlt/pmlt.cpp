@@ -238,7 +238,7 @@ MetropolisIntegrator::BootstrapWeights PMLTIntegrator::weighBootstrap(PassContex
     return w;
 }
 
-double PMLTIntegrator::independentSample(uint64_t key, int64_t n, Worker &wk) {
+double PMLTIntegrator::independentSample(uint64_t key, int64_t n, int64_t, Worker &wk) {
     // A bidirectional sample drawn and weighed as the bootstrap's (its own
     // key): an independent estimate of b (pmlt.h).
     double sum = 0;

@@ -234,7 +234,7 @@ class PMLTIntegrator : public MetropolisIntegrator {
     int64_t startChain(int64_t c, RNG &pick, uint64_t key, Worker &wk) override;
     void releaseBootstrap() override;
     double independentRate() const override { return double(set_.normalizationSamples); }
-    double independentSample(uint64_t key, int64_t n, Worker &wk) override;
+    double independentSample(uint64_t key, int64_t n, int64_t c, Worker &wk) override;
     void beginChains(PassContext &ctx) override;
     int64_t mutateChain(PassContext &ctx, int64_t c, int64_t count, RNG &rng, SampleRecorder &rec,
                         Worker &wk) override;

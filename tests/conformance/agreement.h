@@ -106,10 +106,11 @@ struct Verdict {
         double margin = 0;
     } worst[kNumFamilies];
     std::string table;  // every t, by family
+    std::string reference = "bdpt";
     std::string describe() const {
         std::ostringstream o;
         const Welch &g = worst[kGlobal].w;
-        o << "mean " << g.meanA << " +- " << g.seA << " vs bdpt " << g.meanB << " +- " << g.seB;
+        o << "mean " << g.meanA << " +- " << g.seA << " vs " << reference << " " << g.meanB << " +- " << g.seB;
         for (int f = 0; f < kNumFamilies; ++f) {
             const Worst &x = worst[f];
             o << "; " << (f == kGlobal ? "" : "worst ") << FamilyName(f)
@@ -120,8 +121,10 @@ struct Verdict {
     }
 };
 
-inline Verdict Evaluate(const std::vector<Reduced> &x, const std::vector<Reduced> &ref, double scale,
-                        double alphaLayer) {
+// X's runs (scaled) against the average expectation of one or more
+// reference integrators' runs (WelchContrast), per pixel set.
+inline Verdict Evaluate(const std::vector<Reduced> &x, const std::vector<const std::vector<Reduced> *> &refs,
+                        double scale, double alphaLayer) {
     const Reduced &shape = x[0];
     int count[kNumFamilies] = {}, index[kNumFamilies] = {};
     for (Family f : shape.family) ++count[f];
@@ -131,10 +134,12 @@ inline Verdict Evaluate(const std::vector<Reduced> &x, const std::vector<Reduced
     table << std::fixed;
     for (size_t i = 0; i < shape.value.size(); ++i) {
         const Family f = shape.family[i];
-        std::vector<double> a, b;
+        std::vector<double> a;
+        std::vector<std::vector<double>> b(refs.size());
         for (const auto &r : x) a.push_back(r.value[i] * scale);
-        for (const auto &r : ref) b.push_back(r.value[i]);
-        const Welch w = WelchTest(a, b);
+        for (size_t j = 0; j < refs.size(); ++j)
+            for (const auto &r : *refs[j]) b[j].push_back(r.value[i]);
+        const Welch w = WelchContrast(a, b);
         const double alpha = alphaLayer / kNumFamilies / count[f];
         const double margin = std::abs(w.t) / StudentCritical(alpha, w.dof);
         if (w.p < alpha) v.reject = true;
@@ -148,6 +153,10 @@ inline Verdict Evaluate(const std::vector<Reduced> &x, const std::vector<Reduced
     v.table = table.str();
     return v;
 }
+inline Verdict Evaluate(const std::vector<Reduced> &x, const std::vector<Reduced> &ref, double scale,
+                        double alphaLayer) {
+    return Evaluate(x, std::vector<const std::vector<Reduced> *>{&ref}, scale, alphaLayer);
+}
 
 inline std::vector<std::string> ComparedLayers(const Image &img) {
     auto layers = img.layers();
@@ -159,43 +168,64 @@ inline std::vector<std::string> ComparedLayers(const Image &img) {
     return r;
 }
 
+// K runs of `integrator` (seeds seed0 + k, S spp, `extra` arguments), each
+// reduced per compared layer (ComparedLayers of the first run).
+struct Runs {
+    std::vector<std::string> layers;
+    std::map<std::string, std::vector<Reduced>> reduced;  // by layer
+};
+inline Runs RenderRuns(const fs::path &dir, const std::string &scene, const std::string &integrator, int runs,
+                       int spp, int seed0, const std::vector<std::string> &extra) {
+    Runs r;
+    for (int k = 0; k < runs; ++k) {
+        std::vector<std::string> opts = {"--spp", std::to_string(spp), "--nthreads", "2", "--seed",
+                                         std::to_string(seed0 + k)};
+        opts.insert(opts.end(), extra.begin(), extra.end());
+        Output o = Render(dir, scene, integrator, opts, "run.exr");
+        if (!o.ok) {
+            ADD_FAILURE() << integrator << " " << scene << ": run " << k << " failed";
+            return Runs{};
+        }
+        if (k == 0) r.layers = ComparedLayers(o.image);
+        for (const auto &l : r.layers) r.reduced[l].push_back(Reduce(o.image, l));
+    }
+    return r;
+}
+
+// X's runs against a reference's main image, layer by layer, at alpha per
+// layer; the power check scales X's runs by `power` and 1 / `power`.
+inline void CompareRuns(const std::string &integrator, const std::string &scene, const Runs &x,
+                        const std::string &refName, const std::vector<const std::vector<Reduced> *> &ref,
+                        double alphaLayer, double power, const std::string &config) {
+    std::ostringstream pw;
+    pw << "x" << power;
+    for (const auto &l : x.layers) {
+        const std::string name = l.empty() ? "main" : l;
+        SCOPED_TRACE(integrator + " " + scene + " layer " + name + " vs " + refName);
+        Verdict null = Evaluate(x.reduced.at(l), ref, 1, alphaLayer);
+        Verdict up = Evaluate(x.reduced.at(l), ref, power, alphaLayer);
+        Verdict down = Evaluate(x.reduced.at(l), ref, 1 / power, alphaLayer);
+        null.reference = up.reference = down.reference = refName;
+        std::cout << "[ agree ] " << integrator << " " << scene << " " << name << " vs " << refName << " (" << config
+                  << "): max |t|/crit " << null.margin << "; power " << pw.str() << ": max |t|/crit " << up.margin
+                  << " (global " << up.worst[kGlobal].margin << "), x1/" << power << ": " << down.margin
+                  << " (global " << down.worst[kGlobal].margin << ")\n          " << null.describe() << "\n";
+        EXPECT_FALSE(null.reject) << integrator << " differs from " << refName << " in expectation (alpha "
+                                  << alphaLayer << " for this layer): " << null.describe() << null.table;
+        EXPECT_TRUE(up.reject) << "power check: a bias " << pw.str() << " is not detected: " << up.describe();
+        EXPECT_TRUE(down.reject) << "power check: a bias x1/" << power << " is not detected: " << down.describe();
+    }
+}
+
 inline void CheckAgreement(const std::string &integrator, const std::string &scene, const AgreementConfig &cfg) {
     ScratchDir dir;
-    std::vector<std::string> layers;
-    std::map<std::string, std::vector<Reduced>> xRuns;
-    std::vector<Reduced> ref;
-    auto opts = [&](int seed) {
-        return std::vector<std::string>{"--spp", std::to_string(cfg.spp), "--nthreads", "2", "--seed",
-                                        std::to_string(seed)};
-    };
-    for (int k = 0; k < cfg.runs; ++k) {
-        std::vector<std::string> xOpts = opts(cfg.seedX + k);
-        xOpts.insert(xOpts.end(), cfg.extraX.begin(), cfg.extraX.end());
-        Output x = Render(dir.path(), scene, integrator, xOpts, "x.exr");
-        std::vector<std::string> refOpts = opts(cfg.seedRef + k);
-        refOpts.insert(refOpts.end(), cfg.extraRef.begin(), cfg.extraRef.end());
-        Output b = Render(dir.path(), scene, cfg.reference, refOpts, "b.exr");
-        ASSERT_TRUE(x.ok && b.ok) << "run " << k;
-        if (k == 0) layers = ComparedLayers(x.image);
-        for (const auto &l : layers) xRuns[l].push_back(Reduce(x.image, l));
-        ref.push_back(Reduce(b.image, ""));
-    }
-    const double alphaLayer = kAgreementAlpha / double(layers.size());
-    for (const auto &l : layers) {
-        const std::string name = l.empty() ? "main" : l;
-        SCOPED_TRACE(integrator + " " + scene + " layer " + name);
-        const Verdict null = Evaluate(xRuns[l], ref, 1, alphaLayer);
-        const Verdict up = Evaluate(xRuns[l], ref, kPowerScale, alphaLayer);
-        const Verdict down = Evaluate(xRuns[l], ref, 1 / kPowerScale, alphaLayer);
-        std::cout << "[ agree ] " << integrator << " " << scene << " " << name << " (K " << cfg.runs << ", " << cfg.spp
-                  << " spp): max |t|/crit " << null.margin << "; power x1.05: max |t|/crit " << up.margin
-                  << " (global " << up.worst[kGlobal].margin << "), x1/1.05: " << down.margin << " (global "
-                  << down.worst[kGlobal].margin << ")\n          " << null.describe() << "\n";
-        EXPECT_FALSE(null.reject) << integrator << " differs from bdpt in expectation (alpha " << alphaLayer
-                                  << " for this layer): " << null.describe() << null.table;
-        EXPECT_TRUE(up.reject) << "power check: a 5% bias (x1.05) is not detected: " << up.describe();
-        EXPECT_TRUE(down.reject) << "power check: a 5% bias (x1/1.05) is not detected: " << down.describe();
-    }
+    const Runs x = RenderRuns(dir.path(), scene, integrator, cfg.runs, cfg.spp, cfg.seedX, cfg.extraX);
+    const Runs ref = RenderRuns(dir.path(), scene, cfg.reference, cfg.runs, cfg.spp, cfg.seedRef, cfg.extraRef);
+    if (x.layers.empty() || ref.layers.empty()) return;
+    std::ostringstream config;
+    config << "K " << cfg.runs << ", " << cfg.spp << " spp";
+    CompareRuns(integrator, scene, x, cfg.reference, {&ref.reduced.at("")}, kAgreementAlpha / double(x.layers.size()),
+                kPowerScale, config.str());
 }
 
 using AgreementParam = std::tuple<std::string, std::string>;

@@ -299,4 +299,47 @@ inline Welch WelchTest(const std::vector<double> &a, const std::vector<double> &
     return w;
 }
 
+// Welch's t of mean(a) against the average of the means of several reference
+// samples (a contrast): se^2 = var(mean a) + sum_r var(mean r) / R^2, degrees
+// of freedom by Welch-Satterthwaite over every group's term. With one
+// reference it is WelchTest.
+inline Welch WelchContrast(const std::vector<double> &a, const std::vector<std::vector<double>> &refs) {
+    if (refs.size() == 1) return WelchTest(a, refs[0]);
+    auto moments = [](const std::vector<double> &v, double *mean, double *varOfMean) {
+        double m = 0;
+        for (double x : v) m += x;
+        m /= v.size();
+        double s2 = 0;
+        for (double x : v) s2 += (x - m) * (x - m);
+        *mean = m;
+        *varOfMean = s2 / (v.size() - 1) / v.size();
+    };
+    Welch w;
+    double va;
+    moments(a, &w.meanA, &va);
+    const double R = double(refs.size());
+    double mb = 0, vb = 0, dofDen = va * va / (a.size() - 1);
+    for (const auto &r : refs) {
+        double m, v;
+        moments(r, &m, &v);
+        mb += m / R;
+        vb += v / (R * R);
+        dofDen += (v / (R * R)) * (v / (R * R)) / (r.size() - 1);
+    }
+    w.meanB = mb;
+    w.seA = std::sqrt(va);
+    w.seB = std::sqrt(vb);
+    w.diff = w.meanA - mb;
+    w.se = std::sqrt(va + vb);
+    if (!(va + vb > 0)) {
+        w.t = w.diff == 0 ? 0 : INFINITY;
+        w.p = w.diff == 0 ? 1 : 0;
+        return w;
+    }
+    w.t = w.diff / w.se;
+    w.dof = (va + vb) * (va + vb) / dofDen;
+    w.p = StudentTwoSidedP(w.t, w.dof);
+    return w;
+}
+
 }  // namespace gradus::conformance

@@ -91,6 +91,7 @@ class GBDPTIntegrator : public PixelSampleIntegrator, public GradientFamily {
     explicit GBDPTIntegrator(const EntityDesc &desc);
     ~GBDPTIntegrator() override;
     std::string name() const override { return "gbdpt"; }
+    bool rendersMedia() const override { return true; }  // "Participating media" above
     void preprocess(const Scene &scene, Film &film) override;
     void estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const override;
     void finish(const Film &film, const RenderStats &stats, Image *out) override;

@@ -24,6 +24,7 @@
 #include "gpt/gpt_media_check.h"
 #include "gpt/gpt_media_util.h"
 #include "integrators/gbdpt/gbdpt.h"
+#include "integrators/gradient/medium_shift.h"
 
 using namespace gradus;
 using namespace gradus::gbdpttest;
@@ -246,7 +247,8 @@ TEST(GBDPTMedia, CombinedWeightsSumToOneWithMediumVertices) {
 namespace {
 std::string GridWedgeText(const std::string &integratorLine) {
     std::ostringstream g;
-    g << "MakeNamedMedium \"smoke\" \"string type\" \"heterogeneous\" \"rgb sigma_a\" [0.4 0.4 0.4] "
+    // Identity: the grid's space is the world's (the CTM holds the LookAt here).
+    g << "Identity\nMakeNamedMedium \"smoke\" \"string type\" \"heterogeneous\" \"rgb sigma_a\" [0.4 0.4 0.4] "
          "\"rgb sigma_s\" [1.6 1.6 1.6] \"float g\" [0.2]\n"
          "    \"point p0\" [-1.5 0 0] \"point p1\" [1.5 2 1.05] \"integer nx\" [4] \"integer ny\" [3] "
          "\"integer nz\" [3]\n    \"float density\" [";

@@ -14,8 +14,15 @@
 //    and the hybrid, L1 and L2 reconstructions, 2% power checks, and a z-test
 //    of the gradients against bdpt's neighbour differences) on the smoke wedge
 //    (a material-less interface inside the scene, homogeneous) and its
-//    density-grid variant (ratio tracking of T_y / T_x); the fog room with a
-//    smoke sphere is in the slow tier (test_media_slow.cpp).
+//    density-grid variant (ratio tracking of T_y / T_x); fog-box and the wedge
+//    with specular spheres are in the slow tier (test_media_slow.cpp).
+// Planted faults caught (not committed): T_y / T_x dropped on the reconnection
+// segment (Jacobian test, both wedges), on the first chain's lockstep
+// segments (both wedges), on the light-tracing shift's b -> c segment (both
+// wedges); the squared-distance ratio dropped from the reconnection
+// (Jacobian test, both wedges); sigma_s(y) / sigma_s(x) dropped (grid wedge);
+// the offset's pdfRev at medium vertices left at the base's, and the phase
+// densities left out of rho at a medium b (weight normalisation).
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -14,8 +14,12 @@
 //    and the hybrid, L1 and L2 reconstructions, 2% power checks, and a z-test
 //    of the gradients against bdpt's neighbour differences) on the smoke wedge
 //    (a material-less interface inside the scene, homogeneous) and its
-//    density-grid variant (ratio tracking of T_y / T_x); fog-box and the wedge
-//    with specular spheres are in the slow tier (test_media_slow.cpp).
+//    density-grid variant (ratio tracking of T_y / T_x), and the wedge with a
+//    glass sphere inside the smoke, a near-specular metal sphere and an
+//    environment light (first chains through Dirac and near-specular vertices
+//    between medium vertices, environment shifts out of the smoke, second
+//    chains through specular vertices, which fall back with media: gbdpt.h);
+//    fog-box is in the slow tier (test_media_slow.cpp).
 // Planted faults caught (not committed): T_y / T_x dropped on the reconnection
 // segment (Jacobian test, both wedges), on the first chain's lockstep
 // segments (both wedges), on the light-tracing shift's b -> c segment (both
@@ -278,4 +282,10 @@ TEST(GBDPTMedia, AgreesWithBDPTOnSmokeWedge) {
 TEST(GBDPTMedia, AgreesWithBDPTOnGridSmokeWedge) {
     gptmedia::CheckAgainstPath("gbdpt grid-smoke-wedge", GridWedgeText("Integrator \"gbdpt\" \"integer maxdepth\" [4]"),
                                16, 128, 150, 0.02, "gbdpt", "bdpt", true);
+}
+
+TEST(GBDPTMedia, AgreesWithBDPTOnSmokeWedgeWithSpecularSpheres) {
+    gptmedia::CheckAgainstPath("gbdpt smoke-wedge-specular",
+                               gptmedia::WedgeSpecularText("Integrator \"gbdpt\" \"integer maxdepth\" [4]"), 16, 128, 150,
+                               0.02, "gbdpt", "bdpt", true);
 }

@@ -26,7 +26,9 @@
 // wedges); the squared-distance ratio dropped from the reconnection
 // (Jacobian test, both wedges); sigma_s(y) / sigma_s(x) dropped (grid wedge);
 // the offset's pdfRev at medium vertices left at the base's, and the phase
-// densities left out of rho at a medium b (weight normalisation).
+// densities left out of rho at a medium b (weight normalisation); an offset
+// connection at the reconnection vertex taken as "known visible" (the base's
+// edge: with media that drops its transmittance; smoke wedge, Z 4.9).
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -43,7 +43,8 @@ double PeakRSSMegabytes() {
 
 // Media and BSSRDFs are refused by integrators that do not render them,
 // naming the integrator and the scene part (never a silently wrong image).
-constexpr const char *kMediaIntegrators = "path (pbrt-v3's volpath), bdpt, mbdpt, vcm (modes vcm and vc) and mlt";
+constexpr const char *kMediaIntegrators =
+    "path (pbrt-v3's volpath), bdpt, mbdpt, vcm (modes vcm and vc), mlt, gpt and gbdpt";
 static void RefuseUnhandledParts(const Integrator &integrator, const Scene &scene, const SceneDesc &desc,
                           const EntityDesc &idesc) {
     const FileLoc at = idesc.present ? idesc.loc : (desc.media.empty() ? FileLoc() : desc.media.front().loc);

@@ -61,7 +61,7 @@ inline std::vector<MediaRow> MediaRows() {
 
 // Rows documented to render media (README): refusing is a regression here.
 inline bool MustRenderMedia(const MediaRow &r) {
-    static const std::set<std::string> renders = {"path", "bdpt", "mbdpt", "vcm", "vcm mode=vc", "mlt", "gpt"};
+    static const std::set<std::string> renders = {"path", "bdpt", "mbdpt", "vcm", "vcm mode=vc", "mlt", "gpt", "gbdpt"};
     return renders.count(r.label()) > 0;
 }
 

@@ -34,25 +34,6 @@ struct Fixture {
 
 Vec3 Perturb(const Vec3 &w, const Vec3 &t, Float eps) { return Normalize(w + t * eps); }
 
-// Camera sample and ray of trial `trial`: a pixel of the 24x18 test film's
-// interior, the sampler positioned there (same random numbers as before).
-CameraSample TrialSample(Sampler &sampler, const Camera &camera, int trial, Ray *ray) {
-    Point2i px{1 + trial % 21, 1 + (trial / 21) % 15};
-    sampler.startPixelSample(px, trial, 0);
-    CameraSample cs{Point2(px.x + sampler.get1D(), px.y + sampler.get1D()), sampler.get2D()};
-    camera.generateRay(cs, ray);
-    return cs;
-}
-
-// Arena storage for a subpath of up to n vertices (constructed, n = 0).
-ShiftSubpath ArenaSubpath(Arena &arena, int n) {
-    ShiftSubpath p;
-    p.v = new (arena.alloc(sizeof(PathVertex) * n, alignof(PathVertex))) PathVertex[n];
-    p.b = new (arena.alloc(sizeof(BSDF) * n, alignof(BSDF))) BSDF[n];
-    p.deltaSample = static_cast<uint8_t *>(arena.alloc(n));
-    return p;
-}
-
 // Traces from `p` along `d` through ideal specular glass (refraction) until a
 // non-specular surface; returns the chain points (start, interior..., end).
 bool TraceGlassChain(const Scene &scene, const EmbreeManifoldScene &ms, const Point3 &p, const Vec3 &n, Vec3 d,
@@ -306,34 +287,6 @@ TEST(GBDPTShift, EyeAreaFactorMatchesFiniteDifferences) {
     }
 }
 
-// The light subpath that makes strategy (s, n - s) of a camera path x[0..n-1]
-// ending on an emitter: the reversed tail x[n-1] .. x[n-s], densities swapped.
-ShiftSubpath ReversedTail(const BidirContext &bc, const ShiftSubpath &x, int s, Arena &arena) {
-    ShiftSubpath L = ArenaSubpath(arena, s);
-    L.n = s;
-    const int n = x.n;
-    for (int j = 0; j < s; ++j) {
-        const PathVertex &c = x.v[n - 1 - j];
-        PathVertex &v = L.v[j];
-        v = c;
-        v.pdfFwd = c.pdfRev;
-        v.pdfRev = c.pdfFwd;
-        v.wo = Normalize(x.v[n - j].p - c.p);  // towards the previous light-subpath vertex
-        if (j == 0) v.wo = Normalize(x.v[n - 2].p - c.p);
-        L.b[j] = x.b[n - 1 - j];
-        L.deltaSample[j] = x.deltaSample[n - 1 - j];
-    }
-    // The emitter as a light vertex, as light subpaths start (a light vertex
-    // keeps its flags: infinite, delta position).
-    const PathVertex &e = x.v[n - 1];
-    L.v[0].type = VertexType::Light;
-    L.v[0].light = e.isInfiniteLight() ? bc.scene->infiniteLights[0] : EmitterOf(bc, e);
-    L.v[0].flags = e.type == VertexType::Light ? e.flags : 0;
-    L.v[0].pdfFwd = PdfLightOrigin(bc, x.v[n - 1], x.v[n - 2]);
-    if (s >= 2) L.v[1].pdfFwd = PdfLightDirection(bc, x.v[n - 1], x.v[n - 2]);
-    return L;
-}
-
 // Eq. 8 normalisation over a whole path: for a camera path ending on the light,
 // every strategy (s, t) of the same full path (t >= 2 from the shifted camera
 // subpath, t = 1 by the light-tracing shift) gives w_ij,st(x) (1 + rho_st) =
@@ -404,49 +357,6 @@ bool EndsAsChecked(const BidirContext &bc, const ShiftSubpath &x, bool env, cons
     bool corner = false;
     for (int k = 1; k + 1 < n; ++k) corner |= Distance(x.v[k].p, x.v[k + 1].p) < 1e-2;
     return !corner;
-}
-
-// Sums over the strategies (s, t) of x of the combined weights times (1 +
-// rho) (*sum) and of x's BDPT weights (*sumx). False when a light-tracing
-// shift failed (the sums are then partial).
-bool SumStrategyWeights(const SubpathShiftContext &sc, const BidirContext &bc, const ShiftSubpath &x,
-                        const CameraShift &sh, const CameraSample &cs, bool lightTracing, Arena &arena,
-                        SubpathShiftStats *st, double *sum, double *sumx, int *withLT) {
-    const int n = x.n;
-    const PathVertex &e = x.v[n - 1];
-    const bool pointEnd = e.isDeltaLight() && !e.isInfiniteLight();
-    bool ok = true;
-    for (int t = n; t >= 1 && ok; --t) {
-        int s = n - t;
-        if (s == 0 && pointEnd) continue;  // a point is never hit
-        if (t >= 2 && s >= 1 && !IsDiffuseVertex(sc, x.v[t - 1], &x.b[t - 1])) continue;
-        if (s >= 1 && !IsDiffuseVertex(sc, x.v[t], &x.b[t])) continue;
-        ShiftSubpath L, Ly;  // s = 0: no light vertices
-        if (s >= 1) {
-            L = ReversedTail(bc, x, s, arena);
-            Ly = ReversedTail(bc, sh.y, s, arena);
-        }
-        if (t >= 2) {
-            if (s >= 1 && !EdgeConnectible(bc, x.v[t - 1], x.v[t])) continue;
-            Float wx = MISWeight(bc, L.view(), SubpathView{x.v, x.b, t}, s, t, nullptr);
-            Float wy = MISWeight(bc, Ly.view(), SubpathView{sh.y.v, sh.y.b, t}, s, t, nullptr);
-            Float rho = sh.rho[t - 1];
-            *sum += CombinedWeight(wx, wy, rho) * (1 + rho);
-            *sumx += wx;
-        } else if (lightTracing) {
-            PathVertex lens = x.v[0];
-            Float wx = MISWeight(bc, L.view(), SubpathView{&lens, nullptr, 1}, s, 1, &lens);
-            Spectrum fy;
-            Float wy = 0, rho = 0;
-            // The lens raster position of x_1 is the camera sample's.
-            ok = ShiftLightTracingPath(sc, L, s, lens, cs.pFilm, Spectrum(1), {1, 0}, arena, &fy, &wy, &rho, st);
-            if (!ok) break;
-            *sum += CombinedWeight(wx, wy, rho) * (1 + rho);
-            *sumx += wx;
-            ++*withLT;
-        }
-    }
-    return ok;
 }
 
 void CheckCombinedWeightsSumToOne(const std::string &line, bool lightTracing, bool env = false, bool glossy = false) {

@@ -61,39 +61,47 @@ struct Moments {
     }
 };
 
+// `grad` against `ref` (gbdpt's media tests: gbdpt against bdpt).
 inline void CheckAgainstPath(const std::string &name, const std::string &text, int K, int spp, int minTerms,
-                             double powerBias = 0.02) {
+                             double powerBias = 0.02, const char *grad = "gpt", const char *ref = "path",
+                             bool l1l2 = false) {
     ASSERT_FALSE(text.empty());
     const SceneDesc desc = ParseString(text, name + ".pbrt", ".");
-    std::vector<double> path[kSets], primal[kSets], recon[kSets];
+    // l1l2: also the L1 and L2 reconstructions (layers reconstructed_l1, _l2).
+    std::vector<double> path[kSets], primal[kSets], recon[kSets], rl1[kSets], rl2[kSets];
     Moments P, DX, DY, SEP;
     int W = 0, H = 0;
     for (int k = 0; k < 2 * K; ++k) {
-        const Image img = test::RenderTestDesc(desc, spp, 4000 + k, 2, "path").image;
+        const Image img = test::RenderTestDesc(desc, spp, 4000 + k, 2, ref).image;
         Reduce(img, "", path);
         P.add(img.layerRGB(""));
         W = img.width();
         H = img.height();
     }
     for (int k = 0; k < K; ++k) {
-        const Image img = test::RenderTestDesc(desc, spp, 1000 + k, 2, "gpt").image;
+        const Image img = test::RenderTestDesc(desc, spp, 1000 + k, 2, grad).image;
         Reduce(img, "primal", primal);
         Reduce(img, "", recon);
+        if (l1l2) {
+            Reduce(img, "reconstructed_l1", rl1);
+            Reduce(img, "reconstructed_l2", rl2);
+        }
         DX.add(img.layerRGB("dx"));
         DY.add(img.layerRGB("dy"));
         SEP.add(img.layerRGB("separated"));
     }
-    const double alpha = 1e-4 / (2 * kSets);
-    for (int which = 0; which < 2; ++which) {
-        std::vector<double> *x = which == 0 ? primal : recon;
-        const char *what = which == 0 ? "primal" : "reconstruction";
+    const int nWhich = l1l2 ? 4 : 2;
+    const double alpha = 1e-4 / (nWhich * kSets);
+    for (int which = 0; which < nWhich; ++which) {
+        std::vector<double> *x = which == 0 ? primal : which == 1 ? recon : which == 2 ? rl1 : rl2;
+        const char *what = which == 0 ? "primal" : which == 1 ? "reconstruction" : which == 2 ? "L1" : "L2";
         for (int set = 0; set < kSets; ++set) {
             const Welch w = WelchTest(x[set], path[set]);
             const double crit = StudentCritical(alpha, w.dof);
             if (set == 0)
-                std::printf("[ %s ] gpt %s vs path, image mean: %.6f +- %.6f vs %.6f +- %.6f, t %.2f (critical %.2f)\n",
-                            name.c_str(), what, w.meanA, w.seA, w.meanB, w.seB, w.t, crit);
-            EXPECT_LT(std::abs(w.t), crit) << name << ": gpt " << what << " vs path, set " << set;
+                std::printf("[ %s ] %s %s vs %s, image mean: %.6f +- %.6f vs %.6f +- %.6f, t %.2f (critical %.2f)\n",
+                            name.c_str(), grad, what, ref, w.meanA, w.seA, w.meanB, w.seB, w.t, crit);
+            EXPECT_LT(std::abs(w.t), crit) << name << ": " << grad << " " << what << " vs " << ref << ", set " << set;
             if (set != 0) continue;
             for (double bias : {1 + powerBias, 1 / (1 + powerBias)}) {
                 std::vector<double> scaled = x[0];

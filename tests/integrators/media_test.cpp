@@ -9,8 +9,9 @@
 //    and agreement with bdpt by agreement.h's Welch tests (5% power check) on
 //    fog-box and on a variant whose fog is a density grid (delta and ratio
 //    tracking), both with the smoke sphere's medium interface inside the fog;
-//  - gbdpt refuses a scene with media: a located error and exit status 1; so
-//    do vcm's variants that cannot render them (mode vm, varying kernels).
+//  - gvcm refuses a scene with media (gbdpt renders them: tests/gbdpt/test_media.cpp):
+//    a located error and exit status 1; so do vcm's variants that cannot render
+//    them (mode vm, varying kernels).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -268,18 +269,18 @@ TEST(MediaMLT, AgreesWithBdptOnFogBox) { CheckMLTAgreesWithBdpt(FogBoxText(), 16
 TEST(MediaMLT, AgreesWithBdptOnGridFogBox) { CheckMLTAgreesWithBdpt(GridFogBoxText(), 24, 64, 20000, 32); }
 
 // ---------------------------------------------------------------- refusal
-TEST(MediaBidir, GBDPTRefusesMediaWithALocatedError) {
+TEST(MediaBidir, GVCMRefusesMediaWithALocatedError) {
     const std::string scene = std::string(GRADUS_SOURCE_DIR) + "/scenes/media/fog-box.pbrt";
     const auto dir = std::filesystem::temp_directory_path() / ("gradus_media_refusal_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
     const conformance::ProcResult r =
-        conformance::RunGradus({scene, "--integrator", "gbdpt", "--spp", "1", "--outfile", "x.exr", "--quiet"}, dir);
+        conformance::RunGradus({scene, "--integrator", "gvcm", "--spp", "1", "--outfile", "x.exr", "--quiet"}, dir);
     std::filesystem::remove_all(dir);
     EXPECT_TRUE(r.exited);
     EXPECT_EQ(r.exitCode, 1) << r.describe();
     // The Integrator directive's location (line 16 of the scene), the integrator and the medium.
     EXPECT_NE(r.err.find("fog-box.pbrt:16:1"), std::string::npos) << r.err;
-    EXPECT_NE(r.err.find("\"gbdpt\""), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("\"gvcm\""), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("\"fog\""), std::string::npos) << r.err;
 }
 

@@ -99,10 +99,10 @@ TEST(VolPath, AbsorbingSlabAttenuatesExponentially) {
 
 // Integrators without media support refuse the scene at the Integrator
 // directive, naming themselves and the medium; path (and pbrt-v3's volpath,
-// which maps to it), mlt and gpt render it.
+// which maps to it), mlt, gpt and gbdpt render it.
 TEST(VolPath, OtherIntegratorsRefuseMediaWithALocatedError) {
     const std::string text = FurnaceInMedium(1.0, 0.0, "homogeneous");
-    for (const char *name : {"gbdpt", "gvcm", "pmlt", "gmlt"}) {
+    for (const char *name : {"gvcm", "pmlt", "gmlt"}) {
         std::string err;
         try {
             MakeTestJob(ParseString(text, "test.pbrt", "."), 1, 0, name);
@@ -118,4 +118,5 @@ TEST(VolPath, OtherIntegratorsRefuseMediaWithALocatedError) {
     EXPECT_NO_THROW(MakeTestJob(ParseString(volpath, "test.pbrt", "."), 1, 0));
     EXPECT_NO_THROW(MakeTestJob(ParseString(text, "test.pbrt", "."), 1, 0, "mlt"));
     EXPECT_NO_THROW(MakeTestJob(ParseString(text, "test.pbrt", "."), 1, 0, "gpt"));
+    EXPECT_NO_THROW(MakeTestJob(ParseString(text, "test.pbrt", "."), 1, 0, "gbdpt"));
 }

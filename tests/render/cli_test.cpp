@@ -264,10 +264,10 @@ TEST_F(CliTest, MediaRefusalsAndMotionBlurAreNamedErrors) {
           "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n"
           "MediumInterface \"fog\" \"\"\nMaterial \"\"\nShape \"sphere\"\nWorldEnd\n");
     EXPECT_EQ(run("media.pbrt --quiet --spp 1").status, 0);
-    RunResult r = run("media.pbrt --quiet --spp 1 --integrator gbdpt");
+    RunResult r = run("media.pbrt --quiet --spp 1 --integrator gvcm");
     EXPECT_EQ(r.status, 1);
     EXPECT_NE(r.err.find("media.pbrt:5:1"), std::string::npos) << r.err;
-    EXPECT_NE(r.err.find("\"gbdpt\" does not render participating media"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("\"gvcm\" does not render participating media"), std::string::npos) << r.err;
     write("motion.pbrt",
           "LookAt 0 0 -3  0 0 0  0 1 0\nCamera \"perspective\"\nTransformTimes 0 1\nWorldBegin\n"
           "ActiveTransform EndTime\nTranslate 0 1 0\nActiveTransform All\nShape \"sphere\"\nWorldEnd\n");

@@ -54,13 +54,15 @@ enum class MediaStep { Miss, Surface, Medium, Absorbed, Stuck };
 // scattering distance in the medium of each segment (pbrt-v3's
 // Medium::Sample); *beta takes the factors, *medium the medium at the end.
 MediaStep TraceThroughMedia(const Scene &scene, Ray *ray, const Medium **medium, UniformSource rng,
-                            SurfaceInteraction *isect, MediumInteraction *mi, Spectrum *beta) {
+                            SurfaceInteraction *isect, MediumInteraction *mi, Spectrum *beta, Spectrum *segF) {
     for (int k = 0;; ++k) {
         const bool hit = scene.intersect(*ray, isect);
         if (*medium) {
             Ray seg = *ray;  // up to the hit (t in units of |d|)
             if (hit) seg.tMax = Dot(isect->p - ray->o, ray->d) / ray->d.lengthSquared();
-            *beta *= (*medium)->sample(seg, rng, mi);
+            const Spectrum f = (*medium)->sample(seg, rng, mi);
+            *beta *= f;
+            *segF *= f;
             if (beta->isBlack() || !beta->isFinite()) return MediaStep::Absorbed;
             if (mi->valid()) return MediaStep::Medium;
         }
@@ -93,6 +95,7 @@ struct Walk {
     Float pdfFwd;
     const Medium *medium;
     int n;
+    Spectrum segF{1};  // the distance-sampling factors of the last segment (kMedia)
 
     // What the next segment met: Miss, Surface or Medium; Absorbed and Stuck end the walk.
     MediaStep trace(SurfaceInteraction *isect, MediumInteraction *mi) {
@@ -101,7 +104,10 @@ struct Walk {
             if (h == Scene::SurfaceHit::Stuck) return MediaStep::Stuck;
             return h == Scene::SurfaceHit::Hit ? MediaStep::Surface : MediaStep::Miss;
         }
-        else return TraceThroughMedia(scene, &ray, &medium, rng, isect, mi, &beta);
+        else {
+            segF = Spectrum(1);
+            return TraceThroughMedia(scene, &ray, &medium, rng, isect, mi, &beta, &segF);
+        }
     }
 
     // Russian roulette on the throughput relative to the subpath's start, after
@@ -227,7 +233,7 @@ struct Walk {
 template <bool kMedia>
 int RandomWalkT(const BidirContext &ctx, const Ray &ray, const Spectrum &beta, Float pdfDir, Sampler &sampler,
                 Arena &arena, TransportMode mode, int n, int maxVertices, PathVertex *path, BSDF *bsdfs,
-                const Medium *medium, UniformSource rng) {
+                const Medium *medium, UniformSource rng, Spectrum *segFactors) {
     GRADUS_STAT_COUNTER("BDPT/Subpath vertices", nVerts);
     const Scene &scene = *ctx.scene;
     GRADUS_CHECK(!kMedia || rng);
@@ -240,6 +246,7 @@ int RandomWalkT(const BidirContext &ctx, const Ray &ray, const Spectrum &beta, F
             GRADUS_STAT_COUNTER("BDPT/Medium vertices", nMediumVerts);
             MediumInteraction mi;
             st = w.trace(&isect, &mi);
+            if (segFactors) segFactors[w.n] = w.segF;  // the segment towards vertex w.n (if one is made)
             if (st == MediaStep::Medium) {
                 ++nVerts;
                 ++nMediumVerts;
@@ -262,11 +269,12 @@ int RandomWalkT(const BidirContext &ctx, const Ray &ray, const Spectrum &beta, F
 
 int RandomWalk(const BidirContext &ctx, const Ray &ray, const Spectrum &beta, Float pdfDir, Sampler &sampler,
                Arena &arena, TransportMode mode, int n, int maxVertices, PathVertex *path, BSDF *bsdfs,
-               const Medium *medium, UniformSource rng) {
+               const Medium *medium, UniformSource rng, Spectrum *segFactors = nullptr) {
     if (ctx.scene->features.media)
         return RandomWalkT<true>(ctx, ray, beta, pdfDir, sampler, arena, mode, n, maxVertices, path, bsdfs, medium,
-                                 rng);
-    return RandomWalkT<false>(ctx, ray, beta, pdfDir, sampler, arena, mode, n, maxVertices, path, bsdfs, medium, rng);
+                                 rng, segFactors);
+    return RandomWalkT<false>(ctx, ray, beta, pdfDir, sampler, arena, mode, n, maxVertices, path, bsdfs, medium, rng,
+                              nullptr);
 }
 
 }  // namespace
@@ -408,7 +416,8 @@ void BidirContext::init(const Scene &s, const LightSampler &ls, MISHeuristic h) 
 }
 
 int GenerateCameraSubpath(const BidirContext &ctx, const Ray &ray, Sampler &sampler, Arena &arena,
-                          int maxVertices, PathVertex *path, BSDF *bsdfs, UniformSource mediaRng) {
+                          int maxVertices, PathVertex *path, BSDF *bsdfs, UniformSource mediaRng,
+                          Spectrum *segFactors) {
     if (maxVertices <= 0) return 0;
     PathVertex &v = path[0];
     v = PathVertex();
@@ -428,7 +437,7 @@ int GenerateCameraSubpath(const BidirContext &ctx, const Ray &ray, Sampler &samp
     // full filter weight: a 2-pixel frame up to 30% dark with a radius-2 filter.
     ctx.camera->pdfWe(ray, &pdfPos, &pdfDir);
     return RandomWalk(ctx, ray, Spectrum(1), pdfDir, sampler, arena, TransportMode::Radiance, 1, maxVertices, path,
-                      bsdfs, ctx.scene->cameraMedium, mediaRng);
+                      bsdfs, ctx.scene->cameraMedium, mediaRng, segFactors);
 }
 
 RNG CameraSampleMediaRNG(const Sampler &sampler, const CameraSample &cs) {

@@ -114,8 +114,13 @@ struct BidirContext {
 // Sampler use per bounce: 1D (lobe) + 2D (direction).
 // Sampler use per medium vertex: the same (1D unused, 2D phase direction).
 // mediaRng: distance sampling (required when the scene has media, else unused).
+// segFactors (optional, scenes with media): segFactors[i] = the product of
+// Medium::sample's factors on the segment (through interfaces) that reached
+// vertex i (sigma_s T / p(t) where it scattered, T / P(pass) elsewhere;
+// G-BDPT's offsets scale them by T_y / T_x).
 int GenerateCameraSubpath(const BidirContext &ctx, const Ray &ray, Sampler &sampler, Arena &arena,
-                          int maxVertices, PathVertex *path, BSDF *bsdfs, UniformSource mediaRng = {});
+                          int maxVertices, PathVertex *path, BSDF *bsdfs, UniformSource mediaRng = {},
+                          Spectrum *segFactors = nullptr);
 // Fixed blocks of sampler dimensions for one bidirectional sample taken from
 // the pixel sampler (bdpt, gbdpt): the camera subpath from the sampler's
 // dimension d0 at construction, the light subpath and each strategy's

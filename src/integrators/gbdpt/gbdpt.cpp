@@ -86,6 +86,7 @@ void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     sctx_.manifold = set_.manifold;
     // No specular or near-specular surface: no chain can be non-empty, no walk is attempted.
     sctx_.trySpecular = scene.features.specularSurfaces || scene.features.nearSpecularSurfaces;
+    sctx_.media = scene.features.media;  // medium vertices on both subpaths (gbdpt.h "Participating media")
     // Walks converge to the default 1e-7 of the scene scale (hits are refined in
     // double). A looser 1e-5 let a round trip through a glass sphere land 1e-5 away
     // with the chain Jacobians' product 1% off 1 (tests/gbdpt invertibility).
@@ -148,7 +149,14 @@ struct GBDPTIntegrator::SampleRun {
               const bool inside[kNumNeighbours], Float w, std::vector<GradientSplat> *splats)
         : gi(gi), set(gi.set_), sctx(gi.sctx_), bctx(gi.bctx_), ts(gi.local()), st(ts.shift), cs(cs),
           sampler(sampler), arena(arena), inside(inside), w(w), splats(splats), maxCam(set.maxDepth + 2),
-          maxLight(set.maxDepth + 1), dims(AllocSubpaths(arena, maxCam, maxLight, &cam, &light, sampler)) {}
+          maxLight(set.maxDepth + 1), dims(AllocSubpaths(arena, maxCam, maxLight, &cam, &light, sampler)) {
+        if (sctx.media) {
+            // Media: distances and transmittances from a per-sample RNG (as bdpt).
+            mediaRng = CameraSampleMediaRNG(sampler, cs);
+            mrng = &mediaRng;
+            cam.segFactor = ArenaArray<Spectrum>(arena, maxCam);
+        }
+    }
 
     // Arena storage of both subpaths, then the dimension blocks from the
     // sampler's current dimension (as bdpt).
@@ -163,11 +171,11 @@ struct GBDPTIntegrator::SampleRun {
 
     // [1] camera and light subpaths.
     void traceSubpaths(const Ray &ray) {
-        cam.n = GenerateCameraSubpath(bctx, ray, sampler, arena, maxCam, cam.v, cam.b);
+        cam.n = GenerateCameraSubpath(bctx, ray, sampler, arena, maxCam, cam.v, cam.b, mrng, cam.segFactor);
         dims.startLightSubpath(sampler);
         light.n = gi.scene_->lights.empty() || !gi.connections_
                       ? 0
-                      : GenerateLightSubpath(bctx, sampler, arena, maxLight, light.v, light.b);
+                      : GenerateLightSubpath(bctx, sampler, arena, maxLight, light.v, light.b, mrng);
         PrepareSubpath(sctx, &cam);
         PrepareSubpath(sctx, &light);
         camView = cam.view();
@@ -178,7 +186,7 @@ struct GBDPTIntegrator::SampleRun {
     void shiftCameraSubpath() {
         if (cam.n >= 2)
             for (int k = 0; k < kNumNeighbours; ++k)
-                if (inside[k]) ShiftCameraSubpath(sctx, cam, cs, kNeighbourOffsets[k], arena, &shifts[k], &st);
+                if (inside[k]) ShiftCameraSubpath(sctx, cam, cs, kNeighbourOffsets[k], arena, &shifts[k], &st, mrng);
         c = SecondDiffuseVertex(sctx, cam);
         // Incremental offset weights (bidir.h MISSplit): the offsets reconnect at
         // the same vertex r (c, or the half-vector shift's first diffuse pair, a
@@ -209,6 +217,7 @@ struct GBDPTIntegrator::SampleRun {
             u.uLight = sampler.get2D();
         }
         if (t == 1) u.uLens = sampler.get2D();
+        u.rng = mrng;
         if (t == 1 && !set.lightTracing) return;  // no light-tracing paths (Table 1, "w/o LTP")
         // Sec. 3.2: no connections at vertices classified specular.
         if (s >= 1 && t >= 2 && !diffuseAt(cam, t - 1)) return;
@@ -249,7 +258,7 @@ struct GBDPTIntegrator::SampleRun {
             ok = SampleLightPoint(sctx, cam.v[t - 1], u->uLightSelect, u->uLight, &base->lp);
             if (ok && !base->lp.infinite) {
                 base->useLp = true;
-                ok = ConnectLightPoint(sctx, base->lp, camView, t, &r, false, misSplit, &base->parts);
+                ok = ConnectLightPoint(sctx, base->lp, camView, t, &r, false, misSplit, &base->parts, mrng);
             } else {
                 ok = ConnectBDPT(bctx, lightView, camView, s, t, *u, &r);
             }
@@ -282,7 +291,7 @@ struct GBDPTIntegrator::SampleRun {
             Float wy = 0, rho = 0;
             ++ts.caseAttempts[2];
             bool shifted = ShiftLightTracingPath(sctx, light, s, lens, r.pRaster, r.unweighted, off, arena, &fy, &wy,
-                                                 &rho, &st);
+                                                 &rho, &st, mrng);
             if (shifted) {
                 ++ts.caseSuccesses[2];
                 Float wg = set.mis == GBDPTSettings::MIS::Combined ? CombinedWeight(wx, wy, rho) : 0.5 * wx;  // Eq. 8 / Eq. 9
@@ -320,9 +329,10 @@ struct GBDPTIntegrator::SampleRun {
             // vertex is the base's and so is the connection edge: the
             // base's shadow ray already found it unoccluded.
             ConnectSamples uy = u;
-            uy.knownVisible = sh.r >= 0 && kc >= sh.r;
+            // With media the edge's transmittance is estimated again (knownVisible would drop it).
+            uy.knownVisible = sh.r >= 0 && kc >= sh.r && !sctx.media;
             if (base.useLp)
-                oky = ConnectLightPoint(sctx, base.lp, yv, t, &ry, uy.knownVisible);
+                oky = ConnectLightPoint(sctx, base.lp, yv, t, &ry, uy.knownVisible, -1, nullptr, mrng);
             else
                 oky = ConnectBDPT(bctx, lightView, yv, s, t, uy, &ry);
             oky = oky && !ry.unweighted.isBlack() && ry.weight > 0;
@@ -385,6 +395,8 @@ struct GBDPTIntegrator::SampleRun {
     Float prefixY[kNumNeighbours];
     bool havePrefix[kNumNeighbours] = {};
     PathVertex lens;  // the base's lens vertex with unit throughput (light-tracing shifts)
+    RNG mediaRng;
+    RNG *mrng = nullptr;  // scenes with media: the sample's media RNG
     Spectrum primal = Spectrum(0);
     Spectrum separated = Spectrum(0);  // the part of primal separated from the reconstruction
 };

@@ -27,6 +27,28 @@
 // samples, line 16); the screened-Poisson reconstruction runs in finish()
 // (line 17).
 //
+// Participating media (issue 56; Gruson et al. 2018's volumetric shift on
+// G-BDPT's): both subpaths carry medium vertices as bdpt's (common/bidir.h:
+// pbrt-v3's MIS, phase densities converted to area, distance densities left
+// out of every strategy alike, so rho compares directional densities only).
+// A medium vertex is diffuse (rough). The camera-subpath shift walks each
+// segment of the first chain in lockstep with the base's (the same interface
+// crossings; at a medium vertex the base's free-flight distance copied along
+// the offset's own ray, |T'| = 1, failing where the offset meets a surface
+// first, is in another medium or sigma_t is 0 there) and reconnects b to c
+// (|T'| = d_x^2 / d_y^2, cosines only at surface ends). Every changed segment
+// multiplies the base's distance-sampling factor (GenerateCameraSubpath's
+// segFactors) by T_y / T_x (gradient/medium_shift.h: exact in homogeneous
+// media, ratio tracking in grids), a medium vertex by sigma_s(y) / sigma_s(x).
+// Connections of offsets estimate their own edge's transmittance. The
+// light-tracing shift walks the lens segment in lockstep the same way and
+// carries T_y / T_x on both changed segments. Limitation: a second chain with
+// specular vertices (b -> specular ... -> c) is not walked in a scene with
+// media: the shift fails for such paths, in every strategy and for base and
+// offset alike (the chain's vertex classes are kept by the shift), so their
+// gradient samples fall back to the BDPT weight (unbiased; counted in the
+// statistics). A scene without media runs the surface-only code.
+//
 // Parameters (bidirectional family, integrators/common/bidir_family.h; MIS
 // always the balance heuristic, as Eq. 8 assumes):
 //   integer maxdepth 5               maximum path depth (edges - 1)
@@ -91,6 +113,7 @@ class GBDPTIntegrator : public PixelSampleIntegrator, public GradientFamily {
     explicit GBDPTIntegrator(const EntityDesc &desc);
     ~GBDPTIntegrator() override;
     std::string name() const override { return "gbdpt"; }
+    bool rendersMedia() const override { return true; }  // "Participating media" above
     void preprocess(const Scene &scene, Film &film) override;
     void estimate(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const override;
     void finish(const Film &film, const RenderStats &stats, Image *out) override;

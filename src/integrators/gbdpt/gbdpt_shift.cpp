@@ -34,12 +34,13 @@ bool SampleLightPoint(const SubpathShiftContext &ctx, const PathVertex &pt, Floa
 }
 
 bool ConnectLightPoint(const SubpathShiftContext &ctx, const LightPoint &lp, SubpathView cam, int t,
-                       ConnectResult *res, bool knownVisible, int misSplit, MISSplit *misParts) {
+                       ConnectResult *res, bool knownVisible, int misSplit, MISSplit *misParts, UniformSource rng) {
     *res = ConnectResult();
     const BidirContext &bc = *ctx.bidir;
     const PathVertex &pt = cam.v[t - 1];
     const BSDF *pb = cam.bsdf ? &cam.bsdf[t - 1] : nullptr;
-    if (pt.type != VertexType::Surface || !IsConnectible(pt, pb) || lp.infinite) return false;
+    const bool medium = ctx.media && pt.type == VertexType::Medium;
+    if ((pt.type != VertexType::Surface && !medium) || !IsConnectible(pt, pb) || lp.infinite) return false;
     PathVertex s = lp.v;
     if (!EdgeConnectible(bc, s, pt)) return false;
     Vec3 d = s.p - pt.p;
@@ -62,10 +63,16 @@ bool ConnectLightPoint(const SubpathShiftContext &ctx, const LightPoint &lp, Sub
         // p_A(base) = pdf_omega |cos_x| / d_x^2; the offset's geometry |cos_y| / d_y^2.
         Li = Le * ((cosY / d2) / (lp.pmf * lp.pdf * cosX / d2x));
     }
-    Spectrum L = pt.throughput() * EvalBSDF(pt, *pb, s, TransportMode::Radiance) * Li * AbsDot(wi, Vec3(pt.ns));
+    Spectrum L = pt.throughput() * EvalBSDF(pt, *pb, s, TransportMode::Radiance) * Li *
+                 (medium ? Float(1) : AbsDot(wi, Vec3(pt.ns)));
     if (L.isBlack()) return false;
     res->shadowRayTraced = !knownVisible;
-    if (!knownVisible && !bc.scene->unoccluded(VertexIt(pt), Interaction(s.p, s.ng, -wi))) return false;
+    if (ctx.media) {
+        if (!knownVisible) L *= Transmittance(bc, pt, VertexIt(pt), Interaction(s.p, s.ng, -wi), rng);
+        if (L.isBlack()) return false;
+    } else if (!knownVisible && !bc.scene->unoccluded(VertexIt(pt), Interaction(s.p, s.ng, -wi))) {
+        return false;
+    }
     s.pdfFwd = PdfLightOrigin(bc, s, pt);
     const bool split = misParts && misSplit >= 1 && misSplit + 2 <= t - 1;
     Float w = MISWeight(bc, bc.strategies, SubpathView{&s, nullptr, 1}, cam, 1, t, &s, split ? misSplit : -1,

@@ -24,7 +24,10 @@ bool SampleLightPoint(const SubpathShiftContext &ctx, const PathVertex &pt, Floa
 // f / p_base (unweighted) and the BDPT weight of strategy (1, t) on `cam`;
 // knownVisible: the edge is the base's (no shadow ray); misParts: the weight's
 // parts split at misSplit (bidir.h MISSplit, if misSplit + 2 <= t - 1).
+// With media (ctx.media) cam's vertex may be a medium vertex and the edge's
+// transmittance is estimated with rng (unless knownVisible).
 bool ConnectLightPoint(const SubpathShiftContext &ctx, const LightPoint &lp, SubpathView cam, int t,
-                       ConnectResult *res, bool knownVisible = false, int misSplit = -1, MISSplit *misParts = nullptr);
+                       ConnectResult *res, bool knownVisible = false, int misSplit = -1, MISSplit *misParts = nullptr,
+                       UniformSource rng = {});
 
 }  // namespace gradus

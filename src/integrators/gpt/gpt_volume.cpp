@@ -222,24 +222,11 @@ bool VolumeGradientPathTracer::walkOffset(VolumeOffset &o) {
 }
 
 // Straight pieces from `from` towards the base's next vertex (or direction wi
-// at infinity) through interfaces; 0 when a surface with a material blocks it.
+// at infinity) through interfaces; 0 when a surface with a material blocks it
+// (gradient/medium_shift.h, shared with gbdpt's shifts).
 int VolumeGradientPathTracer::tracePieces(const VolumeVertex &from, const Vec3 &wi, MediumPiece *pieces) const {
-    const bool atInf = next_.kind == VolumeVertex::Infinity;
-    const Interaction &target = next_.it();
-    Interaction it = from.it();
-    const Medium *m = from.leaving(wi);
-    for (int k = 0; k < kMaxMediumPieces; ++k) {
-        Ray r = atInf ? it.spawnRay(wi) : it.spawnRayTo(target);
-        SurfaceInteraction si;
-        const bool hit = scene_.intersect(r, &si);
-        if (hit && si.material) return 0;
-        const Float len = hit ? Distance(r.o, si.p) : (atInf ? Infinity : Distance(r.o, target.p));
-        pieces[k] = {r.o, Normalize(r.d), len, m};
-        if (!hit) return k + 1;
-        m = si.mediumAfter(r.d, m);
-        it = si;
-    }
-    return 0;
+    return TraceSegmentPieces(scene_, from.it(), from.leaving(wi), next_.it(), next_.kind == VolumeVertex::Infinity,
+                              wi, pieces);
 }
 
 bool VolumeGradientPathTracer::edgeFree(const Interaction &a, bool aSurface, const Interaction &b, bool bSurface,

@@ -1,5 +1,7 @@
 #include "integrators/gradient/camera_shift.h"
 
+#include "integrators/gradient/medium_shift.h"
+
 namespace gradus {
 
 namespace {
@@ -249,6 +251,200 @@ bool ShiftToReconnection(const SubpathShiftContext &ctx, const ShiftSubpath &x, 
     return true;
 }
 
+// ---- Scenes with media (SubpathShiftContext::media) ----------------------
+// The base's segment x_{i-1} -> x_i as pieces through interfaces.
+int BaseSegmentPieces(const BidirContext &bc, const ShiftSubpath &x, int i, MediumPiece *xp) {
+    const PathVertex &a = x.v[i - 1], &b = x.v[i];
+    const bool inf = b.isInfiniteLight();
+    const Vec3 d = inf ? -Vec3(b.wo) : Normalize(b.p - a.p);
+    const Medium *m = i == 1 ? bc.scene->cameraMedium : MediumTowards(bc, a, d);
+    return TraceSegmentPieces(*bc.scene, AsInteraction(a), m, AsInteraction(b), inf, d, xp);
+}
+
+// The first chain with media: each segment walks in lockstep with the base's
+// (medium_shift.h LockstepSegment: the same interfaces, the free-flight
+// distance copied, |T'| = 1) and multiplies the base's distance-sampling
+// factor by T_y / T_x (TransmittanceRatio) and, at a medium vertex, by
+// sigma_s(y) / sigma_s(x) (f(y) / p(x) with p(x) the base's). A medium vertex
+// before traceEnd (half-vector shift) keeps the base's world direction (|T'| = 1).
+void TraceFirstChainMedia(const SubpathShiftContext &ctx, const ShiftSubpath &x, const CameraSample &cs, Point2i off,
+                          int traceEnd, Arena &arena, CameraShift *out, OffsetState *o, LocalShiftStats *st,
+                          UniformSource rng) {
+    const BidirContext &bc = *ctx.bidir;
+    const Scene &scene = *bc.scene;
+    const int n = x.n;
+    ShiftSubpath &y = out->y;
+    ++st->offsetPaths;
+    Ray rx, ray;
+    CameraSample c2 = cs;
+    c2.pFilm = Point2(cs.pFilm.x + off.x, cs.pFilm.y + off.y);
+    Float wx = bc.camera->generateRay(cs, &rx), wy = bc.camera->generateRay(c2, &ray);
+    if (!(wx > 0) || !(wy > 0)) {
+        st->fail(ShiftFailure::Geometry);
+        return;
+    }
+    y.v[0] = x.v[0];
+    y.v[0].p = ray.o;
+    y.deltaSample[0] = 0;
+    out->rho[0] = 1;
+    out->validUpTo = 0;
+    o->beta = Spectrum(wy / wx);
+    o->R = 1;
+    const Medium *m = scene.cameraMedium;
+    ray = Interaction(ray.o, Normal3(0, 0, 0), Vec3(0, 0, 0)).spawnRay(Normalize(ray.d));
+    MediumPiece xp[kMaxMediumPieces], yp[kMaxMediumPieces];
+    for (int i = 1; i <= traceEnd; ++i) {
+        const PathVertex &xv = x.v[i];
+        const int nx = BaseSegmentPieces(bc, x, i, xp);
+        if (nx == 0) {
+            st->fail(ShiftFailure::Geometry);
+            break;
+        }
+        const SegmentEnd end = xv.isInfiniteLight() ? SegmentEnd::Escape
+                               : xv.type == VertexType::Medium ? SegmentEnd::Medium
+                                                               : SegmentEnd::Surface;
+        if (xv.type != VertexType::Surface && xv.type != VertexType::Medium && !(xv.isInfiniteLight() && i == n - 1)) {
+            st->fail(ShiftFailure::Escaped);
+            break;
+        }
+        SurfaceInteraction isect;
+        Point3 pm;
+        if (!LockstepSegment(scene, ray, m, xp, nx, end, yp, &isect, &pm, &m)) {
+            st->fail(ShiftFailure::Escaped);
+            break;
+        }
+        Spectrum seg = x.segFactor[i] * TransmittanceRatio(yp, nx, xp, nx, rng);
+        PathVertex &v = y.v[i];
+        if (end == SegmentEnd::Escape) {
+            o->beta *= seg;
+            v = xv;
+            const Vec3 d = Normalize(ray.d);
+            v.p = yp[nx - 1].o + d;
+            v.ng = -d;
+            v.wo = -d;
+            v.setThroughput(o->beta);
+            out->rho[i] = o->R;
+            out->validUpTo = i;
+            break;
+        }
+        if (end == SegmentEnd::Medium) {
+            // sigma_s(y) / sigma_s(x): a grid scales every channel by its density.
+            const Float sy = m->sigmaTAt(pm).maxComponent(), sx = m->sigmaTAt(xv.p).maxComponent();
+            if (!(sx > 0)) {
+                st->fail(ShiftFailure::Geometry);
+                break;
+            }
+            o->beta *= seg * (sy / sx);
+            v = PathVertex();
+            v.type = VertexType::Medium;
+            v.medium = m;
+            v.mediumIndex = xv.mediumIndex;
+            v.p = pm;
+            v.wo = -yp[nx - 1].d;
+            v.flags = xv.flags;
+            v.rrScale = xv.rrScale;
+            v.setThroughput(o->beta);
+            y.b[i] = BSDF();
+            y.deltaSample[i] = 0;
+            o->woY = -yp[nx - 1].d;
+        } else {
+            o->beta *= seg;
+            BSDF by = isect.material->getBSDF(isect, arena, TransportMode::Radiance);
+            bool dy = by && ClassifyBSDF(&by, ctx.threshold) == ShiftVertexClass::Rough;
+            if (!by || dy != IsDiffuseVertex(ctx, xv, &x.b[i])) {
+                st->fail(ShiftFailure::ClassMismatch);
+                break;
+            }
+            SetSurfaceVertex(isect, by, xv, o->beta, &v);
+            v.mediumIndex = MediumIndexOf(scene, m);
+            y.b[i] = by;
+            y.deltaSample[i] = x.deltaSample[i];
+            o->woY = isect.wo;
+        }
+        out->rho[i] = o->R;
+        out->validUpTo = i;
+        if (i == traceEnd || i == n - 1) break;
+        Vec3 wiX = Normalize(x.v[i + 1].p - xv.p), wiY;
+        Spectrum factor;
+        Float ratio;
+        if (end == SegmentEnd::Medium) {
+            st->attempt(ShiftType::HalfVector);
+            const Float py = m->phase.p(o->woY, wiX), px = xv.medium->phase.p(Vec3(xv.wo), wiX);
+            if (!(py > 0) || !(px > 0)) {
+                st->fail(ShiftFailure::Geometry);
+                break;
+            }
+            st->success(ShiftType::HalfVector);
+            wiY = wiX;
+            factor = Spectrum(py / px);
+            ratio = py / px;
+            ray = Ray(pm, wiY, Infinity);
+        } else {
+            if (!PropagateHalfVector(x.b[i], xv.wo, wiX, x.deltaSample[i], y.b[i], o->woY, &wiY, &factor, &ratio, st))
+                break;
+            m = isect.mediumAfter(wiY, m);
+            ray = isect.spawnRay(wiY);
+        }
+        o->beta *= factor * xv.rrScale;  // roulette: see TraceFirstChain
+        o->R *= ratio;
+    }
+}
+
+// The second chain with media: an empty chain only (a reconnection, or the
+// environment shift); the changed segment y_i -> x_rec carries T_y / T_x on
+// the base's distance-sampling factor of x_i -> x_rec. A chain of specular
+// vertices fails (a property of the path that the shift keeps, so base and
+// offset fall back alike: the estimator stays unbiased).
+bool ReconnectMedia(const SubpathShiftContext &ctx, const ShiftSubpath &x, const PathVertex &yi, int i, int rec,
+                    SubpathShiftStats *st, Vec3 *wiY, Float *J, Spectrum *segRatio, UniformSource rng) {
+    const BidirContext &bc = *ctx.bidir;
+    const Scene &scene = *bc.scene;
+    const PathVertex &xi = x.v[i], &xr = x.v[rec];
+    if (rec - i - 1 > 0) {
+        ++st->mediaChains;
+        st->shift.fail(ShiftFailure::Geometry);
+        return false;
+    }
+    MediumPiece xp[kMaxMediumPieces], yp[kMaxMediumPieces];
+    const bool inf = xr.isInfiniteLight();
+    const Vec3 dx = inf ? -Vec3(xr.wo) : Normalize(xr.p - xi.p);
+    const int nx = TraceSegmentPieces(scene, AsInteraction(xi), MediumTowards(bc, xi, dx), AsInteraction(xr), inf, dx, xp);
+    if (nx == 0) {
+        st->shift.fail(ShiftFailure::Geometry);
+        return false;
+    }
+    const ShiftType type = inf ? ShiftType::Environment : ShiftType::Reconnection;
+    st->shift.attempt(type);
+    if (inf) {
+        *wiY = dx;
+        *J = 1;
+    } else {
+        ShiftVertex tgt;
+        tgt.p = xr.p;
+        tgt.n = xr.onSurface() ? Vec3(xr.ng) : Vec3(0, 0, 0);  // no cosine at a medium vertex
+        ReconnectionShift rc;
+        if (!ShiftReconnect(xi.p, yi.p, tgt, &rc)) {
+            st->shift.fail(ShiftFailure::Geometry);
+            return false;
+        }
+        *wiY = rc.wi;
+        *J = rc.jacobian;
+    }
+    const Interaction yIt = AsInteraction(yi);
+    if ((yi.onSurface() && InTangentPlane(yIt.n, *wiY)) || (xr.onSurface() && InTangentPlane(AsInteraction(xr).n, *wiY))) {
+        st->shift.fail(ShiftFailure::Occluded);
+        return false;
+    }
+    const int ny = TraceSegmentPieces(scene, yIt, MediumTowards(bc, yi, *wiY), AsInteraction(xr), inf, *wiY, yp);
+    // The offset must arrive in the medium the base arrives in (x_rec keeps it).
+    if (ny == 0 || yp[ny - 1].medium != xp[nx - 1].medium) {
+        st->shift.fail(ShiftFailure::Occluded);
+        return false;
+    }
+    *segRatio = x.segFactor[rec] * TransmittanceRatio(yp, ny, xp, nx, rng);
+    return true;
+}
+
 // Offset vertices i+1..rec-1 of a walked second chain. Ideal specular: the
 // Dirac coefficient of the offset over the base's lobe probability; glossy
 // (near-specular, its half-vector kept): f_y |cos_y| / p_x in the throughput
@@ -286,7 +482,7 @@ bool AppendWalkedInterior(const ShiftSubpath &x, int i, int rec, const WalkedInt
 
 // y_rec = x_rec with the offset's incoming direction; later vertices are the
 // base's, their throughputs rescaled by the offset's ratio at rec.
-void CopyBaseTail(const ShiftSubpath &x, int rec, const OffsetState &o, CameraShift *out) {
+void CopyBaseTail(const ShiftSubpath &x, int rec, const OffsetState &o, bool media, CameraShift *out) {
     ShiftSubpath &y = out->y;
     const int n = x.n;
     const PathVertex &xr = x.v[rec];
@@ -303,12 +499,24 @@ void CopyBaseTail(const ShiftSubpath &x, int rec, const OffsetState &o, CameraSh
     out->rho[rec] = o.R;
     Float Rn = o.R;
     Spectrum scale(0);
-    if (rec + 1 < n && x.b[rec]) {
+    if (media && rec + 1 < n && xr.type == VertexType::Medium) {
+        // A medium vertex (its phase function), and the next segment's distance factor.
+        Vec3 wi = Normalize(x.v[rec + 1].p - xr.p);
+        Float pyr, pxr;
+        Spectrum fyr = ScatterValue(xr, x.b[rec], v.wo, wi, &pyr);
+        ScatterValue(xr, x.b[rec], xr.wo, wi, &pxr);
+        if (pxr > 0) {
+            Spectrum betaN = o.beta * fyr * (xr.rrScale / pxr) * x.segFactor[rec + 1];
+            scale = SafeDiv(betaN, x.v[rec + 1].throughput());
+            Rn = o.R * pyr / pxr;
+        }
+    } else if (rec + 1 < n && x.b[rec]) {
         Vec3 wi = Normalize(x.v[rec + 1].p - xr.p);
         Spectrum fyr = x.b[rec].f(v.wo, wi);
         Float pyr = x.b[rec].pdf(v.wo, wi), pxr = x.b[rec].pdf(xr.wo, wi);
         if (pxr > 0) {
             Spectrum betaN = o.beta * fyr * (AbsDot(wi, Vec3(xr.ns)) / pxr) * xr.rrScale;
+            if (media) betaN *= x.segFactor[rec + 1];
             scale = SafeDiv(betaN, x.v[rec + 1].throughput());
             Rn = o.R * pyr / pxr;
         }
@@ -327,11 +535,28 @@ void CopyBaseTail(const ShiftSubpath &x, int rec, const OffsetState &o, CameraSh
 // Reconnection of the traced offset (ending at vertex i = traceEnd) to the
 // base at rec through the second chain.
 void ReconnectSecondChain(const SubpathShiftContext &ctx, const ShiftSubpath &x, int i, int rec, Arena &arena,
-                          CameraShift *out, OffsetState *o, SubpathShiftStats *st) {
+                          CameraShift *out, OffsetState *o, SubpathShiftStats *st, UniformSource rng) {
     const ShiftSubpath &y = out->y;
     const PathVertex &xi = x.v[i];
     Vec3 wiX = Normalize(x.v[i + 1].p - xi.p), wiY;
     Float J = 0;
+    if (ctx.media) {
+        Spectrum seg;
+        if (!ReconnectMedia(ctx, x, y.v[i], i, rec, st, &wiY, &J, &seg, rng)) return;
+        Float py, px;
+        const Spectrum fy = ScatterValue(y.v[i], y.b[i], o->woY, wiY, &py);
+        ScatterValue(xi, x.b[i], xi.wo, wiX, &px);
+        if (fy.isBlack() || !(py > 0) || !(px > 0) || !(J > 0) || !std::isfinite(J)) {
+            st->shift.fail(ShiftFailure::Geometry);
+            return;
+        }
+        st->shift.success(x.v[rec].isInfiniteLight() ? ShiftType::Environment : ShiftType::Reconnection);
+        // Eq. 5 factor of vertex i (|T'| = d_x^2 / d_y^2, cosines only at surface ends), T_y / T_x.
+        o->beta *= fy * (J / px) * xi.rrScale * seg;
+        o->R *= J * py / px;
+        CopyBaseTail(x, rec, *o, true, out);
+        return;
+    }
     WalkedInterior walked;
     if (!ShiftToReconnection(ctx, x, y.v[i], i, rec, arena, st, &wiY, &J, &walked)) return;
     Spectrum fy = y.b[i].f(o->woY, wiY);
@@ -345,7 +570,7 @@ void ReconnectSecondChain(const SubpathShiftContext &ctx, const ShiftSubpath &x,
     o->beta *= fy * (AbsDot(wiY, Vec3(y.b[i].ns())) * J / px) * xi.rrScale;  // roulette: see TraceFirstChain
     o->R *= J * py / px;
     if (!AppendWalkedInterior(x, i, rec, walked, out, o)) return;
-    CopyBaseTail(x, rec, *o, out);
+    CopyBaseTail(x, rec, *o, false, out);
 }
 
 // Area densities of the offset in both directions (for its own BDPT weights).
@@ -363,7 +588,7 @@ void SetOffsetDensities(const BidirContext &bc, CameraShift *out) {
     const int revEnd = out->r >= 0 ? out->r - 1 : last;
     for (int k = 1; k <= revEnd; ++k) {
         y.v[k].pdfRev = 0;
-        if (k + 2 <= last && !y.deltaSample[k + 1] && y.v[k + 1].type == VertexType::Surface)
+        if (k + 2 <= last && !y.deltaSample[k + 1] && y.v[k + 1].scatters())
             y.v[k].pdfRev = PdfArea(bc, y.v[k + 1], &y.b[k + 1], &y.v[k + 2], y.v[k], TransportMode::Importance);
     }
 }
@@ -371,7 +596,7 @@ void SetOffsetDensities(const BidirContext &bc, CameraShift *out) {
 }  // namespace
 
 void ShiftCameraSubpath(const SubpathShiftContext &ctx, const ShiftSubpath &x, const CameraSample &cs, Point2i off,
-                        Arena &arena, CameraShift *out, SubpathShiftStats *st) {
+                        Arena &arena, CameraShift *out, SubpathShiftStats *st, UniformSource rng) {
     const int n = x.n;
     out->validUpTo = -1;
     out->r = -1;
@@ -383,10 +608,14 @@ void ShiftCameraSubpath(const SubpathShiftContext &ctx, const ShiftSubpath &x, c
     if (n < 2) return;
     const CameraShiftPlan plan = PlanCameraShift(ctx, x);
     OffsetState o;
-    TraceFirstChain(ctx, x, cs, off, plan.traceEnd, arena, out, &o, &st->shift);
+    if (ctx.media)
+        TraceFirstChainMedia(ctx, x, cs, off, plan.traceEnd, arena, out, &o, &st->shift, rng);
+    else
+        TraceFirstChain(ctx, x, cs, off, plan.traceEnd, arena, out, &o, &st->shift);
     const int i = plan.traceEnd;
-    if (plan.rec >= 0 && out->validUpTo == i && i >= 1 && plan.rec > i && out->y.v[i].type == VertexType::Surface)
-        ReconnectSecondChain(ctx, x, i, plan.rec, arena, out, &o, st);
+    if (plan.rec >= 0 && out->validUpTo == i && i >= 1 && plan.rec > i &&
+        (out->y.v[i].type == VertexType::Surface || (ctx.media && out->y.v[i].type == VertexType::Medium)))
+        ReconnectSecondChain(ctx, x, i, plan.rec, arena, out, &o, st, rng);
     SetOffsetDensities(*ctx.bidir, out);
 }
 

@@ -32,7 +32,9 @@ struct CameraShift {
 // Shifts the camera subpath `x` (generated from camera sample cs) to the
 // neighbour at pixel offset `off`. Vertices before a failure stay valid; the
 // offset's pdfFwd/pdfRev are its own area densities (for its BDPT weights).
+// With media (ctx.media): x.segFactor must be set; rng draws the
+// transmittance-ratio estimates (medium_shift.h).
 void ShiftCameraSubpath(const SubpathShiftContext &ctx, const ShiftSubpath &x, const CameraSample &cs, Point2i off,
-                        Arena &arena, CameraShift *out, SubpathShiftStats *st);
+                        Arena &arena, CameraShift *out, SubpathShiftStats *st, UniformSource rng = {});
 
 }  // namespace gradus

@@ -1,5 +1,6 @@
 #include "integrators/gradient/lighttracing_shift.h"
 
+#include "integrators/gradient/medium_shift.h"
 #include "lights/light.h"
 
 namespace gradus {
@@ -205,6 +206,9 @@ void EvalAtChainEnd(const ShiftSubpath &light, int c, const Vec3 &towardCam, Spe
         *f = al->L(Interaction(xc.p, xc.ng, towardCam), towardCam);
         Float pp;
         xc.light->pdfLe(Ray(xc.p, towardCam), xc.ng, &pp, pdf);
+    } else if (xc.type == VertexType::Medium) {
+        *f = Spectrum(xc.medium->phase.p(towardCam, Vec3(xc.wo)));
+        *pdf = xc.medium->phase.p(Vec3(xc.wo), towardCam);
     } else {
         const BSDF &bcv = light.b[c];
         Vec3 wl = xc.wo;  // towards the light side
@@ -280,11 +284,209 @@ Float OffsetWeight(const BidirContext &bc, const ShiftSubpath &light, int s, int
     return wy;
 }
 
+// ---- Scenes with media ------------------------------------------------------
+// Empty second chain only (a chain of specular vertices fails, as the
+// camera-subpath shift's: camera_shift.h): the offset b walks the base's
+// camera segment lens -> x_1 in lockstep (the same interfaces; a medium
+// vertex at the base's free-flight distance from its last interface, |T'| = 1)
+// and reconnects to c. Both changed segments carry T_y / T_x, a medium b
+// sigma_s(y) / sigma_s(x); f(y)/p(x) = f(x)/p(x) times these and the
+// scattering factors' ratio (the base's value holds its distance densities
+// and its transmittance estimates).
+bool ShiftLightTracingPathMedia(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s,
+                                const PathVertex &lens, Point2 pRaster, const Spectrum &fx, Point2i off, Arena &arena,
+                                Spectrum *fy, Float *wy, Float *rho, SubpathShiftStats *st, UniformSource rng) {
+    const BidirContext &bc = *ctx.bidir;
+    const Scene &scene = *bc.scene;
+    if (s < 2) return false;
+    const PathVertex &x1 = light.v[s - 1];
+    const int c = FindChainEnd(ctx, light, s);
+    if (c < 0) return false;
+    if (s - 2 - c > 0) {
+        ++st->mediaChains;
+        return false;
+    }
+    const PathVertex &xc = light.v[c];
+    const bool envC = xc.isInfiniteLight(), pointC = xc.type == VertexType::Light && !envC && xc.isDeltaLight();
+    if (xc.type == VertexType::Light && !envC && !pointC && !(xc.light && (xc.light->flags & LIGHT_AREA))) return false;
+    if (pointC && !xc.light) return false;
+    const bool medB = x1.type == VertexType::Medium;
+
+    ++st->shift.offsetPaths;
+    Ray r1, ray;
+    CameraSample c1{pRaster, Point2(0.5, 0.5)}, c2{Point2(pRaster.x + off.x, pRaster.y + off.y), Point2(0.5, 0.5)};
+    Float w1 = bc.camera->generateRay(c1, &r1), w2 = bc.camera->generateRay(c2, &ray);
+    if (!(w1 > 0) || !(w2 > 0)) {
+        st->shift.fail(ShiftFailure::Geometry);
+        return false;
+    }
+    // The base's camera segment lens -> x_1, then the offset's in lockstep.
+    const Interaction lensIt(lens.p, Normal3(0, 0, 0), Vec3(0, 0, 0));
+    MediumPiece xl[kMaxMediumPieces], yl[kMaxMediumPieces];
+    const Vec3 dLens = Normalize(x1.p - lens.p);
+    const int nl = TraceSegmentPieces(scene, lensIt, scene.cameraMedium, AsInteraction(x1), false, dLens, xl);
+    if (nl == 0) {
+        st->shift.fail(ShiftFailure::Geometry);
+        return false;
+    }
+    SurfaceInteraction isect;
+    Point3 pm;
+    const Medium *my;
+    if (!LockstepSegment(scene, lensIt.spawnRay(Normalize(ray.d)), scene.cameraMedium, xl, nl,
+                         medB ? SegmentEnd::Medium : SegmentEnd::Surface, yl, &isect, &pm, &my)) {
+        st->shift.fail(ShiftFailure::Escaped);
+        return false;
+    }
+    // The offset b as a vertex (Importance mode: the light subpath's).
+    PathVertex yb;
+    BSDF byR;
+    Float sigmaRatio = 1;
+    const Vec3 woY1 = -yl[nl - 1].d;
+    if (medB) {
+        yb.type = VertexType::Medium;
+        yb.medium = my;
+        yb.mediumIndex = x1.mediumIndex;
+        yb.p = pm;
+        const Float sx = my->sigmaTAt(x1.p).maxComponent();
+        if (!(sx > 0)) return false;
+        sigmaRatio = my->sigmaTAt(pm).maxComponent() / sx;
+    } else {
+        byR = isect.material->getBSDF(isect, arena, TransportMode::Radiance);
+        if (!byR || ClassifyBSDF(&byR, ctx.threshold) != ShiftVertexClass::Rough) {
+            st->shift.fail(ShiftFailure::ClassMismatch);
+            return false;
+        }
+        yb.type = VertexType::Surface;
+        yb.material = isect.material;
+        yb.p = isect.p;
+        yb.ng = isect.n;
+        yb.geomId = isect.geomId;
+        yb.primId = isect.primId;
+        yb.mediumIndex = MediumIndexOf(scene, my);
+    }
+    // b -> c: the environment shift or a reconnection; the offset arrives in the base's medium.
+    const Vec3 wiX1 = Normalize(light.v[s - 2].p - x1.p);
+    Vec3 wiY1;
+    Float J;
+    if (envC) {
+        st->shift.attempt(ShiftType::Environment);
+        wiY1 = wiX1;
+        J = 1;
+    } else {
+        st->shift.attempt(ShiftType::Reconnection);
+        ShiftVertex tgt;
+        tgt.p = xc.p;
+        tgt.n = xc.onSurface() ? Vec3(xc.ng) : Vec3(0, 0, 0);
+        ReconnectionShift rc;
+        if (!ShiftReconnect(x1.p, yb.p, tgt, &rc)) {
+            st->shift.fail(ShiftFailure::Geometry);
+            return false;
+        }
+        wiY1 = rc.wi;
+        J = rc.jacobian;
+    }
+    yb.wo = wiY1;
+    const Interaction ybIt = medB ? Interaction(pm, Normal3(0, 0, 0), woY1) : Interaction(isect.p, isect.n, woY1);
+    const Interaction xcIt = AsInteraction(xc);
+    if ((!medB && InTangentPlane(ybIt.n, wiY1)) || (!envC && xc.onSurface() && InTangentPlane(xcIt.n, wiY1))) {
+        st->shift.fail(ShiftFailure::Occluded);
+        return false;
+    }
+    MediumPiece xcP[kMaxMediumPieces], ycP[kMaxMediumPieces];
+    const Medium *mxb = MediumTowards(bc, x1, wiX1);
+    const Medium *myb = medB ? my : isect.mediumAfter(wiY1, my);
+    const int nxc = TraceSegmentPieces(scene, AsInteraction(x1), mxb, xcIt, envC, wiX1, xcP);
+    const int nyc = TraceSegmentPieces(scene, ybIt, myb, xcIt, envC, wiY1, ycP);
+    if (nxc == 0 || nyc == 0 || ycP[nyc - 1].medium != xcP[nxc - 1].medium) {
+        st->shift.fail(ShiftFailure::Occluded);
+        return false;
+    }
+    st->shift.success(envC ? ShiftType::Environment : ShiftType::Reconnection);
+    const Spectrum T = TransmittanceRatio(yl, nl, xl, nl, rng) * TransmittanceRatio(ycP, nyc, xcP, nxc, rng);
+    // Eq. 5 in the camera-side parameterisation: f(y)|T'| / f(x).
+    const Vec3 woX1 = Normalize(lens.p - x1.p);
+    Spectrum fX1, fY1;
+    if (medB) {
+        fX1 = Spectrum(x1.medium->phase.p(woX1, wiX1));
+        fY1 = Spectrum(my->phase.p(woY1, wiY1) * J);
+    } else {
+        const BSDF &bx = light.b[s - 1];
+        fX1 = bx.f(woX1, wiX1, TransportMode::Radiance) * AbsDot(wiX1, Vec3(bx.ns()));
+        fY1 = byR.f(woY1, wiY1, TransportMode::Radiance) * AbsDot(wiY1, Vec3(byR.ns())) * J;
+    }
+    Spectrum fXc, fYc;
+    Float pcX, pcY;
+    EvalAtChainEnd(light, c, -wiX1, &fXc, &pcX);
+    EvalAtChainEnd(light, c, -wiY1, &fYc, &pcY);
+    *fy = fx * SafeDiv(fY1 * fYc * (w2 / w1), fX1 * fXc) * T * sigmaRatio;
+    if (fy->isBlack() || !fy->isFinite()) {
+        st->shift.fail(ShiftFailure::Geometry);
+        return false;
+    }
+    // rho = |T'| p(y)/p(x) (Eq. 8), as ShiftLightTracingPath's for an empty
+    // chain, without cosines at a medium b (ConvertDensity's measure).
+    const Vec3 n0 = bc.camera->lensNormal();
+    const Float Fx = medB ? EyeVolumeFactor(lens.p, n0, x1.p) : EyeAreaFactor(lens.p, n0, x1.p, x1.ng);
+    const Float Fy = medB ? EyeVolumeFactor(lens.p, n0, pm) : EyeAreaFactor(lens.p, n0, isect.p, isect.n);
+    Float G1x = EdgeGeometry(x1.p, xc.p, Vec3(xc.ng), xc.onSurface());
+    Float G1y = EdgeGeometry(yb.p, xc.p, Vec3(xc.ng), xc.onSurface());
+    Float Gcx = EdgeGeometry(xc.p, x1.p, Vec3(x1.ng), !medB), Gcy = EdgeGeometry(xc.p, yb.p, Vec3(yb.ng), !medB);
+    if (envC) {
+        G1x = G1y = 1;
+        Gcx = medB ? 1 : AbsDot(wiX1, Vec3(x1.ng));
+        Gcy = medB ? 1 : AbsDot(wiX1, Vec3(yb.ng));
+    }
+    const Float denR = Fx * G1y * pcX * Gcx;
+    *rho = denR > 0 ? Fy * J * G1x * pcY * Gcy / denR : 0;
+
+    // BDPT weight of the offset: light vertex s-1 swapped for y_b (restored after).
+    const int lo = std::max(c - 1, 0), m = s - lo;
+    PathVertex saveV[3];
+    BSDF saveB[3];
+    for (int j = 0; j < m; ++j) {
+        saveV[j] = light.v[lo + j];
+        saveB[j] = light.b[lo + j];
+    }
+    PathVertex *yv = light.v;
+    BSDF *ybs = light.b;
+    if (envC) yv[c].p = yb.p + (light.v[c].p - light.v[c + 1].p);
+    {
+        PathVertex &v = yv[s - 1];
+        const PathVertex keep = v;
+        v = yb;
+        v.flags = keep.flags;
+        v.rrScale = keep.rrScale;
+        v.setThroughput(keep.throughput());
+        if (medB) {
+            ybs[s - 1] = BSDF();
+        } else {
+            SurfaceInteraction si2 = isect;
+            si2.wo = wiY1;
+            ybs[s - 1] = isect.material->getBSDF(si2, arena, TransportMode::Importance);
+            v.ns = ybs[s - 1].ns();
+        }
+        v.pdfRev = 0;
+        v.pdfFwd = 0;
+    }
+    yv[c + 1].pdfFwd = PdfArea(bc, xc, c > 0 ? &ybs[c] : nullptr, c > 0 ? &yv[c - 1] : nullptr, yv[c + 1],
+                               TransportMode::Importance);
+    if (c >= 1 && xc.scatters())
+        yv[c - 1].pdfRev = PdfArea(bc, xc, &ybs[c], &yv[c + 1], yv[c - 1], TransportMode::Radiance);
+    PathVertex lensY = lens;
+    *wy = MISWeight(bc, SubpathView{yv, ybs, s}, SubpathView{&lensY, nullptr, 1}, s, 1, &lensY);
+    for (int j = 0; j < m; ++j) {
+        light.v[lo + j] = saveV[j];
+        light.b[lo + j] = saveB[j];
+    }
+    return *wy > 0;
+}
+
 }  // namespace
 
 bool ShiftLightTracingPath(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s, const PathVertex &lens,
                            Point2 pRaster, const Spectrum &fx, Point2i off, Arena &arena, Spectrum *fy, Float *wy,
-                           Float *rho, SubpathShiftStats *st) {
+                           Float *rho, SubpathShiftStats *st, UniformSource rng) {
+    if (ctx.media) return ShiftLightTracingPathMedia(ctx, light, s, lens, pRaster, fx, off, arena, fy, wy, rho, st, rng);
     const BidirContext &bc = *ctx.bidir;
     if (s < 2) return false;
     const PathVertex &x1 = light.v[s - 1];

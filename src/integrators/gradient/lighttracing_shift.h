@@ -16,8 +16,10 @@ namespace gradus {
 // black/blocked. fy = f(y)|T'|/p(x), wy = BDPT weight of the offset (with the
 // strategies of ctx.bidir), rho = |T'| p(y)/p(x) (Eq. 8). The light subpath's
 // vertices are swapped in place for the offset's weight and restored.
+// With media (ctx.media): an empty second chain only, T_y / T_x on both
+// changed segments (lighttracing_shift.cpp); rng draws the ratio estimates.
 bool ShiftLightTracingPath(const SubpathShiftContext &ctx, const ShiftSubpath &light, int s, const PathVertex &lens,
                            Point2 pRaster, const Spectrum &fx, Point2i off, Arena &arena, Spectrum *fy, Float *wy,
-                           Float *rho, SubpathShiftStats *st);
+                           Float *rho, SubpathShiftStats *st, UniformSource rng = {});
 
 }  // namespace gradus

@@ -73,4 +73,56 @@ Spectrum TransmittanceRatio(const MediumPiece *y, int ny, const MediumPiece *x, 
     return r * w;
 }
 
+int TraceSegmentPieces(const Scene &scene, const Interaction &from, const Medium *m, const Interaction &to,
+                       bool atInfinity, const Vec3 &d, MediumPiece *pieces) {
+    Interaction it = from;
+    for (int k = 0; k < kMaxMediumPieces; ++k) {
+        const Ray r = atInfinity ? it.spawnRay(d) : it.spawnRayTo(to);
+        SurfaceInteraction si;
+        const bool hit = scene.intersect(r, &si);
+        if (hit && si.material) return 0;
+        const Float len = hit ? Distance(r.o, si.p) : (atInfinity ? Infinity : Distance(r.o, to.p));
+        pieces[k] = {r.o, Normalize(r.d), len, m};
+        if (!hit) return k + 1;
+        m = si.mediumAfter(r.d, m);
+        it = si;
+    }
+    return 0;
+}
+
+bool LockstepSegment(const Scene &scene, Ray ray, const Medium *m, const MediumPiece *xp, int nx, SegmentEnd end,
+                     MediumPiece *yp, SurfaceInteraction *hit, Point3 *pMedium, const Medium **mEnd) {
+    for (int j = 0; j < nx; ++j) {
+        SurfaceInteraction si;
+        const bool found = scene.intersect(ray, &si);
+        const Vec3 d = Normalize(ray.d);
+        const Float len = found ? Distance(ray.o, si.p) : Infinity;
+        yp[j] = {ray.o, d, len, m};
+        if (j + 1 < nx) {  // an interface, as the base's
+            if (!found || si.material) return false;
+            m = si.mediumAfter(ray.d, m);
+            ray = si.spawnRay(ray.d);
+            continue;
+        }
+        *mEnd = m;
+        switch (end) {
+        case SegmentEnd::Surface:
+            if (!found || !si.material) return false;
+            *hit = si;
+            return true;
+        case SegmentEnd::Escape: return !found;
+        case SegmentEnd::Medium: {
+            const Float t = xp[j].len;
+            if (m != xp[j].medium || !m || !(t < len)) return false;
+            const Point3 p = ray.o + d * t;
+            if (!(m->sigmaTAt(p).maxComponent() > 0)) return false;
+            yp[j].len = t;
+            *pMedium = p;
+            return true;
+        }
+        }
+    }
+    return false;
+}
+
 }  // namespace gradus

@@ -21,6 +21,7 @@
 #include "core/spectrum.h"
 #include "media/medium.h"
 #include "samplers/uniform_source.h"
+#include "scene/scene.h"
 
 namespace gradus {
 
@@ -40,5 +41,27 @@ constexpr int kMaxMediumPieces = kMaxInterfaceCrossings + 2;
 // y pieces have infinite optical depth. The x pieces must have finite optical
 // depth (they are a sampled base path).
 Spectrum TransmittanceRatio(const MediumPiece *y, int ny, const MediumPiece *x, int nx, UniformSource rng);
+
+// ---- Segments of bidirectional subpaths (G-BDPT with media) ----------------
+// What ends a segment between two scattering vertices.
+enum class SegmentEnd { Surface, Medium, Escape };
+
+// The pieces of the straight segment from `from` (leaving in medium m) to the
+// interaction `to` (a surface point, or a point in a medium: zero normal), or
+// towards infinity along d (atInfinity), through interfaces (surfaces without
+// a material). Returns their number, 0 where a surface with a material is in
+// the way or the crossings exceed kMaxInterfaceCrossings.
+int TraceSegmentPieces(const Scene &scene, const Interaction &from, const Medium *m, const Interaction &to,
+                       bool atInfinity, const Vec3 &d, MediumPiece *pieces);
+
+// An offset segment in lockstep with the base's nx pieces xp (Gruson et al.
+// 2018's volumetric shift, as gpt's): from `ray` in medium m it crosses as
+// many interfaces, then ends as the base does: on a surface with a material
+// (Surface: *hit), escaping (Escape), or scattering (Medium) at the base's
+// free-flight distance along its own last piece (|T'| = 1: *pMedium), which
+// fails if it meets a surface first, is in another medium or sigma_t is 0
+// there. Its pieces go to yp (nx of them), *mEnd is the medium it ends in.
+bool LockstepSegment(const Scene &scene, Ray ray, const Medium *m, const MediumPiece *xp, int nx, SegmentEnd end,
+                     MediumPiece *yp, SurfaceInteraction *hit, Point3 *pMedium, const Medium **mEnd);
 
 }  // namespace gradus

@@ -24,6 +24,7 @@ void SubpathShiftStats::add(const SubpathShiftStats &o) {
     walkFailures += o.walkFailures;
     glossyChains += o.glossyChains;
     longChains += o.longChains;
+    mediaChains += o.mediaChains;
     for (size_t i = 0; i < size_t(ManifoldStatus::Count); ++i) walkStatus[i] += o.walkStatus[i];
 }
 
@@ -36,6 +37,11 @@ std::string SubpathShiftStats::formatWalks(bool walksTried) const {
                   (unsigned long long)walks, (unsigned long long)walkFailures, (unsigned long long)glossyChains,
                   (unsigned long long)longChains);
     s += buf;
+    if (mediaChains) {
+        std::snprintf(buf, sizeof buf, "  second chains with specular vertices in a scene with media (fallback) %llu\n",
+                      (unsigned long long)mediaChains);
+        s += buf;
+    }
     for (size_t i = 1; i < size_t(ManifoldStatus::Count); ++i)
         if (walkStatus[i]) {
             std::snprintf(buf, sizeof buf, "    walk failure %-26s %llu\n", ToString(ManifoldStatus(i)),
@@ -65,6 +71,23 @@ Float EyeAreaFactor(const Point3 &lens, const Vec3 &n0, const Point3 &pb, const 
     d = d / std::sqrt(D2);
     Float cb = AbsDot(ngb, d), ct = AbsDot(n0, d);
     return cb > 0 ? ct * ct * ct * D2 / cb : Float(0);
+}
+
+Float EyeVolumeFactor(const Point3 &lens, const Vec3 &n0, const Point3 &pb) {
+    Vec3 d = pb - lens;
+    Float D2 = d.lengthSquared();
+    Float ct = AbsDot(n0, d / std::sqrt(D2));
+    return ct * ct * ct * D2;
+}
+
+Spectrum ScatterValue(const PathVertex &v, const BSDF &b, const Vec3 &wo, const Vec3 &wi, Float *pdf) {
+    if (v.type == VertexType::Medium) {
+        const Float p = v.medium->phase.p(wo, wi);
+        *pdf = p;
+        return Spectrum(p);
+    }
+    *pdf = b.pdf(wo, wi);
+    return b.f(wo, wi) * AbsDot(wi, Vec3(b.ns()));
 }
 
 Interaction VertexIt(const PathVertex &v) {

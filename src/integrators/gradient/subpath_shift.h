@@ -56,6 +56,10 @@ struct SubpathShiftContext : ManifoldSettings {
     const BidirContext *bidir = nullptr;
     bool manifold = true;        // manifold walk (else half-vector shift)
     bool trySpecular = true;     // scene has specular or near-specular surfaces
+    // The scene has participating media: the shifts take their medium
+    // vertices and transmittance ratios (camera_shift.h, lighttracing_shift.h);
+    // without media they run the surface-only code.
+    bool media = false;
 };
 
 // Counters of one sample's shifts (flushed into an integrator's totals).
@@ -65,6 +69,7 @@ struct SubpathShiftStats {
     uint64_t walkStatus[size_t(ManifoldStatus::Count)] = {};
     uint64_t glossyChains = 0;  // second chains walked with near-specular (glossy) vertices
     uint64_t longChains = 0;    // second chains longer than the walk takes (kMaxManifoldVertices): fallback
+    uint64_t mediaChains = 0;   // non-empty second chains in a scene with media: fallback (camera_shift.h)
     void recordWalk(const ManifoldWalkResult &r);
     void add(const SubpathShiftStats &o);
     // The manifold-walk lines of the end-of-render report.
@@ -76,6 +81,9 @@ struct ShiftSubpath {
     PathVertex *v = nullptr;
     BSDF *b = nullptr;
     uint8_t *deltaSample = nullptr;  // the direction sampled at v[i] came from a Dirac lobe
+    // Scenes with media, camera subpaths: the distance-sampling factors of the
+    // segment that reached v[i] (GenerateCameraSubpath's segFactors).
+    Spectrum *segFactor = nullptr;
     int n = 0;
     SubpathView view() const { return {v, b, n}; }
 };
@@ -96,12 +104,17 @@ inline bool DiracCameraChain(const ShiftSubpath &cam, int last) {
         if (!cam.deltaSample[i]) return false;
     return true;
 }
+// f |cos| at a surface vertex (its BSDF, shading normal), the phase function
+// at a medium vertex, towards wi from wo; *pdf: the solid-angle density of wi.
+Spectrum ScatterValue(const PathVertex &v, const BSDF &b, const Vec3 &wo, const Vec3 &wi, Float *pdf);
 // Rough (diffuse) for shift purposes.
 bool IsDiffuseVertex(const SubpathShiftContext &ctx, const PathVertex &v, const BSDF *b);
 
 // dA_b/ds of a pinhole camera at `lens` with axis n0 (cos^4 / G of
 // ShiftJacobianFactor for an empty eye chain, up to the focal constant).
 Float EyeAreaFactor(const Point3 &lens, const Vec3 &n0, const Point3 &pb, const Vec3 &ngb);
+// The same for a point b in a medium (no cosine at b, as ConvertDensity).
+Float EyeVolumeFactor(const Point3 &lens, const Vec3 &n0, const Point3 &pb);
 
 // ---- Building blocks of the subpath shifts -------------------------------
 constexpr Float kShiftDirTol = 1e-4;  // 1 - cos between a recomputed and an expected direction

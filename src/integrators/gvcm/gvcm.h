@@ -122,6 +122,8 @@ class GVCMIntegrator : public GBDPTIntegrator {
   public:
     explicit GVCMIntegrator(const EntityDesc &desc);
     std::string name() const override { return "gvcm"; }
+    // Its merges count surface photons only (README, media); gbdpt's media support is not inherited.
+    bool rendersMedia() const override { return false; }
     void preprocess(const Scene &scene, Film &film) override;
     int samplesPerPass(const RenderOptions &) const override { return 1; }  // one iteration = 1 spp
     void runPass(PassContext &ctx) override;

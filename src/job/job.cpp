@@ -411,6 +411,8 @@ void RecordRenderFigures(const RenderJob &job, const RenderOptions &opts, const 
     m["seconds_passes"] = MetaValue::Double(SecondsBetween(t[1], t[2]));
     m["seconds_finish"] = MetaValue::Double(SecondsBetween(t[2], t[3]));
     m["cpu_seconds"] = MetaValue::Double(cpuSeconds);
+    m["seconds_parallel"] = MetaValue::Double(stats.parallelSeconds);
+    m["lane_occupancy"] = MetaValue::Double(stats.laneSeconds > 0 ? stats.busySeconds / stats.laneSeconds : 0);
     m["stop_reason"] = stats.interrupted ? "interrupted" : stats.timeLimited ? "time budget" : "completed";
     if (opts.timeLimit > 0) m["time_budget"] = MetaValue::Double(opts.timeLimit);
     m["nonfinite_discarded"] = MetaValue::Int(int64_t(stats.nonFinite));

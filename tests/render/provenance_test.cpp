@@ -53,6 +53,7 @@ TEST_F(Provenance, TypedMetadataOfEveryRender) {
     for (const char *k : {"spp", "passes", "threads", "quick", "scene_files", "nonfinite_discarded"})
         EXPECT_EQ(m.at(k).type(), MetaValue::Type::Int) << k;
     for (const char *k : {"render_seconds", "seconds_preprocess", "seconds_passes", "seconds_finish", "cpu_seconds",
+                          "seconds_parallel", "lane_occupancy",
                           "peak_rss_mb", "scene_load_seconds"})
         EXPECT_EQ(m.at(k).type(), MetaValue::Type::Double) << k;
     EXPECT_EQ(m.at("spp"), "2");

@@ -150,10 +150,12 @@ class SectionTally {
         tally_->wallNs += wall;
         tally_->laneNs += wall * lanes_;
     }
-    // Runs f() as one work unit (its duration counted as busy).
+    // Runs f() as one work unit (its duration counted as busy). A unit this
+    // thread runs while in another (a task taken while a unit waits on a
+    // nested loop) is part of that one.
     template <typename F>
     void unit(F &&f) {
-        if (!tally_) return void(f());
+        if (!tally_ || tInWorkUnit) return void(f());
         const auto t0 = Clock::now();
         tInWorkUnit = true;
         struct Reset {

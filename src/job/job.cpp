@@ -398,7 +398,7 @@ void CheckpointSession::record(const RenderOptions &loopOpts, const RenderStats 
 
 // The render's figures as typed metadata (RenderResult in job.h).
 void RecordRenderFigures(const RenderJob &job, const RenderOptions &opts, const RenderStats &stats,
-                         const Clock::time_point t[4], double cpuSeconds, Metadata *mp) {
+                         const Clock::time_point t[4], double cpuSeconds, double cpuPasses, Metadata *mp) {
     const Film &film = *job.film;
     Metadata &m = *mp;
     for (const auto &kv : job.provenance) m[kv.first] = kv.second;
@@ -412,6 +412,9 @@ void RecordRenderFigures(const RenderJob &job, const RenderOptions &opts, const 
     m["seconds_passes"] = MetaValue::Double(SecondsBetween(t[1], t[2]));
     m["seconds_finish"] = MetaValue::Double(SecondsBetween(t[2], t[3]));
     m["cpu_seconds"] = MetaValue::Double(cpuSeconds);
+    m["cpu_seconds_passes"] = MetaValue::Double(cpuPasses);
+    m["seconds_parallel"] = MetaValue::Double(stats.parallelSeconds);
+    m["lane_occupancy"] = MetaValue::Double(stats.laneSeconds > 0 ? stats.busySeconds / stats.laneSeconds : 0);
     m["stop_reason"] = stats.interrupted ? "interrupted" : stats.timeLimited ? "time budget" : "completed";
     if (opts.timeLimit > 0) m["time_budget"] = MetaValue::Double(opts.timeLimit);
     m["nonfinite_discarded"] = MetaValue::Int(int64_t(stats.nonFinite));
@@ -450,14 +453,16 @@ RenderResult RenderJobImage(RenderJob &job, const RenderOptions &opts) {
         }
     }
     RenderResult r;
+    const double cpuLoop = CpuSeconds();
     r.stats = RunRender(*job.integrator, *job.scene, *job.film, *job.sampler, loopOpts);
+    const double cpuPasses = CpuSeconds() - cpuLoop;
     checkpoints.writeFinal(r.stats);
     t[2] = Clock::now();
     r.image = job.film->toImage();
     job.integrator->finish(*job.film, r.stats, &r.image);
     t[3] = Clock::now();
     r.stats.seconds = SecondsBetween(t[0], t[3]);
-    RecordRenderFigures(job, opts, r.stats, t, CpuSeconds() - cpu0, &r.image.metadata);
+    RecordRenderFigures(job, opts, r.stats, t, CpuSeconds() - cpu0, cpuPasses, &r.image.metadata);
     checkpoints.record(loopOpts, r.stats, &r.image.metadata);
     // Crops keep their place in the full image (EXR data window in the display window).
     const Film &film = *job.film;

@@ -119,6 +119,7 @@ struct PassContext::Shared {
     const Sampler *prototype = nullptr;
     tbb::enumerable_thread_specific<Worker> workers;
     std::atomic<uint64_t> nonFinite{0};
+    LaneTally lanes;
 };
 
 Worker &PassContext::worker() const {
@@ -132,6 +133,44 @@ bool PassContext::interrupted() const { return pass_ > 0 && !opts_.wholePasses &
 void PassContext::addNonFinite(uint64_t n) { shared_.nonFinite += n; }
 
 namespace {
+using Clock = std::chrono::steady_clock;
+int64_t Nanoseconds(Clock::duration d) { return std::chrono::duration_cast<std::chrono::nanoseconds>(d).count(); }
+// Set while this thread runs a work unit of a tallied parallel section: a
+// section started inside one (nested) is part of that unit, not tallied again.
+thread_local bool tInWorkUnit = false;
+
+// One parallel section's share of the LaneTally: its wall time times its
+// lanes, and the work units' durations (added by the lanes as they finish).
+class SectionTally {
+  public:
+    SectionTally(LaneTally *t, int64_t lanes) : tally_(tInWorkUnit ? nullptr : t), lanes_(lanes), t0_(Clock::now()) {}
+    ~SectionTally() {
+        if (!tally_) return;
+        const int64_t wall = Nanoseconds(Clock::now() - t0_);
+        tally_->wallNs += wall;
+        tally_->laneNs += wall * lanes_;
+    }
+    // Runs f() as one work unit (its duration counted as busy). A unit this
+    // thread runs while in another (a task taken while a unit waits on a
+    // nested loop) is part of that one.
+    template <typename F>
+    void unit(F &&f) {
+        if (!tally_ || tInWorkUnit) return void(f());
+        const auto t0 = Clock::now();
+        tInWorkUnit = true;
+        struct Reset {
+            ~Reset() { tInWorkUnit = false; }
+        } reset;
+        f();
+        tally_->busyNs += Nanoseconds(Clock::now() - t0);
+    }
+
+  private:
+    LaneTally *tally_;
+    const int64_t lanes_;
+    const Clock::time_point t0_;
+};
+
 // Runs work(i) for i in [0, n) on the loop's threads, started in increasing
 // order, and merges each result into the film in index order as soon as it and
 // all before it are done (so the film does not depend on the thread count).
@@ -142,19 +181,22 @@ namespace {
 class OrderedMerge {
   public:
     using Work = std::function<std::unique_ptr<FilmTile>(int64_t)>;  // null: nothing to merge
-    OrderedMerge(Film &film, int64_t n, int64_t window, const std::function<void(int64_t)> &onMerged = nullptr)
-        : film_(film), n_(n), window_(std::max<int64_t>(1, window)), onMerged_(onMerged), slot_(size_t(window_)),
-          ready_(size_t(window_)) {}
+    OrderedMerge(Film &film, int64_t n, int64_t window, LaneTally *tally,
+                 const std::function<void(int64_t)> &onMerged = nullptr)
+        : film_(film), n_(n), window_(std::max<int64_t>(1, window)), onMerged_(onMerged), tally_(tally),
+          slot_(size_t(window_)), ready_(size_t(window_)) {}
 
     void run(const Work &work) {
         const int threads = int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
         const int lanes = int(std::max<int64_t>(1, std::min<int64_t>(n_, std::max(1, threads))));
-        tbb::parallel_for(0, lanes, [&](int) { lane(work); }, tbb::simple_partitioner());
+        SectionTally section(tally_, lanes);
+        tbb::parallel_for(0, lanes, [&](int) { lane(work, section); }, tbb::simple_partitioner());
         GRADUS_CHECK(merged_ == n_);
     }
 
   private:
-    void lane(const Work &work) {
+    // Work units: rendering a result and merging results (mergeReady).
+    void lane(const Work &work, SectionTally &section) {
         for (;;) {
             int64_t i;
             {
@@ -165,13 +207,13 @@ class OrderedMerge {
             }
             std::unique_ptr<FilmTile> t;
             // Isolated: a nested parallel wait inside work must not pick up another lane (which could wait on i).
-            tbb::this_task_arena::isolate([&] { t = work(i); });
+            section.unit([&] { tbb::this_task_arena::isolate([&] { t = work(i); }); });
             {
                 std::lock_guard<std::mutex> lk(m_);
                 slot_[size_t(i % window_)] = std::move(t);
                 ready_[size_t(i % window_)] = 1;
             }
-            mergeReady();
+            section.unit([&] { mergeReady(); });
         }
     }
     // Merges the ready results from merged_ on; one thread merges at a time (the
@@ -204,6 +246,7 @@ class OrderedMerge {
     Film &film_;
     const int64_t n_, window_;
     const std::function<void(int64_t)> onMerged_;
+    LaneTally *tally_;
     std::mutex m_;
     std::condition_variable canStart_;
     int64_t claimed_ = 0, merged_ = 0;
@@ -219,7 +262,7 @@ int64_t PassContext::mergeWindow() const {
 }
 
 void PassContext::forEachTile(const TileFn &fn) {
-    OrderedMerge(film_, tiles_.count(), mergeWindow()).run([&](int64_t t) -> std::unique_ptr<FilmTile> {
+    OrderedMerge(film_, tiles_.count(), mergeWindow(), &shared_.lanes).run([&](int64_t t) -> std::unique_ptr<FilmTile> {
         if (interrupted()) return nullptr;
         Bounds2i tb = tiles_.tile(int(t));
         auto tile = film_.makeTile(tb);
@@ -270,7 +313,7 @@ void PassContext::forEachPixelSample(const SampleEstimator &est) {
 void PassContext::forEachItem(int64_t n, uint64_t tag, const ItemFn &fn, const ChunkFn &chunkMerged) {
     const int64_t chunks = std::max<int64_t>(0, (n + PassContext::kItemChunk - 1) / PassContext::kItemChunk);
     const uint64_t key = seed() ^ tag;
-    OrderedMerge(film_, chunks, mergeWindow(), chunkMerged).run([&](int64_t c) -> std::unique_ptr<FilmTile> {
+    OrderedMerge(film_, chunks, mergeWindow(), &shared_.lanes, chunkMerged).run([&](int64_t c) -> std::unique_ptr<FilmTile> {
         if (interrupted()) return nullptr;
         auto tile = film_.makeSplatTile();
         Worker &w = worker();
@@ -290,8 +333,10 @@ void PassContext::forEachItem(int64_t n, uint64_t tag, const ItemFn &fn, const C
 void PassContext::parallelFor(int64_t n, int64_t grain, const RangeFn &fn) {
     grain = std::max<int64_t>(1, grain);
     const int64_t ranges = (n + grain - 1) / grain;
+    const int threads = int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+    SectionTally section(&shared_.lanes, std::max<int64_t>(1, std::min<int64_t>(ranges, std::max(1, threads))));
     tbb::parallel_for(int64_t(0), ranges, [&](int64_t r) {
-        fn(r * grain, std::min(n, (r + 1) * grain), worker());
+        section.unit([&] { fn(r * grain, std::min(n, (r + 1) * grain), worker()); });
     });
 }
 
@@ -364,6 +409,9 @@ RenderStats RunRender(Integrator &integ, const Scene &scene, Film &film, const S
     stats.cameraSamples = int64_t(done) * grid.bounds.area();
     stats.seconds = elapsed();
     stats.nonFinite = shared.nonFinite;
+    stats.parallelSeconds = 1e-9 * double(shared.lanes.wallNs.load());
+    stats.laneSeconds = 1e-9 * double(shared.lanes.laneNs.load());
+    stats.busySeconds = 1e-9 * double(shared.lanes.busyNs.load());
     return stats;
 }
 

@@ -12,6 +12,7 @@
 // finish (at most a window of them waits for an earlier, slower one), so images
 // do not depend on the thread count and memory does not grow with the image.
 #pragma once
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -75,6 +76,19 @@ struct RenderStats {
     bool timeLimited = false;
     int firstPass = 0, firstSpp = 0;  // where this session started (resume, --passes)
     bool complete = false;            // the render's last pass is done (spp reached)
+    // Where the threads went in the passes' parallel sections (forEachTile,
+    // forEachItem, parallelFor; a section inside another's work unit is part
+    // of that unit): their wall seconds, the same times their lanes (threads
+    // that could work), and the lanes' seconds inside work units (rendering
+    // and merging; a descheduled thread still counts). busy / lane seconds is
+    // the scheduling's occupancy (1: no lane waited), independent of the
+    // machine's load; seconds - parallelSeconds ran outside parallel sections.
+    double parallelSeconds = 0, laneSeconds = 0, busySeconds = 0;
+};
+
+// Sums of RenderStats' parallel-section figures, in nanoseconds.
+struct LaneTally {
+    std::atomic<int64_t> wallNs{0}, laneNs{0}, busyNs{0};
 };
 
 // Collects one camera sample's (or one work item's) contributions; guards

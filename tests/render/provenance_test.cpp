@@ -53,6 +53,7 @@ TEST_F(Provenance, TypedMetadataOfEveryRender) {
     for (const char *k : {"spp", "passes", "threads", "quick", "scene_files", "nonfinite_discarded"})
         EXPECT_EQ(m.at(k).type(), MetaValue::Type::Int) << k;
     for (const char *k : {"render_seconds", "seconds_preprocess", "seconds_passes", "seconds_finish", "cpu_seconds",
+                          "cpu_seconds_passes", "seconds_parallel", "lane_occupancy",
                           "peak_rss_mb", "scene_load_seconds"})
         EXPECT_EQ(m.at(k).type(), MetaValue::Type::Double) << k;
     EXPECT_EQ(m.at("spp"), "2");
@@ -67,6 +68,10 @@ TEST_F(Provenance, TypedMetadataOfEveryRender) {
     EXPECT_NE(m.at("integrator_parameters").str().find("\"integer rrdepth\" 3"), std::string::npos) << m.at("integrator_parameters");
     EXPECT_NE(m.at("camera").str().find("\"float fov\" 40"), std::string::npos) << m.at("camera");
     EXPECT_GT(m.at("peak_rss_mb").number(), 1);
+    EXPECT_LE(m.at("cpu_seconds_passes").number(), m.at("cpu_seconds").number() + 1e-6);
+    EXPECT_LE(m.at("seconds_parallel").number(), m.at("seconds_passes").number() + 1e-6);
+    EXPECT_GT(m.at("lane_occupancy").number(), 0);
+    EXPECT_LE(m.at("lane_occupancy").number(), 1 + 1e-9);
     const double total = m.at("render_seconds").number();
     EXPECT_NEAR(total, m.at("seconds_preprocess").number() + m.at("seconds_passes").number() +
                            m.at("seconds_finish").number(), 1e-3);

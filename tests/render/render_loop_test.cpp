@@ -277,3 +277,53 @@ TEST(RenderLoop, MergeWindowBoundsWorkAheadOfASlowTile) {
         for (int x = 0; x < img.width(); ++x)
             ASSERT_EQ(img.at(x, y, 0), x == 0 && y == 0 ? 1 + slow.items : 1) << x << ", " << y;
 }
+
+// RenderStats' lane figures: a section whose one long work unit leaves the
+// other lane idle has occupancy ~1/2, equal units ~1; a section nested in a
+// work unit is part of that unit (not tallied again: the sections' wall time
+// stays within the pass); time outside sections is not in parallelSeconds.
+TEST(RenderLoop, LaneOccupancyCountsIdleLanesAndSerialTime) {
+    struct Lanes : Integrator {
+        std::string name() const override { return "lanes"; }
+        void runPass(PassContext &ctx) override {
+            auto sleep = [](int ms) { std::this_thread::sleep_for(std::chrono::milliseconds(ms)); };
+            // Two work units: the 20x12 film is 2 x 1 tiles of 16 pixels.
+            ctx.forEachTile([&](int t, const Bounds2i &, FilmTile &, Worker &) {
+                if (t == 0 || balanced) sleep(200);
+                ctx.parallelFor(4, 1, [&](int64_t, int64_t, Worker &) { sleep(nestedMs); });
+            });
+            tiles = ctx.tiles().count();
+            sleep(serialMs);  // one thread, outside every section
+        }
+        bool balanced = false;
+        int serialMs = 0, nestedMs = 0, tiles = 0;
+    };
+    auto run = [](Lanes &l) {
+        RenderJob job = Job();
+        RenderOptions ro;
+        ro.spp = 1;
+        ro.nthreads = 2;
+        ro.quiet = true;
+        ro.tileSize = 16;
+        return RunRender(l, *job.scene, *job.film, *job.sampler, ro);
+    };
+    Lanes skewed;
+    skewed.nestedMs = 5;
+    RenderStats s = run(skewed);
+    ASSERT_EQ(skewed.tiles, 2);
+    EXPECT_NEAR(s.laneSeconds, 2 * s.parallelSeconds, 1e-6);
+    EXPECT_GE(s.parallelSeconds, 0.2);
+    // Busy: the 200 ms unit and the short one; the other lane waits.
+    EXPECT_GT(s.busySeconds / s.laneSeconds, 0.4);
+    EXPECT_LT(s.busySeconds / s.laneSeconds, 0.65);
+
+    Lanes even;  // both units 200 ms plus their nested loops (4 x 50 ms on the unit's own thread)
+    even.balanced = true;
+    even.nestedMs = 50;
+    even.serialMs = 150;
+    s = run(even);
+    EXPECT_GT(s.busySeconds / s.laneSeconds, 0.9);
+    EXPECT_LE(s.busySeconds, s.laneSeconds * (1 + 1e-9));
+    EXPECT_GE(s.parallelSeconds, 0.2);
+    EXPECT_LT(s.parallelSeconds, s.seconds - 0.14);  // the serial sleep is outside
+}

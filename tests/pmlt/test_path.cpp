@@ -101,7 +101,9 @@ TEST(PMLTMutation, ChoiceProbabilitiesSumToOne) {
             for (int a = 0; a + nd <= n; ++a) {
                 double add = 0;
                 for (int na = 0; na <= ms.maxDepth + 2; ++na) add += m.additionProbability(n, nd, a, na);
-                if (add > 0) EXPECT_NEAR(add, 1, 1e-12) << "n " << n << " nd " << nd << " a " << a;
+                if (add > 0) {
+                    EXPECT_NEAR(add, 1, 1e-12) << "n " << n << " nd " << nd << " a " << a;
+                }
             }
     }
 }

@@ -106,7 +106,9 @@ TEST(HomogeneousMedium, DistanceSamplingIsUnbiased) {
             pass[c].add(mi.valid() ? 0 : f[c]);
             scat[c].add(mi.valid() ? f[c] : 0);
         }
-        if (mi.valid()) ASSERT_TRUE(mi.p.y >= 0 && mi.p.y < D);
+        if (mi.valid()) {
+            ASSERT_TRUE(mi.p.y >= 0 && mi.p.y < D);
+        }
     }
     for (int c = 0; c < 3; ++c) {
         const double st = sa[c] + ss[c];

@@ -270,7 +270,7 @@ void RenderOption(ArgCursor &arg, CommandLine &cl) {
 // Options in order; the first informational option ends the parse with its status.
 CommandLine ParseCommandLine(int argc, char **argv) {
     CommandLine cl;
-    for (ArgCursor arg{argc, argv}; arg.i < argc; ++arg.i) {
+    for (ArgCursor arg{argc, argv, 1, {}}; arg.i < argc; ++arg.i) {
         arg.a = argv[arg.i];
         cl.exitStatus = InfoOption(arg);
         if (cl.exitStatus >= 0) return cl;

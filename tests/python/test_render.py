@@ -11,7 +11,7 @@ import gradus
 from conftest import CORNELL, CORNELL_GLB, assert_same_layers, bits, run_tool
 
 # Records that differ between two runs of the same render: timings, memory, the invocation.
-VARYING = ("seconds", "peak_rss_mb", "command_line")
+VARYING = ("seconds", "peak_rss_mb", "command_line", "lane_occupancy")  # timing-dependent
 
 
 def cli_render(tmp_path, scene, args):

@@ -176,18 +176,18 @@ TEST(Separated, NothingSeparatedWithoutSpecularChains) {
     }
 }
 
-// "separatedsamples K" (gbdpt.cpp separatedWalks): K extra Dirac-only camera
+// "separatedsamples K" (gradient_family.h separatedWalks): K extra Dirac-only camera
 // walks per sample estimate the separated light, averaged with the sample's
 // own. A large two-sided emitter (L = 1) seen directly, in a mirror floor and
 // through a glass sphere, in front of a diffuse wall it lights strongly (a
 // walk going on through a diffuse lobe would add ~10% there), gaussian pixel
-// filter (radius 2: the walks' footprints). Per seed and integrator (gbdpt,
-// gvcm): K = 0 against K = 8 at the same seed must keep dx and dy bit for bit
+// filter (radius 2: the walks' footprints). Per seed and integrator (gpt,
+// gbdpt, gvcm): K = 0 against K = 8 at the same seed must keep dx and dy bit for bit
 // (the main sample's numbers are untouched) and primal - separated up to
 // float rounding (1e-4 relative per pixel). Over 48 seeds each (4 spp), the image
 // sum of the separated layer at K = 8 against K = 0 (independent seeds):
 // Welch |t| < 4.5 (two-sided p ~ 5e-5 per comparison at >= 47 degrees of
-// freedom; 2 comparisons), and the same data with K = 8 scaled by 1.03 must
+// freedom; 3 comparisons), and the same data with K = 8 scaled by 1.03 must
 // give |t| > 4.5 (power against a 3% bias).
 std::string WalkScene(const std::string &integrator) {
     return "LookAt 0 1 -4  0 0.8 0  0 1 0\nCamera \"perspective\" \"float fov\" [50]\n"
@@ -218,7 +218,7 @@ WorldEnd
 
 TEST(Separated, WalksKeepTheSeparatedExpectation) {
     const int runs = 48, spp = 4;
-    for (const char *integrator : {"\"gbdpt\"", "\"gvcm\""}) {
+    for (const char *integrator : {"\"gpt\"", "\"gbdpt\"", "\"gvcm\""}) {
         std::vector<double> sum0, sum8;
         for (int k = 0; k < runs; ++k) {
             const uint64_t seed = 3000 + k;

@@ -152,9 +152,6 @@ class GBDPTIntegrator : public PixelSampleIntegrator, public GradientFamily {
     virtual void addStrategies(const CameraState &, GradientSample *) const {}
     // false: no light subpath per camera sample and no connections (G-PM).
     bool connections_ = true;
-    // The K walks of "separatedsamples" for the camera sample cs at rec's
-    // pixel, each (1 / (K + 1)) x its separated light to the film.
-    void separatedWalks(const CameraSample &cs, Sampler &sampler, Arena &arena, SampleRecorder &rec) const;
 
     GBDPTSettings set_;
     FileLoc loc_;

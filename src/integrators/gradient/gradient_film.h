@@ -73,7 +73,7 @@ class GradientFilm {
     // Records one camera sample's primal value and neighbour differences.
     void record(SampleRecorder &rec, const GradientSample &s) const;
     // Adds separated light v estimated at film position pFilm inside this
-    // sample's pixel (gbdpt's "separatedsamples" walks) to the primal and the
+    // sample's pixel (the "separatedsamples" walks, gradient_family.h) to the primal and the
     // separated layer, with the pixel and filter handling of record(). The
     // primal's square gets v^2 as if v were a sample's value on its own (an
     // approximation of primal_var: the walks are independent of the sample

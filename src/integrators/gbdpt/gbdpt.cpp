@@ -61,6 +61,10 @@ ParamTable<GBDPTSettings> GBDPTParamTable() {
               "false: no light-tracing paths, in no MIS weight either (Table 1 \"w/o LTP\")");
     t.enumeration<S::MIS>("mis", &S::mis, "combined", {{"combined", S::GBDPTSettings::MIS::Combined}, {"simple", S::MIS::Simple}},
                           "gradient MIS: combined (Eq. 8) or simple (Eq. 9)");
+    t.integer("separatedsamples", &S::separatedSamples, 0,
+              "extra camera walks through Dirac scattering only per camera sample, for the separated light "
+              "(scenes without media)",
+              AtLeast(0));
     return t;
 }
 
@@ -96,6 +100,8 @@ void GBDPTIntegrator::preprocess(const Scene &scene, Film &film) {
     // Camera samples go through the scene's pixel filter (pixelfilter "film",
     // as bdpt); light-tracing splats land in the pixel of their raster point,
     // exactly like bdpt's (the film does not filter splats).
+    if (set_.separatedSamples > 0 && scene.features.media)
+        throw Error(loc_, name() + ": \"separatedsamples\" needs a scene without media");
     initGradients(film, set_.filmFilter, connections_ && set_.lightTracing);  // no splat layers without light tracing
     splatScale_ = LightTracingSplatScale(film);
     store_->threads.clear();
@@ -109,7 +115,10 @@ void GBDPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &
     for (int k = 0; k < kNumNeighbours; ++k) inside[k] = set_.filmFilter || pairInside(p, k);
     std::vector<GradientSplat> splats;
     GradientSample s = sample(cs, sampler, arena, inside, &splats);
+    const int K = set_.separatedSamples;
+    shareSeparated(&s, K);
     gfilm_.record(rec, s);
+    if (K > 0) separatedWalks(bctx_, K, set_.maxDepth, cs, sampler, arena, rec);
     // Light-tracing values are normalised like BDPT's splats (line 16).
     for (const GradientSplat &sp : splats) gfilm_.splatLightTracing(rec, sp, splatScale_);
 }

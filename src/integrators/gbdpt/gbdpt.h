@@ -71,6 +71,10 @@
 //   string mis "combined"            combined (Eq. 8) | simple (Eq. 9)
 //   string manifoldsolver "newton"   newton (the direct Newton walk) | ceres (ceres::TinySolver,
 //                                    Levenberg-Marquardt): the solver of the manifold walks
+//   integer separatedsamples 0       K extra camera walks per camera sample for the separated
+//                                    light only (DiracCameraWalk; scenes without media): the
+//                                    separated estimate is the mean of the sample's and the K
+//                                    walks'; primal = the rest + that mean. 0: as before
 // Output layers: primal, separated, dx, dy, *_var, reconstructed_l1, reconstructed_l2,
 // reconstructed_hybrid (and reconstructed_weighted). Strategies s = 0 whose camera
 // vertices all scattered by Dirac lobes (an emitter seen directly or through
@@ -102,6 +106,7 @@ struct GBDPTSettings : BidirSettings, GradientSettings {
     ManifoldSolver solver;
     bool lightTracing;
     MIS mis;
+    int separatedSamples;  // extra Dirac-only camera walks per camera sample (separated light)
 };
 
 // gbdpt's parameter table (gvcm appends it to its own).

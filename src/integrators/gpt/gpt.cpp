@@ -20,6 +20,10 @@ ParamTable<GPTSettings> Table() {
     t.enumeration<S::ShiftMode>("shift", &S::mode, "halfvector",
                                 {{"halfvector", S::ShiftMode::HalfVector}, {"hybrid", S::ShiftMode::Hybrid}},
                                 "offset paths: half-vector copy (G-PT), or hybrid: random replay until reconnection");
+    t.integer("separatedsamples", &S::separatedSamples, 0,
+              "extra camera walks through Dirac scattering only per camera sample, for the separated light "
+              "(scenes without media)",
+              AtLeast(0));
     return t;
 }
 }  // namespace
@@ -33,6 +37,9 @@ void GPTIntegrator::preprocess(const Scene &scene, Film &film) {
     initGradients(film, set_.filmFilter);
     scene_ = &scene;
     volumetric_ = scene.features.media;
+    if (set_.separatedSamples > 0 && volumetric_)
+        throw Error(loc_, "gpt: \"separatedsamples\" needs a scene without media");
+    if (set_.separatedSamples > 0) walkCtx_.init(scene, lightSampler_, MISHeuristic::Balance);
     stats_.reset();
 }
 
@@ -43,7 +50,10 @@ void GPTIntegrator::estimate(const CameraSample &cs, Sampler &sampler, Arena &ar
     // pixels around the film reach it too (targets outside are dropped).
     for (int k = 0; k < kNumNeighbours; ++k) inside[k] = set_.filmFilter || pairInside(p, k);
     GradientSample s = sample(cs, sampler, arena, inside);
+    const int K = set_.separatedSamples;
+    shareSeparated(&s, K);
     gfilm_.record(rec, s);
+    if (K > 0) separatedWalks(walkCtx_, K, set_.maxDepth, cs, sampler, arena, rec);
 }
 
 void GPTIntegrator::finish(const Film &film, const RenderStats &stats, Image *out) {

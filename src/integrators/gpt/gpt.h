@@ -29,9 +29,12 @@
 //                                    | box (a sample counts in its own pixel, as in the papers)
 // (gpt):
 //   string shift "halfvector"        halfvector (G-PT) | hybrid (random replay until reconnection)
+//   integer separatedsamples 0       K extra camera walks per camera sample for the separated
+//                                    light only (gradient_family.h; scenes without media)
 #pragma once
 #include <memory>
 
+#include "integrators/common/bidir.h"
 #include "integrators/gradient/gradient_film.h"
 #include "integrators/gradient/gradient_params.h"
 #include "integrators/gradient/gradient_family.h"
@@ -46,6 +49,7 @@ namespace gradus {
 struct GPTSettings : PathSettings, GradientSettings {
     enum class ShiftMode { HalfVector, Hybrid };
     ShiftMode mode;
+    int separatedSamples;  // extra Dirac-only camera walks per camera sample (separated light)
 };
 
 class GPTIntegrator : public PixelSampleIntegrator, public GradientFamily {
@@ -72,6 +76,7 @@ class GPTIntegrator : public PixelSampleIntegrator, public GradientFamily {
     FileLoc loc_;
     LightSampler lightSampler_;
     bool volumetric_ = false;  // the scene has media: sample() takes gpt::VolumeGradientPathTracer
+    BidirContext walkCtx_;     // the separatedsamples walks' scene and camera
     mutable ShiftStats stats_;
 };
 

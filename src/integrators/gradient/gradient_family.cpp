@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "core/error.h"
+#include "integrators/gradient/subpath_shift.h"
 
 namespace gradus {
 
@@ -97,6 +98,57 @@ void GradientFamily::finishGradients(const Film &film, const RenderStats &stats,
         sum(g.dyVar, add->dyVar);
     }
     WriteGradientOutput(g, norm, alpha, out, &reconReport_);
+}
+
+// Separated light, K more samples of it (issue 59, item 2). Its paths are the
+// s = 0 paths whose camera vertices x_1 .. x_{t-2} all scattered by a Dirac
+// lobe (DiracCameraChain); every integrator that separates them gives them
+// MIS weight 1, so the plain walks of DiracCameraWalk estimate the same
+// integral and the K + 1 estimates are averaged with equal weights:
+// - bdpt/gbdpt (MISWeight, bidir.cpp): a strategy (s', t') with t' >= 2 and
+//   s' >= 1 connects at camera vertex x_{t'-1}, and one with t' = 1 connects
+//   light vertex x_1 to the lens; either needs a non-delta endpoint and a
+//   non-delta neighbour (the light vertex x_k is the emitter, reached from the
+//   delta x_{k-1}), so every term of OtherStrategies is skipped and the weight is
+//   1 / (1 + 0). The directly seen emitter, (0, 2), has only (1, 1) as its
+//   alternative, which bdpt does not evaluate (MISWeight returns 1 for
+//   s + t = 2, as pbrt-v3's bdpt).
+// - gvcm: merges are tried and weighted only at MergeableIn vertices, which
+//   with mergeRoughOnly (G-VCM's weights) excludes delta vertices, and never at
+//   the light origin (the emitter x_k when s = 0); no merge term remains.
+// - G-PM (gvcm mergeonly, chainEmission): s = 0 through a specular chain is
+//   the only strategy of its path, weight 1 by construction.
+// - gpt (gpt_terms.cpp emissionTerms): emission after a Dirac bounce (or
+//   seen directly) takes the BSDF technique's weight 1; next-event
+//   estimation cannot reach it (no light sample connects through a delta
+//   vertex).
+// Walk k's film position is uniform in the sample's pixel (as the sampler's
+// film samples), its lens position uniform; numbers from an RNG keyed by the
+// sampler's seed and the sample's film and lens position, so the main
+// sample's numbers (and with K = 0 the images) do not change.
+void GradientFamily::shareSeparated(GradientSample *s, int K) {
+    if (K <= 0 || s->separated.isBlack()) return;
+    const Float keep = Float(1) / Float(K + 1);
+    s->primal = s->primal - s->separated * (1 - keep);
+    s->separated *= keep;
+}
+
+void GradientFamily::separatedWalks(const BidirContext &ctx, int K, int maxDepth, const CameraSample &cs,
+                                    const Sampler &sampler, Arena &arena, SampleRecorder &rec) const {
+    const Float scale = Float(1) / Float(K + 1);
+    const Point2i p = rec.pixel();
+    RNG rng(Hash(sampler.seed() ^ 0x5e9a2a7edd1ac0ffULL, FloatBits(cs.pFilm.x), FloatBits(cs.pFilm.y),
+                 FloatBits(cs.pLens.x) ^ (FloatBits(cs.pLens.y) << 1)));
+    for (int k = 0; k < K; ++k) {
+        CameraSample cw;
+        cw.pFilm = Point2(p.x + Float(rng.uniform()), p.y + Float(rng.uniform()));
+        cw.pLens = Point2(Float(rng.uniform()), Float(rng.uniform()));
+        Ray ray;
+        const Float w = ctx.camera->generateRay(cw, &ray);
+        if (w == 0) continue;
+        const Spectrum L = DiracCameraWalk(ctx, ray, maxDepth, rng, arena);
+        gfilm_.recordSeparated(rec, cw.pFilm, L * (w * scale));
+    }
 }
 
 }  // namespace gradus

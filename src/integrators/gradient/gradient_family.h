@@ -16,6 +16,11 @@
 
 namespace gradus {
 
+struct BidirContext;
+struct CameraSample;
+class Arena;
+class Sampler;
+
 class GradientFamily {
   protected:
     // Adds the gradient layers to the film (lightTracing: also the layers of
@@ -39,6 +44,14 @@ class GradientFamily {
     // safety); plus the page faults of the memory it allocates (timed once).
     // The render loop reserves it from the budget.
     double reconstructionEstimate(ReconstructionNorm norm, Float alpha) const;
+    // "separatedsamples K" (gpt, gbdpt, gvcm; gradient_family.cpp): the
+    // camera sample's separated light becomes one of K + 1 estimates (its
+    // primal keeps the rest plus that share) ...
+    static void shareSeparated(GradientSample *s, int K);
+    // ... and the K Dirac-only walks (DiracCameraWalk) of camera sample cs at
+    // rec's pixel add theirs, each times 1 / (K + 1). Scenes without media.
+    void separatedWalks(const BidirContext &ctx, int K, int maxDepth, const CameraSample &cs, const Sampler &sampler,
+                        Arena &arena, SampleRecorder &rec) const;
     // The statistics tail: the integrator's lines followed by the reconstruction's.
     std::string withReconstructionReport(const std::string &lines) const { return lines + reconReport_; }
 

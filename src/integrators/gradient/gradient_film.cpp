@@ -129,6 +129,25 @@ void GradientFilm::record(SampleRecorder &rec, const GradientSample &s) const {
     }
 }
 
+void GradientFilm::recordSeparated(SampleRecorder &rec, Point2 pFilm, const Spectrum &v) const {
+    GRADUS_CHECK(samples_);
+    if (v.isBlack() || !v.isFinite()) return;
+    const bool squares = variance_ && layer_[PrimalSq] >= 0;
+    if (!filter_) {  // box: the sample's own pixel
+        rec.addLayer(layer_[Primal], v);
+        if (squares) rec.addLayer(layer_[PrimalSq], v * v);
+        rec.addLayer(sepLayer_, v);
+        return;
+    }
+    const Footprint fp(*filter_, filterNorm_, pFilm, rec.pixel());
+    for (int i = 0; i < fp.size(); ++i) {
+        const Spectrum hv = v * fp.weight(i);
+        rec.addLayer(layer_[Primal], hv, fp.offset(i));
+        if (squares) rec.addLayer(layer_[PrimalSq], hv * hv, fp.offset(i));
+        rec.addLayer(sepLayer_, hv, fp.offset(i));
+    }
+}
+
 void GradientFilm::splatLightTracing(SampleRecorder &rec, const GradientSplat &s, Float scale) const {
     GRADUS_CHECK(lightTracing_);
     const GradientSample &g = s.value;

@@ -72,6 +72,13 @@ class GradientFilm {
     void init(Film &film, bool useFilmFilter = false, bool lightTracing = false, bool samples = true);
     // Records one camera sample's primal value and neighbour differences.
     void record(SampleRecorder &rec, const GradientSample &s) const;
+    // Adds separated light v estimated at film position pFilm inside this
+    // sample's pixel (the "separatedsamples" walks, gradient_family.h) to the primal and the
+    // separated layer, with the pixel and filter handling of record(). The
+    // primal's square gets v^2 as if v were a sample's value on its own (an
+    // approximation of primal_var: the walks are independent of the sample
+    // but share its count).
+    void recordSeparated(SampleRecorder &rec, Point2 pFilm, const Spectrum &v) const;
     // Records a light-tracing sample (values times `scale`) at its pixel
     // (differences: forward at the pixel, backward at the neighbour, as in
     // record()); pixels outside the film are dropped. Needs init(.., true).

@@ -65,6 +65,42 @@ void PrepareSubpath(const SubpathShiftContext &ctx, ShiftSubpath *p) {
 }
 
 
+Spectrum DiracCameraWalk(const BidirContext &ctx, Ray ray, int maxDepth, RNG &rng, Arena &arena) {
+    const Scene &scene = *ctx.scene;
+    PathVertex prev;  // the vertex the walk left last (first the lens)
+    prev.type = VertexType::Camera;
+    prev.p = ray.o;
+    Spectrum beta(1), L(0);
+    // Vertex j of the camera subpath: depth j - 1 (GenerateCameraSubpath with
+    // maxDepth + 2 vertices makes vertices up to maxDepth + 1 and scatters at
+    // those up to maxDepth).
+    for (int j = 1; j <= maxDepth + 1; ++j) {
+        SurfaceInteraction isect;
+        const Scene::SurfaceHit h = scene.intersectSurface(&ray, &isect);
+        if (h == Scene::SurfaceHit::Stuck) break;
+        if (h == Scene::SurfaceHit::Miss) {
+            const Ray towards(ray.o, Normalize(ray.d));
+            for (const Light *l : scene.infiniteLights) L += beta * l->Le(towards);
+            break;
+        }
+        if (!isect.material) break;
+        const BSDF bsdf = isect.material->getBSDF(isect, arena, TransportMode::Radiance);
+        PathVertex v;
+        MakeSurfaceVertex(ctx, isect, bsdf, &v);
+        L += beta * EmittedRadiance(ctx, v, prev);
+        if (j == maxDepth + 1 || !bsdf) break;
+        const Float uc = Float(rng.uniform());
+        const Point2 u2(Float(rng.uniform()), Float(rng.uniform()));
+        BSDFSample bs;
+        if (!bsdf.sample(isect.wo, uc, u2, TransportMode::Radiance, &bs) || !bs.valid() || !bs.isSpecular()) break;
+        beta *= bs.f * (AbsDot(bs.wi, Vec3(v.ns)) / bs.pdf);
+        if (beta.isBlack() || !beta.isFinite()) break;
+        ray = isect.spawnRay(bs.wi);
+        prev = v;
+    }
+    return L;
+}
+
 Float EyeAreaFactor(const Point3 &lens, const Vec3 &n0, const Point3 &pb, const Vec3 &ngb) {
     Vec3 d = pb - lens;
     Float D2 = d.lengthSquared();

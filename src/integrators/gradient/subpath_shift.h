@@ -104,6 +104,16 @@ inline bool DiracCameraChain(const ShiftSubpath &cam, int last) {
         if (!cam.deltaSample[i]) return false;
     return true;
 }
+// Separated light by its own estimator (gbdpt/gvcm "separatedsamples"): a
+// camera walk from `ray` that samples each BSDF and goes on only while the
+// sampled lobe is Dirac (BSDFSample::isSpecular, the test that sets the
+// camera subpath's deltaSample), adding throughput x emitted radiance at every
+// emitter it reaches (area lights; the infinite lights where it escapes) at
+// depth <= maxDepth: the emitter at vertex j is strategy (0, j + 1) of depth
+// j - 1, exactly the s = 0 contributions that DiracCameraChain separates.
+// No next-event estimation, no roulette. Scenes without media only (the
+// caller's check). Random numbers from `rng`; BSDFs in `arena`.
+Spectrum DiracCameraWalk(const BidirContext &ctx, Ray ray, int maxDepth, RNG &rng, Arena &arena);
 // f |cos| at a surface vertex (its BSDF, shading normal), the phase function
 // at a medium vertex, towards wi from wo; *pdf: the solid-angle density of wi.
 Spectrum ScatterValue(const PathVertex &v, const BSDF &b, const Vec3 &wo, const Vec3 &wi, Float *pdf);

@@ -86,6 +86,8 @@
 //   string manifoldsolver "newton"   newton | ceres
 //   bool lighttracing true           false: no light-tracing paths (in no MIS sum either)
 //   string mis "combined"            combined (Eq. 8) | simple (Eq. 9); merges always use Eq. 23
+//   integer separatedsamples 0       K extra Dirac-only camera walks per sample for the separated
+//                                    light (gradient_family.h; scenes without media)
 // (gvcm):
 //   string mode "vcm"                vcm (G-VCM) | mergeonly (G-PM)
 //   float radius 0                   initial merging radius in scene units (0: from the pixel footprint)

@@ -216,11 +216,13 @@ TEST(IntegratorTables, OutOfRangeIntIsLocated) {
         EXPECT_EQ(CreateError("mbdpt", Desc().integer("connections", {0}, Loc(2, 30))),
                   "test.pbrt:2:30: \"connections\" must be in [1, 1024]");
     }
-    for (const char *name : {"gpt", "gbdpt", "gvcm"})
-        if (Registered(name))
+    for (const char *name : {"gpt", "gbdpt", "gvcm"}) {
+        if (Registered(name)) {
             EXPECT_EQ(CreateError(name, Desc().integer("separatedsamples", {-1}, Loc(6, 3))),
                       "test.pbrt:6:3: \"separatedsamples\" must be >= 0")
                 << name;
+        }
+    }
     if (Registered("mlt")) {
         EXPECT_EQ(CreateError("mlt", Desc().integer("chains", {0}, Loc(3, 9))), "test.pbrt:3:9: \"chains\" must be >= 1");
         EXPECT_EQ(CreateError("mlt", Desc().integer("bootstrapsamples", {0}, Loc(4, 2))),

@@ -117,29 +117,38 @@ void SetSurfaceVertex(const SurfaceInteraction &si, const BSDF &bsdf, const Path
 
 // Offset vertices 0..traceEnd: the camera ray through the shifted image-plane
 // point, then the first chain re-traced with the base's half vectors.
+// The offset's camera vertex and ray through the shifted image-plane point.
+// The image-plane shift has |T'| = 1 and equal pdfs: the offset starts with
+// the camera weight ratio. false: a camera without a ray there (shift failed).
+bool StartOffsetAtCamera(const BidirContext &bc, const ShiftSubpath &x, const CameraSample &cs, Point2i off,
+                         CameraShift *out, OffsetState *o, LocalShiftStats *st, Ray *ray) {
+    ShiftSubpath &y = out->y;
+    ++st->offsetPaths;
+    Ray rx;
+    CameraSample c2 = cs;
+    c2.pFilm = Point2(cs.pFilm.x + off.x, cs.pFilm.y + off.y);
+    Float wx = bc.camera->generateRay(cs, &rx), wy = bc.camera->generateRay(c2, ray);
+    if (!(wx > 0) || !(wy > 0)) {
+        st->fail(ShiftFailure::Geometry);
+        return false;
+    }
+    y.v[0] = x.v[0];
+    y.v[0].p = ray->o;
+    y.deltaSample[0] = 0;
+    out->rho[0] = 1;
+    out->validUpTo = 0;
+    o->beta = Spectrum(wy / wx);
+    o->R = 1;
+    return true;
+}
+
 void TraceFirstChain(const SubpathShiftContext &ctx, const ShiftSubpath &x, const CameraSample &cs, Point2i off,
                      int traceEnd, Arena &arena, CameraShift *out, OffsetState *o, LocalShiftStats *st) {
     const BidirContext &bc = *ctx.bidir;
     const int n = x.n;
     ShiftSubpath &y = out->y;
-    ++st->offsetPaths;
-    Ray rx, ray;
-    CameraSample c2 = cs;
-    c2.pFilm = Point2(cs.pFilm.x + off.x, cs.pFilm.y + off.y);
-    Float wx = bc.camera->generateRay(cs, &rx), wy = bc.camera->generateRay(c2, &ray);
-    if (!(wx > 0) || !(wy > 0)) {
-        st->fail(ShiftFailure::Geometry);
-        return;
-    }
-    y.v[0] = x.v[0];
-    y.v[0].p = ray.o;
-    y.deltaSample[0] = 0;
-    out->rho[0] = 1;
-    out->validUpTo = 0;
-    // The image-plane shift has |T'| = 1 and equal pdfs: the offset starts with
-    // the camera weight ratio.
-    o->beta = Spectrum(wy / wx);
-    o->R = 1;
+    Ray ray;
+    if (!StartOffsetAtCamera(bc, x, cs, off, out, o, st, &ray)) return;
     SurfaceInteraction isect;
     for (int i = 1; i <= traceEnd; ++i) {
         const PathVertex &xv = x.v[i];
@@ -274,22 +283,8 @@ void TraceFirstChainMedia(const SubpathShiftContext &ctx, const ShiftSubpath &x,
     const Scene &scene = *bc.scene;
     const int n = x.n;
     ShiftSubpath &y = out->y;
-    ++st->offsetPaths;
-    Ray rx, ray;
-    CameraSample c2 = cs;
-    c2.pFilm = Point2(cs.pFilm.x + off.x, cs.pFilm.y + off.y);
-    Float wx = bc.camera->generateRay(cs, &rx), wy = bc.camera->generateRay(c2, &ray);
-    if (!(wx > 0) || !(wy > 0)) {
-        st->fail(ShiftFailure::Geometry);
-        return;
-    }
-    y.v[0] = x.v[0];
-    y.v[0].p = ray.o;
-    y.deltaSample[0] = 0;
-    out->rho[0] = 1;
-    out->validUpTo = 0;
-    o->beta = Spectrum(wy / wx);
-    o->R = 1;
+    Ray ray;
+    if (!StartOffsetAtCamera(bc, x, cs, off, out, o, st, &ray)) return;
     const Medium *m = scene.cameraMedium;
     ray = Interaction(ray.o, Normal3(0, 0, 0), Vec3(0, 0, 0)).spawnRay(Normalize(ray.d));
     MediumPiece xp[kMaxMediumPieces], yp[kMaxMediumPieces];

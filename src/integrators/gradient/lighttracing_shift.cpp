@@ -218,22 +218,57 @@ void EvalAtChainEnd(const ShiftSubpath &light, int c, const Vec3 &towardCam, Spe
 }
 
 
-// BDPT weight of the offset light-tracing path: only light vertices c-1 .. s-1
-// differ from the base, so they are swapped in place and restored (copying
-// whole subpaths per light-tracing strategy made long paths O(n^2)).
+// The offset light-tracing path differs from the base only in light vertices
+// c-1 .. s-1: they are swapped in place for the offset's and restored when this
+// goes out of scope (copying whole subpaths per light-tracing strategy made
+// long paths O(n^2)).
+class SwappedLightVertices {
+  public:
+    SwappedLightVertices(const ShiftSubpath &light, int c, int s)
+        : light_(light), lo_(std::max(c - 1, 0)), m_(s - lo_), ok_(m_ <= kCapacity) {
+        for (int j = 0; ok_ && j < m_; ++j) {
+            v_[j] = light.v[lo_ + j];
+            b_[j] = light.b[lo_ + j];
+        }
+    }
+    ~SwappedLightVertices() {
+        for (int j = 0; ok_ && j < m_; ++j) {
+            light_.v[lo_ + j] = v_[j];
+            light_.b[lo_ + j] = b_[j];
+        }
+    }
+    SwappedLightVertices(const SwappedLightVertices &) = delete;
+    SwappedLightVertices &operator=(const SwappedLightVertices &) = delete;
+    bool ok() const { return ok_; }
+
+  private:
+    static constexpr int kCapacity = kMaxManifoldVertices + 3;
+    const ShiftSubpath &light_;
+    const int lo_, m_;
+    const bool ok_;
+    PathVertex v_[kCapacity];
+    BSDF b_[kCapacity];
+};
+
+// The offset's area densities at c's neighbours, which change with the
+// direction from c to the offset's b: c+1's forward (importance) and, where c
+// scatters, c-1's reverse (radiance) density (the terms of BDPT's weight).
+void UpdateChainEndDensities(const BidirContext &bc, PathVertex *yv, const BSDF *yb, int c) {
+    const PathVertex &xc = yv[c];
+    yv[c + 1].pdfFwd = PdfArea(bc, xc, c > 0 ? &yb[c] : nullptr, c > 0 ? &yv[c - 1] : nullptr, yv[c + 1],
+                               TransportMode::Importance);
+    if (c >= 1 && xc.scatters())
+        yv[c - 1].pdfRev = PdfArea(bc, xc, &yb[c], &yv[c + 1], yv[c - 1], TransportMode::Radiance);
+}
+
+// BDPT weight of the offset light-tracing path (vertices swapped as above).
 Float OffsetWeight(const BidirContext &bc, const ShiftSubpath &light, int s, int c, const SurfaceInteraction &yHit,
                    const LightChain &ch, const PathVertex &lens, Arena &arena, bool *ok) {
     const int k = s - 2 - c;
     const PathVertex &xc = light.v[c];
-    const int lo = std::max(c - 1, 0), m = s - lo;
-    PathVertex saveV[kMaxManifoldVertices + 3];
-    BSDF saveB[kMaxManifoldVertices + 3];
-    *ok = m <= kMaxManifoldVertices + 3;
+    const SwappedLightVertices swapped(light, c, s);
+    *ok = swapped.ok();
     if (!*ok) return 0;
-    for (int j = 0; j < m; ++j) {
-        saveV[j] = light.v[lo + j];
-        saveB[j] = light.b[lo + j];
-    }
     PathVertex *yv = light.v;
     BSDF *yb = light.b;
     // An infinite light's origin moves with b, so that it lies in the same direction.
@@ -263,11 +298,8 @@ Float OffsetWeight(const BidirContext &bc, const ShiftSubpath &light, int s, int
         v.pdfRev = 0;
         v.pdfFwd = 0;
     }
-    yv[c + 1].pdfFwd = PdfArea(bc, xc, c > 0 ? &yb[c] : nullptr, c > 0 ? &yv[c - 1] : nullptr, yv[c + 1],
-                               TransportMode::Importance);
     if (k > 0) yv[c].pdfRev = 0;
-    if (c >= 1 && xc.type == VertexType::Surface)
-        yv[c - 1].pdfRev = PdfArea(bc, xc, &yb[c], &yv[c + 1], yv[c - 1], TransportMode::Radiance);
+    UpdateChainEndDensities(bc, yv, yb, c);
     // A glossy interior is sampled from, unlike an ideal specular one: its
     // neighbours' densities are real (as in the base's light subpath).
     for (int m = c + 1; m <= s - 2; ++m)
@@ -276,12 +308,7 @@ Float OffsetWeight(const BidirContext &bc, const ShiftSubpath &light, int s, int
             yv[m - 1].pdfRev = PdfArea(bc, yv[m], &yb[m], &yv[m + 1], yv[m - 1], TransportMode::Radiance);
         }
     PathVertex lensY = lens;
-    Float wy = MISWeight(bc, SubpathView{yv, yb, s}, SubpathView{&lensY, nullptr, 1}, s, 1, &lensY);
-    for (int j = 0; j < m; ++j) {
-        light.v[lo + j] = saveV[j];
-        light.b[lo + j] = saveB[j];
-    }
-    return wy;
+    return MISWeight(bc, SubpathView{yv, yb, s}, SubpathView{&lensY, nullptr, 1}, s, 1, &lensY);
 }
 
 // ---- Scenes with media ------------------------------------------------------
@@ -440,13 +467,7 @@ bool ShiftLightTracingPathMedia(const SubpathShiftContext &ctx, const ShiftSubpa
     *rho = denR > 0 ? Fy * J * G1x * pcY * Gcy / denR : 0;
 
     // BDPT weight of the offset: light vertex s-1 swapped for y_b (restored after).
-    const int lo = std::max(c - 1, 0), m = s - lo;
-    PathVertex saveV[3];
-    BSDF saveB[3];
-    for (int j = 0; j < m; ++j) {
-        saveV[j] = light.v[lo + j];
-        saveB[j] = light.b[lo + j];
-    }
+    const SwappedLightVertices swapped(light, c, s);  // m <= 3 here: empty chain
     PathVertex *yv = light.v;
     BSDF *ybs = light.b;
     if (envC) yv[c].p = yb.p + (light.v[c].p - light.v[c + 1].p);
@@ -468,16 +489,9 @@ bool ShiftLightTracingPathMedia(const SubpathShiftContext &ctx, const ShiftSubpa
         v.pdfRev = 0;
         v.pdfFwd = 0;
     }
-    yv[c + 1].pdfFwd = PdfArea(bc, xc, c > 0 ? &ybs[c] : nullptr, c > 0 ? &yv[c - 1] : nullptr, yv[c + 1],
-                               TransportMode::Importance);
-    if (c >= 1 && xc.scatters())
-        yv[c - 1].pdfRev = PdfArea(bc, xc, &ybs[c], &yv[c + 1], yv[c - 1], TransportMode::Radiance);
+    UpdateChainEndDensities(bc, yv, ybs, c);
     PathVertex lensY = lens;
     *wy = MISWeight(bc, SubpathView{yv, ybs, s}, SubpathView{&lensY, nullptr, 1}, s, 1, &lensY);
-    for (int j = 0; j < m; ++j) {
-        light.v[lo + j] = saveV[j];
-        light.b[lo + j] = saveB[j];
-    }
     return *wy > 0;
 }
 

@@ -111,6 +111,24 @@ def main():
             print("%-15s %-22s n=%d relMSE %.4g (net %.4g, ref %.3g) trimmed %.4g pair-var %.4g spp %s cpu %s means %s per-seed %s"
                   % (scene, row["integrator"], row["seeds"], row["relmse"], row["net"], noise, row["trimmed"],
                      pvar, row["spp"], row["cpu"], " ".join(row["means"]), " ".join(row["per_seed"])))
+    # Ratios of the goals: pmlt / gmlt (>= 2.5), gbdpt / pmlt and gbdpt / gmlt (>= 1.5),
+    # by the raw relMSE, net of the reference and by the seed-pair variance; and per mutation
+    # (relMSE x mutations per pixel, lower is better) with the mutation cost ratio.
+    by = {(r["scene"], r["integrator"]): r for r in rows}
+    for scene in sorted({r["scene"] for r in rows}):
+        def ratio(a, b, key):
+            ra, rb = by.get((scene, a)), by.get((scene, b))
+            return ra[key] / rb[key] if ra and rb and rb[key] > 0 else float("nan")
+        line = [scene]
+        for a, b in (("pmlt", "gmlt"), ("gbdpt", "pmlt"), ("gbdpt", "gmlt")):
+            line.append("%s/%s raw %.2f net %.2f pair-var %.2f" % (a, b, ratio(a, b, "relmse"), ratio(a, b, "net"),
+                                                                   ratio(a, b, "pair_variance")))
+        p, g = by.get((scene, "pmlt")), by.get((scene, "gmlt"))
+        if p and g:
+            mp, mg = np.mean(p["spp"]), np.mean(g["spp"])
+            line.append("mutations pmlt/gmlt %.2f; relMSE x mpp (net) pmlt %.3g gmlt %.3g (%.2fx)"
+                        % (mp / mg, p["net"] * mp, g["net"] * mg, p["net"] * mp / (g["net"] * mg)))
+        print("; ".join(line))
     if args.csv:
         import csv
         with open(args.csv, "w", newline="") as f:

@@ -221,7 +221,8 @@ void EvalAtChainEnd(const ShiftSubpath &light, int c, const Vec3 &towardCam, Spe
 // The offset light-tracing path differs from the base only in light vertices
 // c-1 .. s-1: they are swapped in place for the offset's and restored when this
 // goes out of scope (copying whole subpaths per light-tracing strategy made
-// long paths O(n^2)).
+// long paths O(n^2)). kCapacity: the most vertices swapped (stack storage).
+template <int kCapacity>
 class SwappedLightVertices {
   public:
     SwappedLightVertices(const ShiftSubpath &light, int c, int s)
@@ -242,7 +243,6 @@ class SwappedLightVertices {
     bool ok() const { return ok_; }
 
   private:
-    static constexpr int kCapacity = kMaxManifoldVertices + 3;
     const ShiftSubpath &light_;
     const int lo_, m_;
     const bool ok_;
@@ -266,7 +266,7 @@ Float OffsetWeight(const BidirContext &bc, const ShiftSubpath &light, int s, int
                    const LightChain &ch, const PathVertex &lens, Arena &arena, bool *ok) {
     const int k = s - 2 - c;
     const PathVertex &xc = light.v[c];
-    const SwappedLightVertices swapped(light, c, s);
+    const SwappedLightVertices<kMaxManifoldVertices + 3> swapped(light, c, s);
     *ok = swapped.ok();
     if (!*ok) return 0;
     PathVertex *yv = light.v;
@@ -467,7 +467,7 @@ bool ShiftLightTracingPathMedia(const SubpathShiftContext &ctx, const ShiftSubpa
     *rho = denR > 0 ? Fy * J * G1x * pcY * Gcy / denR : 0;
 
     // BDPT weight of the offset: light vertex s-1 swapped for y_b (restored after).
-    const SwappedLightVertices swapped(light, c, s);  // m <= 3 here: empty chain
+    const SwappedLightVertices<3> swapped(light, c, s);  // empty chain: c-1 .. c+1
     PathVertex *yv = light.v;
     BSDF *ybs = light.b;
     if (envC) yv[c].p = yb.p + (light.v[c].p - light.v[c + 1].p);
